@@ -1,0 +1,123 @@
+"""The problem protocol: a genome declaration and a batch evaluation.
+
+Every study exposes a :class:`Problem`. The engine never evaluates one individual at a
+time: ``evaluate`` receives the whole batch ``genomes[pop, dim]`` and returns one fitness
+per row plus named per-individual metrics (for example ``time_to_fall_s``).
+
+Fitness is in the problem's own sense (``"max"`` or ``"min"``). Optimizers work on a
+*cost* that is always minimised: ``cost = fitness`` for ``"min"`` and ``-fitness`` for
+``"max"``. A non-finite fitness becomes the worst cost (``+inf``); see :func:`sanitize`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Literal, Protocol, runtime_checkable
+
+import numpy as np
+
+Sense = Literal["min", "max"]
+
+
+@dataclass(frozen=True)
+class GenomeSpec:
+    """Real-valued genome: ``dim`` genes with box bounds and optional named slices."""
+
+    lower: np.ndarray
+    upper: np.ndarray
+    slices: dict[str, slice] = field(default_factory=dict)
+    names: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        lo = np.asarray(self.lower, dtype=float).ravel()
+        hi = np.asarray(self.upper, dtype=float).ravel()
+        if lo.shape != hi.shape:
+            raise ValueError(f"genome bounds differ in length: {lo.size} vs {hi.size}")
+        if np.any(lo > hi):
+            bad = int(np.argmax(lo > hi))
+            raise ValueError(f"genome lower bound > upper bound at gene {bad}")
+        object.__setattr__(self, "lower", lo)
+        object.__setattr__(self, "upper", hi)
+
+    @property
+    def dim(self) -> int:
+        return int(self.lower.size)
+
+    @property
+    def span(self) -> np.ndarray:
+        return self.upper - self.lower
+
+    @classmethod
+    def box(cls, dim: int, lower: float, upper: float) -> GenomeSpec:
+        return cls(np.full(dim, float(lower)), np.full(dim, float(upper)))
+
+    def sample(self, rng: np.random.Generator, n: int) -> np.ndarray:
+        """``n`` genomes drawn uniformly inside the bounds."""
+        return rng.uniform(self.lower, self.upper, size=(n, self.dim))
+
+
+@dataclass
+class Evaluation:
+    """Result of evaluating a batch: ``fitness[pop]`` and ``metrics[name][pop]``."""
+
+    fitness: np.ndarray
+    metrics: dict[str, np.ndarray] = field(default_factory=dict)
+    failed: np.ndarray | None = None  # bool[pop]: non-finite or raised
+
+    def __len__(self) -> int:
+        return int(self.fitness.shape[0])
+
+    @staticmethod
+    def concat(parts: list[Evaluation]) -> Evaluation:
+        fit = np.concatenate([p.fitness for p in parts])
+        keys = list(parts[0].metrics) if parts else []
+        metrics = {k: np.concatenate([p.metrics[k] for p in parts]) for k in keys}
+        failed = np.concatenate(
+            [p.failed if p.failed is not None else np.zeros(len(p), bool) for p in parts]
+        )
+        return Evaluation(fit, metrics, failed)
+
+
+@runtime_checkable
+class Problem(Protocol):
+    """What an optimizer needs from a study."""
+
+    genome: GenomeSpec
+    sense: Sense
+    metric_names: tuple[str, ...]
+
+    def evaluate(self, genomes: np.ndarray) -> Evaluation: ...
+
+
+def worst_fitness(sense: Sense) -> float:
+    return -np.inf if sense == "max" else np.inf
+
+
+def to_cost(fitness: np.ndarray, sense: Sense) -> np.ndarray:
+    """Fitness in the problem's sense -> cost to minimise (non-finite -> +inf)."""
+    f = np.asarray(fitness, dtype=float)
+    cost = -f if sense == "max" else f.copy()
+    cost[~np.isfinite(cost)] = np.inf
+    return cost
+
+
+def sanitize(ev: Evaluation, sense: Sense, n: int) -> Evaluation:
+    """Check shapes and turn NaN/inf fitness into the worst value, flagging it in ``failed``."""
+    fit = np.asarray(ev.fitness, dtype=float).reshape(-1)
+    if fit.shape[0] != n:
+        raise ValueError(f"problem returned {fit.shape[0]} fitness values for {n} genomes")
+    bad = ~np.isfinite(fit)
+    if ev.failed is not None:
+        bad |= np.asarray(ev.failed, dtype=bool)
+    fit = np.where(bad, worst_fitness(sense), fit)
+    metrics = {k: np.asarray(v).reshape(n, *np.shape(v)[1:]) for k, v in ev.metrics.items()}
+    return Evaluation(fit, metrics, bad)
+
+
+def failed_evaluation(n: int, sense: Sense, metric_names: tuple[str, ...]) -> Evaluation:
+    """An evaluation in which all ``n`` individuals failed (worst fitness, NaN metrics)."""
+    return Evaluation(
+        np.full(n, worst_fitness(sense)),
+        {k: np.full(n, np.nan) for k in metric_names},
+        np.ones(n, dtype=bool),
+    )

@@ -1,0 +1,26 @@
+"""Registry of studies: name -> ``"module:attribute"`` of a :class:`~.base.Study`.
+
+Entries are imported lazily so that ``evomotion studies`` stays fast and a study's heavy
+dependencies load only when it is used.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+from evomotion.core.registry import lookup
+from evomotion.studies.base import Study
+
+STUDIES: dict[str, str] = {
+    "functions": "evomotion.studies.functions.study:STUDY",
+}
+
+
+def get_study(name: str) -> Study:
+    target = lookup(STUDIES, "study", name)
+    module, attr = target.split(":")
+    return getattr(importlib.import_module(module), attr)
+
+
+def all_studies() -> list[Study]:
+    return [get_study(n) for n in STUDIES]
