@@ -1,0 +1,94 @@
+"""Batched open-loop physics with :mod:`mujoco.rollout` and torso-trajectory analysis.
+
+Controls are precomputed in numpy as ``ctrl[batch, nstep, nu]`` (one target per actuator and
+physics step); ``mujoco.rollout`` steps every trajectory in C++ threads (one ``MjData`` per
+thread), with no Python loop per physics step. Falls, heading and displacement are read back
+from the recorded states (``mjSTATE_FULLPHYSICS``: time, qpos, qvel, ...).
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+from mujoco import rollout as mj_rollout
+
+from evomotion.sim.nao import STATE_SPEC
+
+QPOS_OFFSET = 1  # the state vector starts with time (mjSTATE_TIME), then qpos
+
+
+class BatchSimulator:
+    """Rolls out batches of control sequences from one initial state with ``nthread`` threads."""
+
+    def __init__(self, model: mujoco.MjModel, nthread: int = 0) -> None:
+        self.model = model
+        self.nthread = int(nthread) if nthread and nthread > 0 else (os.cpu_count() or 1)
+        self.datas = [mujoco.MjData(model) for _ in range(self.nthread)]
+        self._runner = mj_rollout.Rollout(nthread=self.nthread) if self.nthread > 1 else None
+        self.nstate = mujoco.mj_stateSize(model, STATE_SPEC)
+        self.steps_simulated = 0
+
+    def run(self, initial_state: np.ndarray, ctrl: np.ndarray) -> np.ndarray:
+        """``states[batch, nstep, nstate]`` after each step for ``ctrl[batch, nstep, nu]``."""
+        ctrl = np.ascontiguousarray(ctrl, dtype=np.float64)
+        batch, nstep, _ = ctrl.shape
+        init = np.ascontiguousarray(np.broadcast_to(initial_state, (batch, self.nstate)))
+        if self._runner is not None:
+            state, _ = self._runner.rollout(self.model, self.datas, init, ctrl, nstep=nstep)
+        else:
+            state, _ = mj_rollout.rollout(self.model, self.datas[0], init, ctrl, nstep=nstep)
+        self.steps_simulated += batch * nstep
+        return state
+
+    def close(self) -> None:
+        if self._runner is not None:
+            self._runner.close()
+            self._runner = None
+
+    def __enter__(self) -> BatchSimulator:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+@dataclass
+class TorsoTrack:
+    """Torso trajectory per rollout: ``xyz[batch, T, 3]``, ``up_z``, ``yaw_rad`` (unwrapped)."""
+
+    xyz: np.ndarray
+    up_z: np.ndarray  # z component of the torso's up axis (1 = upright)
+    yaw_rad: np.ndarray
+
+
+def torso_track(states: np.ndarray) -> TorsoTrack:
+    """Torso position, uprightness and heading from recorded states (free joint first)."""
+    q = states[..., QPOS_OFFSET:QPOS_OFFSET + 7]
+    w, x, y, z = (q[..., 3 + i] for i in range(4))
+    up_z = 1.0 - 2.0 * (x * x + y * y)
+    yaw = np.unwrap(np.arctan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z)), axis=-1)
+    return TorsoTrack(q[..., :3], up_z, yaw)
+
+
+def fall_step(track: TorsoTrack, fall_height_m: float, fall_tilt_rad: float) -> np.ndarray:
+    """Index of the first step at which the robot is fallen (torso lower than
+    ``fall_height_m`` or tilted more than ``fall_tilt_rad``), ``nstep`` where it never falls."""
+    fallen = (track.xyz[..., 2] < fall_height_m) | (track.up_z < np.cos(fall_tilt_rad))
+    nstep = fallen.shape[-1]
+    return np.where(fallen.any(axis=-1), fallen.argmax(axis=-1), nstep)
+
+
+def interpolate_controls(times_s: np.ndarray, values: np.ndarray, dt: float,
+                         nstep: int) -> np.ndarray:
+    """Linear interpolation of key poses ``values[..., K, nu]`` at ``times_s[K]`` onto the
+    physics steps ``t = dt * (i + 1)``, ``i < nstep`` (held constant outside the keys).
+    Returns ``[..., nstep, nu]``."""
+    t = dt * (np.arange(nstep) + 1.0)
+    idx = np.clip(np.searchsorted(times_s, t, side="right") - 1, 0, len(times_s) - 1)
+    nxt = np.minimum(idx + 1, len(times_s) - 1)
+    span = np.where(nxt > idx, times_s[nxt] - times_s[idx], 1.0)
+    frac = np.clip((t - times_s[idx]) / span, 0.0, 1.0)[:, None]
+    return values[..., idx, :] * (1.0 - frac) + values[..., nxt, :] * frac

@@ -1,0 +1,154 @@
+"""Webots ``.motion`` files: reader and writer.
+
+Format (Webots ``src/controller/c/motion.c``, the parser the robot controller uses):
+
+- line 1: ``#WEBOTS_MOTION,V1.0`` then the joint names, on the same line (current variant) or
+  alone on line 2 (older variant, e.g. Webots' ``HandWave.motion``);
+- each further line: ``time,poseName,v1,...,vN`` with ``time`` = ``[[MM:]SS:]mmm``
+  (``MM*60000 + SS*1000 + mmm`` ms), strictly increasing; values in radians, ``*`` = unset
+  (the joint is not commanded around that pose); an empty line ends the file;
+- tokens are separated by commas (``strtok(",\\n\\r")``: CRLF is fine, empty fields collapse).
+
+Bad input raises :class:`~evomotion.errors.FileFormatError` naming the file and line.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from evomotion.errors import FileFormatError
+
+#: Every NAO device name a motion may drive (the 22 modelled joints + wrists and hands).
+NAO_JOINT_NAMES: frozenset[str] = frozenset((
+    "HeadYaw", "HeadPitch",
+    "LShoulderPitch", "LShoulderRoll", "LElbowYaw", "LElbowRoll", "LWristYaw", "LHand",
+    "RShoulderPitch", "RShoulderRoll", "RElbowYaw", "RElbowRoll", "RWristYaw", "RHand",
+    "LHipYawPitch", "LHipRoll", "LHipPitch", "LKneePitch", "LAnklePitch", "LAnkleRoll",
+    "RHipYawPitch", "RHipRoll", "RHipPitch", "RKneePitch", "RAnklePitch", "RAnkleRoll",
+))
+MAGIC, VERSION = "#WEBOTS_MOTION", "V1.0"
+MAX_LINE = 4095  # motion.c reads lines with fgets(buffer, 4096)
+_TIME = re.compile(r"^[0-9:]+$")
+
+
+@dataclass
+class Motion:
+    """Key poses: ``values[K, N]`` (rad, NaN = ``*``) of ``joints[N]`` at ``times_ms[K]``."""
+
+    joints: tuple[str, ...]
+    times_ms: np.ndarray
+    values: np.ndarray
+    pose_names: list[str] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        self.times_ms = np.asarray(self.times_ms, dtype=np.int64)
+        self.values = np.asarray(self.values, dtype=float).reshape(len(self.times_ms), -1)
+        if not self.pose_names:
+            self.pose_names = [f"Pose{i + 1}" for i in range(len(self.times_ms))]
+
+    @property
+    def duration_s(self) -> float:
+        return float(self.times_ms[-1]) / 1000.0
+
+    def column(self, joint: str) -> np.ndarray:
+        return self.values[:, self.joints.index(joint)]
+
+
+def parse_time_ms(token: str) -> int | None:
+    """``[[MM:]SS:]mmm`` -> milliseconds, or None when malformed."""
+    if not _TIME.match(token):
+        return None
+    parts = token.split(":")
+    if len(parts) > 3 or any(p == "" for p in parts):
+        return None
+    nums = [int(p) for p in parts]
+    weights = (60000, 1000, 1)[-len(nums):]
+    return sum(n * w for n, w in zip(nums, weights, strict=True))
+
+
+def format_time_ms(ms: int) -> str:
+    """Milliseconds -> ``MM:SS:mmm`` as Webots writes it."""
+    ms = int(ms)
+    return f"{ms // 60000:02d}:{ms // 1000 % 60:02d}:{ms % 1000:03d}"
+
+
+def _tokens(line: str) -> list[str]:
+    return [t.strip() for t in line.split(",") if t.strip() != ""]
+
+
+def read_motion(path: str | Path) -> Motion:
+    """Read a Webots ``.motion`` file (both header variants)."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise FileFormatError(path, None, f"cannot read motion file ({exc})") from None
+    lines = text.splitlines()
+    if not lines:
+        raise FileFormatError(path, 1, f"expected '{MAGIC},{VERSION}' header, got empty file")
+    head = _tokens(lines[0])
+    if len(head) < 2 or head[0] != MAGIC or head[1] != VERSION:
+        raise FileFormatError(path, 1, f"expected '{MAGIC},{VERSION}' header")
+    joints, first = head[2:], 1
+    if not joints:  # older variant: the joint names on line 2
+        joints = _tokens(lines[1]) if len(lines) > 1 else []
+        first = 2
+    if not joints:
+        raise FileFormatError(path, first, "expected at least one joint name")
+    for name in joints:
+        if name not in NAO_JOINT_NAMES:
+            raise FileFormatError(path, first, f"unknown joint {name!r}; expected a NAO joint name")
+    if len(set(joints)) != len(joints):
+        raise FileFormatError(path, first, "expected each joint name once")
+    times, names, rows = [], [], []
+    for lineno, line in enumerate(lines[first:], start=first + 1):
+        if line.strip() == "":
+            break  # an empty line ends the file (motion.c)
+        tok = _tokens(line)
+        t = parse_time_ms(tok[0]) if tok else None
+        if t is None:
+            got = tok[0] if tok else line.strip()
+            raise FileFormatError(path, lineno, f"bad time stamp {got!r}; expected MM:SS:mmm")
+        if times and t <= times[-1]:
+            raise FileFormatError(path, lineno, "expected strictly increasing time stamps")
+        if len(tok) - 2 != len(joints):
+            raise FileFormatError(path, lineno,
+                                  f"expected {len(joints)} values, got {max(len(tok) - 2, 0)}")
+        row = []
+        for value in tok[2:]:
+            try:
+                row.append(np.nan if value == "*" else float(value))
+            except ValueError:
+                raise FileFormatError(path, lineno,
+                                      f"bad value {value!r}; expected a number or '*'") from None
+        times.append(t)
+        names.append(tok[1])
+        rows.append(row)
+    if not rows:
+        raise FileFormatError(path, first + 1, "expected at least one pose")
+    return Motion(tuple(joints), np.array(times), np.array(rows), names)
+
+
+def format_motion(motion: Motion, header_on_first_line: bool = True) -> str:
+    """Text of a motion file. Values use Python's shortest exact float text (``*`` for NaN),
+    so that :func:`read_motion` gives back exactly the same numbers."""
+    if np.any(np.diff(motion.times_ms) <= 0):
+        raise ValueError("motion times must be strictly increasing")
+    sep = "," if header_on_first_line else "\n"
+    out = [f"{MAGIC},{VERSION}{sep}{','.join(motion.joints)}"]
+    for t, name, row in zip(motion.times_ms, motion.pose_names, motion.values, strict=True):
+        vals = ",".join("*" if np.isnan(v) else repr(float(v)) for v in row)
+        line = f"{format_time_ms(t)},{name},{vals}"
+        if len(line) > MAX_LINE:
+            raise ValueError(f"motion line longer than {MAX_LINE} characters")
+        out.append(line)
+    return "\n".join(out) + "\n"
+
+
+def write_motion(path: str | Path, motion: Motion, header_on_first_line: bool = True) -> None:
+    """Write ``motion`` to ``path`` (``\\n`` line endings, no blank lines)."""
+    Path(path).write_text(format_motion(motion, header_on_first_line), encoding="ascii")

@@ -1,0 +1,42 @@
+import json
+from pathlib import Path
+
+import pytest
+
+from evomotion.studies.humanoid_step.replay import replay, replay_command
+
+FIXTURES = Path("/work/shared/fixtures/webots-motions")
+
+
+@pytest.mark.parametrize("name,sign", [("TurnLeft40", 1), ("TurnLeft60", 1), ("TurnRight40", -1)])
+def test_turn_motions_turn_the_right_way(name, sign):
+    out = replay(FIXTURES / f"{name}.motion")
+    assert not out["fell"]
+    assert sign * out["heading_change_rad"] > 0.5  # at least ~29 degrees
+    assert abs(out["displacement_m"][0]) < 0.05
+
+
+def test_side_step_left_moves_left():
+    out = replay(FIXTURES / "SideStepLeft.motion")
+    assert not out["fell"]
+    assert out["displacement_m"][1] > 0.03
+    assert abs(out["heading_change_rad"]) < 0.2
+
+
+def test_hand_wave_keeps_standing():
+    out = replay(FIXTURES / "HandWave.motion")
+    assert out == {**out, "fell": False, "fall_time_s": None}
+    assert max(abs(v) for v in out["displacement_m"]) < 0.02
+
+
+def test_replay_command_json_only_on_stdout(capsys):
+    replay_command(FIXTURES / "HandWave.motion", json_out=True, video=None)
+    data = json.loads(capsys.readouterr().out)
+    assert set(data) == {"displacement_m", "heading_change_rad", "fell", "fall_time_s"}
+    assert len(data["displacement_m"]) == 2
+
+
+def test_replay_command_human_summary(capsys):
+    replay_command(FIXTURES / "TurnRight40.motion", json_out=False, video=None)
+    out = capsys.readouterr().out
+    assert "TurnRight40.motion" in out and "stayed up" in out
