@@ -54,6 +54,10 @@ class Optimizer(ABC):
         cost = np.where(np.isfinite(cost), cost, np.inf)
         return self._tell(state, genomes, cost, rng)
 
+    def stop(self, state: Any) -> str | None:
+        """The optimizer's own stopping reason (for example CMA-ES ``tolfun``), or ``None``."""
+        return None
+
     def population(self, state: Any) -> tuple[np.ndarray, np.ndarray]:
         """Current population and its costs (for statistics and diversity)."""
         return state.pop, state.cost

@@ -63,6 +63,7 @@ class Evaluation:
     fitness: np.ndarray
     metrics: dict[str, np.ndarray] = field(default_factory=dict)
     failed: np.ndarray | None = None  # bool[pop]: non-finite or raised
+    errors: list[str] = field(default_factory=list)  # messages of exceptions caught
 
     def __len__(self) -> int:
         return int(self.fitness.shape[0])
@@ -75,7 +76,8 @@ class Evaluation:
         failed = np.concatenate(
             [p.failed if p.failed is not None else np.zeros(len(p), bool) for p in parts]
         )
-        return Evaluation(fit, metrics, failed)
+        errors = [e for p in parts for e in p.errors]
+        return Evaluation(fit, metrics, failed, errors)
 
 
 @runtime_checkable
@@ -111,7 +113,7 @@ def sanitize(ev: Evaluation, sense: Sense, n: int) -> Evaluation:
         bad |= np.asarray(ev.failed, dtype=bool)
     fit = np.where(bad, worst_fitness(sense), fit)
     metrics = {k: np.asarray(v).reshape(n, *np.shape(v)[1:]) for k, v in ev.metrics.items()}
-    return Evaluation(fit, metrics, bad)
+    return Evaluation(fit, metrics, bad, list(ev.errors))
 
 
 def failed_evaluation(n: int, sense: Sense, metric_names: tuple[str, ...]) -> Evaluation:

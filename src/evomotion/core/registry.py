@@ -5,10 +5,12 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any, TypeVar
 
+from evomotion.errors import InputError
+
 T = TypeVar("T")
 
 
-class UnknownNameError(KeyError):
+class UnknownNameError(InputError, KeyError):
     """Raised for an unknown registry entry; ``str()`` is a one-line user-facing message."""
 
     def __str__(self) -> str:

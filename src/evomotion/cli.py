@@ -1,0 +1,129 @@
+"""The ``evomotion`` command line (thin: parsing and error reporting only)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from evomotion.errors import InputError
+from evomotion.studies import STUDIES, all_studies, get_study
+
+app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
+                  help="Evolve and search robot motions: gaits, steps, kicks, reaches, plans.")
+
+SetOpt = Annotated[list[str] | None, typer.Option("--set", help="Override, e.g. run.seed=3")]
+
+
+@app.command("studies")
+def studies_cmd() -> None:
+    """List the studies with one-line descriptions."""
+    for s in all_studies():
+        typer.echo(f"{s.name:16s} {s.description}")
+
+
+@app.command("run")
+def run_cmd(
+    study: Annotated[str, typer.Argument(help="Study name (see 'evomotion studies').")],
+    config: Annotated[Path | None, typer.Option("--config", "-c", help="TOML config")] = None,
+    sets: SetOpt = None,
+    out: Annotated[Path | None, typer.Option("--out", help="Run folder")] = None,
+    evaluator: Annotated[str | None, typer.Option(help="serial, process, ray, dask")] = None,
+    workers: Annotated[int | None, typer.Option(help="Worker count (0: all cores)")] = None,
+    address: Annotated[str | None, typer.Option(help="Cluster address (ray/dask)")] = None,
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No console output")] = False,
+) -> None:
+    """Run STUDY and write a run folder (config, stats, checkpoints, plots, artifacts)."""
+    from evomotion.run.config import config_to_toml, resolve_config
+    from evomotion.run.folder import atomic_write_text, make_run_dir
+    from evomotion.run.runner import run_study
+
+    s = get_study(study)
+    overrides = list(sets or [])
+    for key, val in (("evaluator", evaluator), ("workers", workers), ("address", address)):
+        if val is not None:
+            overrides.append(f"run.{key}={val!r}" if isinstance(val, str) else f"run.{key}={val}")
+    cfg = resolve_config(s, config, overrides)
+    out_dir = make_run_dir(s.name, out)
+    if s.run is not None:
+        atomic_write_text(out_dir / "config.toml", config_to_toml(cfg))
+        raise typer.Exit(s.run(cfg, out_dir, cfg.run.evaluator, quiet))
+    res = run_study(s, cfg, out_dir, quiet=quiet)
+    if not quiet:
+        typer.echo(f"{res.stop_reason}: best fitness {res.best_fitness:.6g} after "
+                   f"{res.generation} generations -> {res.out_dir}", err=True)
+    raise typer.Exit(res.exit_code)
+
+
+@app.command("resume")
+def resume_cmd(
+    run_dir: Annotated[Path, typer.Argument(help="Run folder with checkpoints/")],
+    evaluator: Annotated[str | None, typer.Option(help="Continue with another evaluator")] = None,
+    workers: Annotated[int | None, typer.Option(help="Worker count")] = None,
+    address: Annotated[str | None, typer.Option(help="Cluster address (ray/dask)")] = None,
+    quiet: Annotated[bool, typer.Option("--quiet", "-q")] = False,
+) -> None:
+    """Continue an interrupted run from its last checkpoint."""
+    from evomotion.run.config import config_from_dict, config_from_run_dir
+    from evomotion.run.runner import run_study
+
+    name, raw = config_from_run_dir(run_dir)
+    s = get_study(name)
+    if s.run is not None:
+        raise InputError(f"study {name!r} runs to completion in one go; run it again instead")
+    raw.setdefault("run", {})
+    for key, val in (("evaluator", evaluator), ("workers", workers), ("address", address)):
+        if val is not None:
+            raw["run"][key] = val
+    cfg = config_from_dict(s, raw)
+    res = run_study(s, cfg, run_dir, quiet=quiet, resume=True)
+    if not quiet:
+        typer.echo(f"{res.stop_reason}: best fitness {res.best_fitness:.6g} after "
+                   f"{res.generation} generations -> {res.out_dir}", err=True)
+    raise typer.Exit(res.exit_code)
+
+
+@app.command("plot")
+def plot_cmd(
+    run_dirs: Annotated[list[Path], typer.Argument(help="One or more run folders")],
+    out: Annotated[Path | None, typer.Option(help="Output stem (.png and .svg)")] = None,
+) -> None:
+    """Fitness per generation (one run) or median/IQR against evaluations (several)."""
+    from evomotion.run.plots import plot_fitness, plot_runs
+
+    for d in run_dirs:
+        if not (d / "stats.csv").exists():
+            raise InputError(f"{d}: not a run folder (no stats.csv)")
+    if len(run_dirs) == 1:
+        paths = plot_fitness(run_dirs[0] / "stats.csv", out or run_dirs[0] / "plots" / "fitness")
+    else:
+        paths = plot_runs([d / "stats.csv" for d in run_dirs], out or Path("runs-comparison"))
+    for p in paths:
+        typer.echo(str(p))
+
+
+def _mount_study_app(argv: list[str]) -> None:
+    """Mount ``evomotion <study> ...`` subcommands for the study named on the command line."""
+    if len(argv) > 1 and argv[1] in STUDIES:
+        s = get_study(argv[1])
+        if s.cli is not None:
+            app.add_typer(s.cli, name=s.name, help=s.description)
+
+
+def main(argv: list[str] | None = None) -> None:
+    argv = list(sys.argv if argv is None else argv)
+    try:
+        _mount_study_app(argv)
+        app(args=argv[1:], prog_name="evomotion")
+    except (InputError, KeyError) as e:
+        msg = str(e)
+        if isinstance(e, KeyError) and not hasattr(e, "__str__"):
+            msg = repr(e)
+        typer.echo(f"error: {msg}", err=True)
+        sys.exit(2)
+
+
+if __name__ == "__main__":
+    main()

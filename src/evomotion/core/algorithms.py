@@ -1,0 +1,9 @@
+"""Registry of ask/tell optimizers: name -> (config dataclass, factory(genome, cfg))."""
+
+from __future__ import annotations
+
+from evomotion.core.ga import GA, GAConfig
+
+ALGORITHMS: dict[str, tuple[type, object]] = {
+    "ga": (GAConfig, GA),
+}

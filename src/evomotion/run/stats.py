@@ -1,0 +1,68 @@
+"""Per-generation statistics written to ``stats.csv``."""
+
+from __future__ import annotations
+
+import csv
+import io
+from pathlib import Path
+
+import numpy as np
+
+COLUMNS = ("generation", "evaluations", "best", "mean", "median", "min", "max", "std",
+           "best_so_far", "wall_s", "evals_per_s", "diversity", "failed")
+
+
+def population_stats(fitness: np.ndarray) -> dict[str, float]:
+    """Statistics over the finite fitness values of a population (NaN if none)."""
+    f = np.asarray(fitness, dtype=float)
+    f = f[np.isfinite(f)]
+    if f.size == 0:
+        return dict.fromkeys(("mean", "median", "min", "max", "std"), float("nan"))
+    return {"mean": float(f.mean()), "median": float(np.median(f)), "min": float(f.min()),
+            "max": float(f.max()), "std": float(f.std())}
+
+
+def diversity(pop: np.ndarray, span: np.ndarray) -> float:
+    """Mean per-gene standard deviation, as a fraction of each gene's range."""
+    s = np.where(span > 0, span, 1.0)
+    return float(np.mean(np.std(pop, axis=0) / s)) if len(pop) else float("nan")
+
+
+class StatsWriter:
+    """Appends rows to ``stats.csv``; ``offset`` is the byte size used for resume."""
+
+    def __init__(self, path: Path, columns: tuple[str, ...] = COLUMNS) -> None:
+        self.path = Path(path)
+        self.columns = columns
+        if not self.path.exists() or self.path.stat().st_size == 0:
+            self.path.write_text(",".join(columns) + "\n")
+
+    def truncate(self, offset: int) -> None:
+        with open(self.path, "r+b") as fh:
+            fh.truncate(offset)
+
+    @property
+    def offset(self) -> int:
+        return self.path.stat().st_size
+
+    def write(self, row: dict[str, float]) -> None:
+        buf = io.StringIO()
+        csv.writer(buf).writerow([_fmt(row.get(c, "")) for c in self.columns])
+        with open(self.path, "a") as fh:
+            fh.write(buf.getvalue())
+
+
+def _fmt(v: object) -> str:
+    if isinstance(v, float):
+        return repr(v)
+    return str(v)
+
+
+def read_stats(path: Path) -> dict[str, np.ndarray]:
+    """``stats.csv`` as columns of floats."""
+    with open(path) as fh:
+        rows = list(csv.DictReader(fh))
+    if not rows:
+        return {}
+    return {k: np.array([float(r[k]) if r[k] not in ("", None) else np.nan for r in rows])
+            for k in rows[0]}

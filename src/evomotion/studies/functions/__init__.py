@@ -1,0 +1,1 @@
+"""Classic continuous benchmark functions (sphere, Rosenbrock, Rastrigin, Ackley)."""

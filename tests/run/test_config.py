@@ -1,0 +1,55 @@
+from __future__ import annotations
+
+import pytest
+
+from evomotion.errors import InputError
+from evomotion.run.config import config_from_dict, config_to_toml, resolve_config
+from evomotion.studies import get_study
+
+S = get_study("functions")
+
+
+def test_precedence_set_over_file_over_defaults(tmp_path):
+    f = tmp_path / "c.toml"
+    f.write_text("[run]\nseed = 5\ngenerations = 7\n[problem]\ndim = 4\n")
+    cfg = resolve_config(S, f, ["run.seed=9", "algorithm.crossover_params.alpha=0.7"])
+    assert cfg.run.seed == 9 and cfg.run.generations == 7 and cfg.problem.dim == 4
+    assert cfg.algorithm.crossover_params == {"alpha": 0.7}
+    assert cfg.algorithm.replacement == "plus"  # study default
+    assert cfg.run.checkpoint_every == 10  # dataclass default
+
+
+def test_round_trip_through_toml(tmp_path):
+    import tomllib
+
+    cfg = resolve_config(S, None, ["run.target=1e-3", "problem.name=ackley"])
+    raw = tomllib.loads(config_to_toml(cfg))
+    assert config_from_dict(S, raw) == cfg
+
+
+@pytest.mark.parametrize("item,msg", [
+    ("run.bogus=1", "unknown key 'run.bogus'; valid keys: address"),
+    ("run.seed=abc", "run.seed: expected int"),
+    ("run.generations=-3", "run.generations must be >= 0"),
+    ("algorithm.pop_size=-5", "pop_size must be >= 2"),
+    ("algorithm.name=nope", "unknown algorithm 'nope'"),
+    ("nosection=1", "SECTION.NAME"),
+    ("problem.dim", "KEY=VALUE"),
+])
+def test_bad_overrides(item, msg):
+    with pytest.raises(InputError, match=msg):
+        resolve_config(S, None, [item])
+
+
+def test_malformed_toml_names_file_and_line(tmp_path):
+    f = tmp_path / "bad.toml"
+    f.write_text("[run]\nseed = 1\ngenerations = = 3\n")
+    with pytest.raises(InputError, match=r"bad.toml:3: .*invalid TOML"):
+        resolve_config(S, f)
+
+
+def test_unknown_section(tmp_path):
+    f = tmp_path / "c.toml"
+    f.write_text("[runn]\nseed = 1\n")
+    with pytest.raises(InputError, match="unknown section 'runn'"):
+        resolve_config(S, f)
