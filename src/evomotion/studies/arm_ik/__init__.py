@@ -1,0 +1,1 @@
+"""Arm + fingers inverse kinematics among obstacles (seed 001)."""

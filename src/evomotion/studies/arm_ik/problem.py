@@ -1,0 +1,139 @@
+"""Arm-IK problem of seed 001: configuration, batch assessment and the Problem protocol."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from evomotion.core.problem import Evaluation, GenomeSpec
+from evomotion.errors import InputError
+from evomotion.studies.arm_ik.geometry import count_intersections
+from evomotion.studies.arm_ik.heuristics import WristMap, build_wrist_map
+from evomotion.studies.arm_ik.kinematics import Layout, forward
+from evomotion.studies.arm_ik.objective import (
+    DISTANCES,
+    MATCHINGS,
+    greedy_match,
+    keys_match,
+    matched,
+    optimal_match,
+    straight_distances,
+)
+from evomotion.studies.arm_ik.scenario import Scenario, load_scenario
+from evomotion.studies.arm_ik.visibility import VisibilityGraph
+
+
+@dataclass(frozen=True)
+class ArmIKConfig:
+    """``[problem]`` section of the arm-ik study (angles in degrees, lengths in board units)."""
+
+    scenario: str = "seed_example"  # bundled name or path to a scenario file
+    matching: str = "optimal"  # greedy | optimal | chromosome
+    distance: str = "straight"  # straight | obstacle (way around the obstacles)
+    pop_size: int = 100
+    arm_generations: int = 15  # seed schedule: N arm generations,
+    finger_generations: int = 15  # then M finger generations,
+    whole_generations: int = 3000  # then whole-limb generations (until solved)
+    wall_seconds: float = 30.0  # give up after this long (whole run)
+    tournament_k: int = 2  # parent tournament size
+    blend_prob: float = 0.5  # per active gene: beta-blend, else inherit (uniform swap)
+    circular_blend: bool = True  # blend full-circle angles along the shorter arc
+    mutation_rate: float = 1.0  # probability that a child gets one angle perturbed
+    mutation_min_deg: float = 1e-3  # perturbation magnitude is log-uniform in [min, max]
+    mutation_max_deg: float = 60.0
+    infeasible_fraction: float = 0.1  # IDEA: share of survivors kept infeasible
+    cell_size: float = 0.0  # heuristic cell side (board units); 0 = diagonal / 150
+    tolerance: float = 1e-3  # solved: every tip within tolerance * diagonal of its target
+    stop_when_solved: bool = True
+    pictures: bool = True  # board.png and best.gif in the run folder
+    gif_frames: int = 30
+
+    def validate(self) -> None:
+        if self.matching not in MATCHINGS:
+            raise InputError(f"problem.matching: expected one of {', '.join(MATCHINGS)}, "
+                             f"got {self.matching!r}")
+        if self.distance not in DISTANCES:
+            raise InputError(f"problem.distance: expected one of {', '.join(DISTANCES)}, "
+                             f"got {self.distance!r}")
+        if self.pop_size < 4 or self.pop_size % 2:
+            raise InputError(f"problem.pop_size: expected an even number >= 4, got {self.pop_size}")
+        if not 0 <= self.infeasible_fraction < 1:
+            raise InputError("problem.infeasible_fraction: expected a value in [0, 1)")
+        if not 0 < self.mutation_min_deg <= self.mutation_max_deg:
+            raise InputError("problem.mutation_min_deg/max_deg: expected 0 < min <= max")
+
+
+@dataclass
+class Assessment:
+    """Everything measured about a batch of limbs (arrays over the population)."""
+
+    wrist_distance: np.ndarray  # (n,) to the nearest wrist-candidate cell (arm phase objective)
+    arm_intersections: np.ndarray  # (n,) arm bones x obstacle edges
+    intersections: np.ndarray  # (n,) all bones x obstacle edges
+    distance: np.ndarray  # (n,) sum of matched tip distances (finger / whole phase objective)
+    tip_error: np.ndarray  # (n, F) straight-line matched tip-target distances
+    assignment: np.ndarray  # (n, F) target index of each finger
+    tips: np.ndarray  # (n, F, 2)
+    solved: np.ndarray  # (n,) bool
+
+    def take(self, idx: np.ndarray) -> Assessment:
+        return Assessment(**{k: v[idx] for k, v in vars(self).items()})
+
+    @staticmethod
+    def concat(a: Assessment, b: Assessment) -> Assessment:
+        return Assessment(**{k: np.concatenate([v, getattr(b, k)]) for k, v in vars(a).items()})
+
+
+class ArmIKProblem:
+    """Batch evaluation of limbs; ``evaluate`` gives the penalised whole-limb fitness."""
+
+    sense = "min"
+    metric_names = ("distance", "intersections", "max_tip_error", "solved")
+
+    def __init__(self, cfg: ArmIKConfig, scenario: Scenario | None = None) -> None:
+        cfg.validate()
+        self.cfg = cfg
+        self.scn = scenario if scenario is not None else load_scenario(cfg.scenario)
+        self.layout = Layout.of(self.scn, with_keys=cfg.matching == "chromosome")
+        self.genome = GenomeSpec(self.layout.lower, self.layout.upper)
+        self.obstacles = self.scn.obstacle_segments()
+        self.wrist_map: WristMap = build_wrist_map(self.scn, cfg.cell_size)
+        self.visibility = VisibilityGraph.build(self.scn) if cfg.distance == "obstacle" else None
+        self.tol = cfg.tolerance * self.scn.diagonal
+
+    def assess(self, genomes: np.ndarray) -> Assessment:
+        g = np.atleast_2d(np.asarray(genomes, dtype=float))
+        pose = forward(self.scn, self.layout, g)
+        arm_hits = count_intersections(pose.arm_segments(), self.obstacles)
+        fmask = self.layout.finger_mask.ravel()
+        hits = arm_hits + count_intersections(pose.finger_segments(), self.obstacles, fmask)
+        tips = pose.tips
+        straight = straight_distances(tips, self.scn.targets)
+        D = straight
+        if self.visibility is not None:
+            D = self.visibility.distances(tips)
+            D = np.where(np.isfinite(D), D, straight + self.scn.diagonal)  # tip inside a wall
+        if self.cfg.matching == "greedy":
+            assign = greedy_match(D)
+        elif self.cfg.matching == "optimal":
+            assign = optimal_match(D)
+        else:
+            assign = keys_match(g[:, self.layout.keys])
+        tip_err = matched(straight, assign)
+        in_limits = np.all((g >= self.layout.lower) & (g <= self.layout.upper), axis=1)
+        solved = (hits == 0) & np.all(tip_err <= self.tol, axis=1) & in_limits
+        return Assessment(self.wrist_map.wrist_distance(pose.wrist), arm_hits, hits,
+                          matched(D, assign).sum(axis=1), tip_err, assign, tips, solved)
+
+    def evaluate(self, genomes: np.ndarray) -> Evaluation:
+        """Whole-limb fitness ``distance + diagonal * intersections`` (for generic optimizers)."""
+        a = self.assess(genomes)
+        fit = a.distance + self.scn.diagonal * a.intersections
+        metrics = {"distance": a.distance, "intersections": a.intersections.astype(float),
+                   "max_tip_error": a.tip_error.max(axis=1), "solved": a.solved.astype(float)}
+        return Evaluation(fit, metrics)
+
+
+def make_problem(cfg: ArmIKConfig) -> ArmIKProblem:
+    return ArmIKProblem(cfg)

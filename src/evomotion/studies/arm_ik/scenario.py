@@ -1,0 +1,226 @@
+"""Scenario files of seed 001 (Januszkiewicz & Kowalski 2011, section 1.1).
+
+One value group per line; lines starting with ``#`` are comments and blank lines are
+skipped. In order: board width, board height, start point ``X Y``, the number of targets
+(= number of fingers), the targets, the number of arm bones, one ``length min_deg max_deg``
+line per arm bone, then for every finger its bone count and bone lines, then the number of
+obstacles and for each obstacle its point count and points. An obstacle is the polyline
+through its points; it is closed when the last point repeats the first.
+
+Angles (degrees) are counter-clockwise rotations relative to the previous bone, 0 meaning
+straight on; the first arm bone is relative to +x, the first bone of every finger relative
+to the last arm bone. Limits satisfy ``0 <= min <= max <= 360``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from evomotion.errors import FileFormatError
+
+SCENARIO_DIR = Path(__file__).parent / "scenarios"
+
+
+@dataclass(frozen=True)
+class Chain:
+    """A chain of bones: ``length[k]`` (board units) and joint limits ``min_deg/max_deg[k]``."""
+
+    length: np.ndarray
+    min_deg: np.ndarray
+    max_deg: np.ndarray
+
+    @property
+    def n_bones(self) -> int:
+        return int(self.length.size)
+
+    def reach(self) -> tuple[float, float]:
+        """Conservative [min, max] distance from the chain's base to its tip.
+
+        ``max = sum(length)``; ``min = max(0, longest - rest)`` (triangle inequality). Both hold
+        for any joint limits, so no reachable position is ever excluded.
+        """
+        total = float(self.length.sum())
+        longest = float(self.length.max())
+        return max(0.0, 2 * longest - total), total
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A parsed scenario; points are ``[x, y]`` in board units."""
+
+    name: str
+    width: float
+    height: float
+    start: np.ndarray  # (2,)
+    targets: np.ndarray  # (T, 2)
+    arm: Chain
+    fingers: tuple[Chain, ...]
+    obstacles: tuple[np.ndarray, ...]  # each (k, 2), k >= 2
+
+    @property
+    def diagonal(self) -> float:
+        return math.hypot(self.width, self.height)
+
+    @property
+    def n_targets(self) -> int:
+        return int(self.targets.shape[0])
+
+    def obstacle_segments(self) -> np.ndarray:
+        """All obstacle edges as ``(M, 2, 2)`` = (segment, endpoint, xy)."""
+        segs = [np.stack([p[:-1], p[1:]], axis=1) for p in self.obstacles]
+        return np.concatenate(segs) if segs else np.zeros((0, 2, 2))
+
+    def summary(self) -> str:
+        lo, hi = self.arm.reach()
+        lines = [
+            f"scenario {self.name}: board {self.width:g} x {self.height:g}, "
+            f"start ({self.start[0]:g}, {self.start[1]:g})",
+            f"  {self.n_targets} targets / fingers: "
+            + ", ".join(f"({x:g}, {y:g})" for x, y in self.targets),
+            f"  arm: {self.arm.n_bones} bones, reach [{lo:g}, {hi:g}]",
+        ]
+        for j, f in enumerate(self.fingers):
+            flo, fhi = f.reach()
+            lines.append(f"  finger {j + 1}: {f.n_bones} bones, reach [{flo:g}, {fhi:g}]")
+        closed = sum(bool(np.array_equal(p[0], p[-1])) for p in self.obstacles)
+        lines.append(
+            f"  {len(self.obstacles)} obstacles ({closed} closed), "
+            f"{self.obstacle_segments().shape[0]} edges"
+        )
+        return "\n".join(lines)
+
+
+class _Lines:
+    """Cursor over the non-comment lines of a file, raising FileFormatError on bad values."""
+
+    def __init__(self, text: str, path: str) -> None:
+        self.path = path
+        self.rows: list[tuple[int, list[str]]] = []
+        last = 0
+        for no, raw in enumerate(text.splitlines(), start=1):
+            last = no
+            s = raw.strip()
+            if s and not s.startswith("#"):
+                self.rows.append((no, s.split()))
+        self.eof_line = last + 1
+        self.i = 0
+
+    def _next(self, what: str) -> tuple[int, list[str]]:
+        if self.i >= len(self.rows):
+            raise FileFormatError(self.path, self.eof_line, f"expected {what}, got end of file")
+        row = self.rows[self.i]
+        self.i += 1
+        return row
+
+    def numbers(self, what: str, n: int) -> tuple[int, list[float]]:
+        no, toks = self._next(what)
+        if len(toks) != n:
+            raise FileFormatError(
+                self.path, no, f"expected {what} ({n} values), got {len(toks)} values"
+            )
+        vals = []
+        for t in toks:
+            try:
+                v = float(t)
+            except ValueError:
+                raise FileFormatError(
+                    self.path, no, f"expected {what}, got non-numeric {t!r}") from None
+            if not math.isfinite(v):
+                raise FileFormatError(self.path, no, f"expected {what}, got {t!r}")
+            vals.append(v)
+        return no, vals
+
+    def count(self, what: str, minimum: int) -> int:
+        no, toks = self._next(what)
+        if len(toks) != 1 or not toks[0].lstrip("+-").isdigit():
+            got = " ".join(toks)
+            raise FileFormatError(self.path, no, f"expected {what} (one integer), got {got!r}")
+        v = int(toks[0])
+        if v < minimum:
+            raise FileFormatError(self.path, no, f"expected {what} >= {minimum}, got {v}")
+        return v
+
+    def positive(self, what: str) -> float:
+        no, (v,) = self.numbers(what, 1)
+        if v <= 0:
+            raise FileFormatError(self.path, no, f"expected {what} > 0, got {v:g}")
+        return v
+
+    def point(self, what: str, width: float, height: float, inside: bool) -> np.ndarray:
+        no, (x, y) = self.numbers(what, 2)
+        if inside and not (0 <= x <= width and 0 <= y <= height):
+            raise FileFormatError(
+                self.path, no, f"expected {what} inside the board [0, {width:g}] x [0, {height:g}]"
+                f", got ({x:g}, {y:g})"
+            )
+        return np.array([x, y])
+
+    def chain(self, what: str) -> Chain:
+        k = self.count(f"number of bones of the {what}", 1)
+        rows = []
+        for b in range(k):
+            label = f"{what} bone {b + 1} 'length min_deg max_deg'"
+            no, (length, lo, hi) = self.numbers(label, 3)
+            if length <= 0:
+                raise FileFormatError(self.path, no,
+                                      f"expected {label} with length > 0, got {length:g}")
+            if not 0 <= lo <= hi <= 360:
+                raise FileFormatError(
+                    self.path, no,
+                    f"expected {label} with 0 <= min <= max <= 360, got {lo:g} {hi:g}",
+                )
+            rows.append((length, lo, hi))
+        a = np.array(rows, dtype=float)
+        return Chain(a[:, 0].copy(), a[:, 1].copy(), a[:, 2].copy())
+
+
+def parse_scenario_text(text: str, path: str = "<text>", name: str | None = None) -> Scenario:
+    """Parse scenario ``text``; errors name ``path``, the line and what was expected."""
+    c = _Lines(text, path)
+    width = c.positive("board width")
+    height = c.positive("board height")
+    start = c.point("start point 'X Y'", width, height, inside=True)
+    n_targets = c.count("number of targets", 1)
+    targets = np.stack(
+        [c.point(f"target {t + 1} 'X Y'", width, height, inside=True) for t in range(n_targets)]
+    )
+    arm = c.chain("arm")
+    fingers = tuple(c.chain(f"finger {j + 1}") for j in range(n_targets))
+    n_obst = c.count("number of obstacles", 0)
+    obstacles = []
+    for o in range(n_obst):
+        k = c.count(f"number of points of obstacle {o + 1}", 2)
+        pts = [c.point(f"obstacle {o + 1} point {p + 1} 'X Y'", width, height, False)
+               for p in range(k)]
+        obstacles.append(np.stack(pts))
+    if c.i < len(c.rows):
+        no, toks = c.rows[c.i]
+        raise FileFormatError(path, no, f"expected end of file, got extra line {' '.join(toks)!r}")
+    return Scenario(name or Path(path).stem, width, height, start, targets, arm, fingers,
+                    tuple(obstacles))
+
+
+def load_scenario(name_or_path: str | Path) -> Scenario:
+    """A bundled scenario by name (``seed_example``) or a scenario file by path."""
+    p = Path(name_or_path)
+    if not p.is_file():
+        bundled = SCENARIO_DIR / f"{name_or_path}.scen"
+        if bundled.is_file():
+            p = bundled
+        else:
+            avail = ", ".join(bundled_names())
+            raise FileFormatError(name_or_path, None,
+                                  f"expected a scenario file or a bundled name ({avail})")
+    try:
+        text = p.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as e:
+        raise FileFormatError(p, None, f"expected a readable UTF-8 text file ({e})") from None
+    return parse_scenario_text(text, str(p))
+
+
+def bundled_names() -> list[str]:
+    return sorted(q.stem for q in SCENARIO_DIR.glob("*.scen"))

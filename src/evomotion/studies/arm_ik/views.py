@@ -1,0 +1,80 @@
+"""Pictures after seed 001's figure 2: obstacles red, start green, targets orange, cells not
+reachable from the start black, wrist-candidate cells light blue; the best limb blue and the
+best feasible one green. ``best.gif`` animates the best limb over the generations."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import imageio.v2 as imageio  # noqa: E402
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.colors import ListedColormap  # noqa: E402
+
+from evomotion.studies.arm_ik.kinematics import forward  # noqa: E402
+from evomotion.studies.arm_ik.problem import ArmIKProblem  # noqa: E402
+
+
+def _draw_board(ax, prob: ArmIKProblem) -> None:
+    scn, wm = prob.scn, prob.wrist_map
+    layer = np.where(~wm.reachable, 1, np.where(wm.candidate, 2, 0))
+    ax.imshow(layer, origin="lower", extent=(0, wm.reachable.shape[1] * wm.cell, 0,
+              wm.reachable.shape[0] * wm.cell), interpolation="nearest",
+              cmap=ListedColormap(["white", "black", "#add8e6"]), vmin=0, vmax=2)
+    for p in scn.obstacles:
+        ax.plot(p[:, 0], p[:, 1], color="red", lw=2)
+    ax.plot(*scn.start, "o", color="green", ms=8)
+    ax.plot(scn.targets[:, 0], scn.targets[:, 1], "o", color="orange", ms=8)
+    ax.set_xlim(0, scn.width)
+    ax.set_ylim(0, scn.height)
+    ax.set_aspect("equal")
+
+
+def _draw_limb(ax, prob: ArmIKProblem, genome: np.ndarray, color: str, label: str) -> None:
+    pose = forward(prob.scn, prob.layout, genome[None])
+    arm = pose.arm_joints[0]
+    ax.plot(arm[:, 0], arm[:, 1], "-o", color=color, lw=2.5, ms=3, label=label)
+    for j, b in enumerate(prob.layout.finger_bones):
+        f = pose.finger_joints[0, j, : b + 1]
+        ax.plot(f[:, 0], f[:, 1], "-o", color=color, lw=1.5, ms=2, alpha=0.8)
+
+
+def _figure(prob: ArmIKProblem):
+    scn = prob.scn
+    w = 7.0
+    return plt.subplots(figsize=(w, max(2.5, w * scn.height / scn.width + 0.6)), dpi=100)
+
+
+def save_board(prob: ArmIKProblem, best: np.ndarray, best_feasible: np.ndarray | None,
+               path: Path, title: str = "") -> None:
+    """``board.png``: the heuristic map, the best limb (blue) and best feasible limb (green)."""
+    fig, ax = _figure(prob)
+    _draw_board(ax, prob)
+    _draw_limb(ax, prob, best, "blue", "best")
+    if best_feasible is not None:
+        _draw_limb(ax, prob, best_feasible, "green", "best feasible")
+    ax.legend(loc="upper right", fontsize=7)
+    ax.set_title(title or prob.scn.name, fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+
+
+def save_gif(prob: ArmIKProblem, history: np.ndarray, path: Path, frames: int = 30,
+             fps: float = 5.0) -> None:
+    """Animated GIF of the best limb at ``frames`` generations spread over ``history``."""
+    idx = np.unique(np.linspace(0, history.shape[0] - 1, max(1, frames)).round().astype(int))
+    fig, ax = _figure(prob)
+    images = []
+    for g in idx:
+        ax.clear()
+        _draw_board(ax, prob)
+        _draw_limb(ax, prob, history[g], "blue", "best")
+        ax.set_title(f"{prob.scn.name}: generation {g}", fontsize=9)
+        fig.canvas.draw()
+        images.append(np.asarray(fig.canvas.buffer_rgba())[..., :3].copy())
+    plt.close(fig)
+    imageio.mimsave(path, images, duration=1.0 / fps, loop=0)
