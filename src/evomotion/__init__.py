@@ -1,3 +1,3 @@
-"""evomotion: evolve and search robot motions (gaits, steps, kicks, reaching poses, plans, paths)."""
+"""evomotion: evolve and search robot motions (gaits, steps, kicks, reaches, plans, paths)."""
 
 __version__ = "0.1.0"

@@ -79,12 +79,12 @@ def test_resume_after_kill_9_is_bit_identical(tmp_path):
     run_study(STUDY, cfg, tmp_path / "full", quiet=True)
     out = tmp_path / "killed"
     code = (
-        "import sys; sys.path.insert(0, %r)\n"
+        f"import sys; sys.path.insert(0, {str(Path(__file__).parent)!r})\n"
         "from toy_study import STUDY\n"
         "from evomotion.run.config import resolve_config\n"
         "from evomotion.run.runner import run_study\n"
-        "run_study(STUDY, resolve_config(STUDY, None, %r), %r, quiet=True)\n"
-    ) % (str(Path(__file__).parent), overrides, str(out))
+        f"run_study(STUDY, resolve_config(STUDY, None, {overrides!r}), {str(out)!r}, quiet=True)\n"
+    )
     proc = subprocess.Popen([sys.executable, "-c", code])
     deadline = time.time() + 60
     while time.time() < deadline:

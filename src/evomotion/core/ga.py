@@ -66,7 +66,6 @@ class GAConfig:
 class GAState:
     pop: np.ndarray
     cost: np.ndarray
-    children: np.ndarray
     best_x: np.ndarray
     best_cost: float
     generation: int = 0
@@ -98,7 +97,7 @@ class GA(Optimizer):
         if pop is None:
             pop = self.genome.sample(rng, self.cfg.pop_size)
         return GAState(pop=np.asarray(pop, float), cost=np.full(len(pop), np.inf),
-                       children=np.empty((0, d)), best_x=np.full(d, np.nan), best_cost=np.inf)
+                       best_x=np.full(d, np.nan), best_cost=np.inf)
 
     def _ask(self, state: GAState, rng: np.random.Generator):
         if not state.evaluated:
@@ -115,11 +114,10 @@ class GA(Optimizer):
                 kids[2, keep] = a[keep]
         flat = kids.transpose(1, 0, 2).reshape(-1, g.dim)  # pair-major
         flat = self._mut(flat, g.lower, g.upper, rng, c.mutation_rate, **c.mutation_params)
-        flat = clip_to_bounds(flat, g.lower, g.upper)
+        flat = clip_to_bounds(flat, g.lower, g.upper, out=flat)
         if self._k == 2:
             flat = flat[: self.n_offspring]
-        state.children = flat
-        return flat.copy(), state
+        return flat, state
 
     def _tell(self, state: GAState, genomes, cost, rng):
         if not state.evaluated:
@@ -133,7 +131,6 @@ class GA(Optimizer):
             state.pop, state.cost = self._rep(state.pop, state.cost, kids, kcost,
                                               self.cfg.n_elite)
             state.generation += 1
-        state.children = np.empty((0, self.genome.dim))
         i = int(np.argmin(state.cost))
         if state.cost[i] < state.best_cost:
             state.best_cost, state.best_x = float(state.cost[i]), state.pop[i].copy()

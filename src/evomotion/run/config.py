@@ -132,14 +132,12 @@ def _check_type(value: Any, tp: Any, key: str) -> Any:
         return value
     if tp is str and isinstance(value, str):
         return value
-    if origin is dict or tp is dict:
-        if isinstance(value, dict):
-            return dict(value)
-    if origin in (tuple, list) or tp in (tuple, list):
-        if isinstance(value, list | tuple):
-            args = [a for a in typing.get_args(tp) if a is not Ellipsis]
-            items = [_check_type(v, args[0], key) for v in value] if args else list(value)
-            return tuple(items) if (origin is tuple or tp is tuple) else items
+    if (origin is dict or tp is dict) and isinstance(value, dict):
+        return dict(value)
+    if (origin in (tuple, list) or tp in (tuple, list)) and isinstance(value, list | tuple):
+        args = [a for a in typing.get_args(tp) if a is not Ellipsis]
+        items = [_check_type(v, args[0], key) for v in value] if args else list(value)
+        return tuple(items) if (origin is tuple or tp is tuple) else items
     name = getattr(tp, "__name__", str(tp))
     raise InputError(f"{key}: expected {name}, got {type(value).__name__} {value!r}")
 

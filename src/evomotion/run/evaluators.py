@@ -11,9 +11,9 @@ lazily.
 from __future__ import annotations
 
 import importlib
+import multiprocessing
 import os
 from collections.abc import Callable
-import multiprocessing
 from concurrent.futures import ProcessPoolExecutor
 from typing import Any
 

@@ -128,11 +128,14 @@ def blx_alpha(a, b, rng: np.random.Generator, alpha: float = 0.5) -> np.ndarray:
     if alpha < 0:
         raise ValueError(f"blx_alpha needs alpha >= 0, got {alpha}")
     a, b = _pair(a, b)
-    lo, hi = np.minimum(a, b), np.maximum(a, b)
-    span = hi - lo
-    lo, hi = lo - alpha * span, hi + alpha * span
+    lo = np.minimum(a, b)
+    width = np.abs(a - b)
+    lo -= alpha * width
+    width *= 1.0 + 2.0 * alpha
     u = rng.random((2,) + a.shape)
-    return lo + u * (hi - lo)
+    u *= width
+    u += lo
+    return u
 
 
 @_reg("sbx")

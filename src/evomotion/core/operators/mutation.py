@@ -25,10 +25,15 @@ def _reg(name: str):
     return deco
 
 
-def clip_to_bounds(x: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
-    """Clip every gene into its box (NaN genes become the lower bound)."""
-    x = np.where(np.isnan(x), lower, x)
-    return np.clip(x, lower, upper)
+def clip_to_bounds(x: np.ndarray, lower: np.ndarray, upper: np.ndarray,
+                   out: np.ndarray | None = None) -> np.ndarray:
+    """Clip every gene into its box; NaN genes become the lower bound (``out`` may be ``x``)."""
+    y = np.maximum(x, lower, out=out)  # maximum propagates NaN ...
+    np.minimum(y, upper, out=y)
+    nan = np.isnan(y)
+    if nan.any():  # ... so replace NaN genes explicitly
+        y[nan] = np.broadcast_to(lower, y.shape)[nan]
+    return y
 
 
 def _who(rng: np.random.Generator, n: int, rate: float) -> np.ndarray:
@@ -37,14 +42,37 @@ def _who(rng: np.random.Generator, n: int, rate: float) -> np.ndarray:
     return rng.random(n) < rate
 
 
-def _gene_mask(rng, shape, gene_rate):
-    n, d = shape
+def _positions(rng: np.random.Generator, who: np.ndarray, d: int,
+               gene_rate: float | None) -> tuple[np.ndarray, np.ndarray]:
+    """Row/column indices of the genes to mutate.
+
+    Each gene of a mutated individual (``who``) is chosen with probability ``gene_rate``
+    (default ``1/d``), and at least one gene is forced per mutated individual. For small
+    rates the Bernoulli process is sampled sparsely through geometric gaps between hits,
+    so the cost is proportional to the number of mutated genes, not to ``n * d``.
+    """
+    n = who.size
     p = 1.0 / d if gene_rate is None else float(gene_rate)
-    m = rng.random(shape) < p
-    # at least one gene changes in a mutated individual
-    force = rng.integers(0, d, n)
-    m[np.arange(n), force] = True
-    return m
+    if not 0.0 <= p <= 1.0:
+        raise ValueError(f"gene_rate must be in [0, 1], got {p}")
+    total = n * d
+    if p >= 0.2 or total == 0:
+        flat = np.flatnonzero(rng.random(total) < p)
+    elif p == 0.0:
+        flat = np.empty(0, dtype=np.int64)
+    else:
+        mean = total * p
+        size = int(mean + 6 * np.sqrt(mean) + 16)
+        pos = np.cumsum(rng.geometric(p, size=size)) - 1
+        while pos[-1] < total - 1:  # rare: extend the process until it passes the end
+            pos = np.concatenate([pos, pos[-1] + np.cumsum(rng.geometric(p, size=size))])
+        flat = pos[pos < total]
+    rows, cols = np.divmod(flat, d)
+    keep = who[rows]
+    rows, cols = rows[keep], cols[keep]
+    forced = np.flatnonzero(who & (np.bincount(rows, minlength=n) == 0))
+    fcols = rng.integers(0, d, forced.size)
+    return np.concatenate([rows, forced]), np.concatenate([cols, fcols])
 
 
 @_reg("uniform_reset")
@@ -52,10 +80,10 @@ def uniform_reset(x, lower, upper, rng: np.random.Generator, rate: float,
                   gene_rate: float | None = None) -> np.ndarray:
     """Reset chosen genes to ``U(lower, upper)``."""
     x = np.array(x, dtype=float)
-    who = _who(rng, x.shape[0], rate)
-    mask = _gene_mask(rng, x.shape, gene_rate) & who[:, None]
-    fresh = rng.uniform(lower, upper, size=x.shape)
-    return np.where(mask, fresh, x)
+    r, c = _positions(rng, _who(rng, x.shape[0], rate), x.shape[1], gene_rate)
+    lower, upper = np.broadcast_to(lower, x.shape[1]), np.broadcast_to(upper, x.shape[1])
+    x[r, c] = rng.uniform(lower[c], upper[c])
+    return x
 
 
 @_reg("gaussian")
@@ -65,10 +93,11 @@ def gaussian(x, lower, upper, rng: np.random.Generator, rate: float,
     if sigma < 0:
         raise ValueError(f"gaussian mutation needs sigma >= 0, got {sigma}")
     x = np.array(x, dtype=float)
-    who = _who(rng, x.shape[0], rate)
-    mask = _gene_mask(rng, x.shape, gene_rate) & who[:, None]
-    step = rng.standard_normal(x.shape) * (sigma * (np.asarray(upper) - np.asarray(lower)))
-    return clip_to_bounds(np.where(mask, x + step, x), lower, upper)
+    r, c = _positions(rng, _who(rng, x.shape[0], rate), x.shape[1], gene_rate)
+    lower, upper = np.broadcast_to(lower, x.shape[1]), np.broadcast_to(upper, x.shape[1])
+    v = x[r, c] + rng.standard_normal(r.size) * (sigma * (upper[c] - lower[c]))
+    x[r, c] = np.clip(v, lower[c], upper[c])
+    return x
 
 
 @_reg("perturb_k")

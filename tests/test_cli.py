@@ -1,0 +1,65 @@
+"""CLI behaviour: one-line errors for bad input, the README's commands, plot, resume."""
+
+from __future__ import annotations
+
+import json
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def cli(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "evomotion.cli", *args], capture_output=True,
+                          text=True, cwd=cwd, timeout=300)
+
+
+@pytest.mark.parametrize("args,msg", [
+    (["run", "nope"], "unknown study 'nope'; available: "),
+    (["run", "functions", "--set", "algorithm.pop_size=-4"], "pop_size must be >= 2"),
+    (["run", "functions", "--set", "algorithm.crossover=blx"], "unknown crossover 'blx'"),
+    (["run", "functions", "--set", "run.bogus=1"], "unknown key 'run.bogus'"),
+    (["resume", "/nonexistent/run"], "not a run folder"),
+])
+def test_bad_input_is_one_line_error(tmp_path, args, msg):
+    r = cli(*args, cwd=tmp_path)
+    assert r.returncode == 2
+    assert "Traceback" not in r.stderr
+    lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1 and msg in lines[0], r.stderr
+    assert not (tmp_path / "runs").exists()  # nothing created for a rejected command
+
+
+def test_malformed_toml(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[run]\nseed = \n")
+    r = cli("run", "functions", "--config", str(bad), cwd=tmp_path)
+    assert r.returncode == 2 and "Traceback" not in r.stderr
+    assert re.search(r"bad.toml:2: .*invalid TOML", r.stderr)
+
+
+def test_run_resume_plot_studies(tmp_path):
+    r = cli("run", "functions", "--set", "run.generations=12", "--set", "problem.dim=5",
+            "--out", str(tmp_path / "r"), "--quiet")
+    assert r.returncode == 0, r.stderr
+    assert r.stdout == "" and r.stderr == ""  # --quiet and not a terminal: silent
+    best = json.loads((tmp_path / "r" / "best.json").read_text())
+    assert best["stop_reason"] == "generations" and best["generation"] == 12
+    r = cli("plot", str(tmp_path / "r"), str(tmp_path / "r"), "--out", str(tmp_path / "cmp"))
+    assert r.returncode == 0 and (tmp_path / "cmp.png").exists() and (tmp_path / "cmp.svg").exists()
+    r = cli("studies")
+    assert r.returncode == 0 and "functions" in r.stdout
+
+
+def test_readme_commands_are_the_ci_commands():
+    readme = (ROOT / "README.md").read_text()
+    blocks = re.findall(r"```sh\n(.*?)```", readme, re.S)
+    assert len(blocks) >= 2
+    main_job, tests = blocks[0].strip(), blocks[1].strip()
+    assert "evomotion run" in main_job
+    ci = (ROOT / ".ci" / "run").read_text()
+    assert tests in ci
