@@ -116,7 +116,6 @@ class CMAESState:
     C: np.ndarray  # [d, d]
     B: np.ndarray  # eigenvectors of C (columns)
     D: np.ndarray  # sqrt of eigenvalues
-    c_inv_sqrt: np.ndarray  # C^{-1/2}
     p_sigma: np.ndarray
     p_c: np.ndarray
     lam: int
@@ -183,7 +182,7 @@ class CMAES(Optimizer):
         mean[self.fixed] = 0.0
         eye = np.eye(n)
         return dict(mean=mean, sigma=float(sigma), C=eye.copy(), B=eye.copy(), D=np.ones(n),
-                    c_inv_sqrt=eye.copy(), p_sigma=np.zeros(n), p_c=np.zeros(n), lam=int(lam),
+                    p_sigma=np.zeros(n), p_c=np.zeros(n), lam=int(lam),
                     pop=np.zeros((lam, n)), cost=np.full(lam, np.inf),
                     modified=np.zeros(lam, bool), best_hist=np.zeros(0), median_hist=np.zeros(0),
                     generation=0, eigen_generation=0, restart_best=math.inf, since_improvement=0,

@@ -26,7 +26,7 @@ class StrategyParams:
     c_mu: float
     c_m: float
     chi_n: float  # E||N(0, I)||
-    eigen_every: int  # generations between eigendecompositions
+    eigen_every: float  # generations between eigendecompositions (lazy update gap)
 
 
 def strategy_params(n: int, lam: int) -> StrategyParams:
@@ -56,6 +56,6 @@ def strategy_params(n: int, lam: int) -> StrategyParams:
     else:
         weights[mu:] = 0.0
     chi_n = math.sqrt(n) * (1 - 1 / (4 * n) + 1 / (21 * n * n))
-    eigen_every = max(1, int(1 / (10 * n * (c_1 + c_mu))))
+    eigen_every = 1 / (10 * n * (c_1 + c_mu))
     return StrategyParams(lam, mu, weights, mu_eff, c_sigma, d_sigma, c_c, c_1, c_mu, 1.0,
                           chi_n, eigen_every)

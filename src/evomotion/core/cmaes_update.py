@@ -40,7 +40,7 @@ def cmaes_update(opt: CMAES, s: CMAESState, genomes: np.ndarray, cost: np.ndarra
     changed = s.modified | np.any(genomes != s.pop, axis=1)
     y = (opt.to_unit(genomes[order]) - s.mean) / s.sigma
     y[:, opt.fixed] = 0.0
-    z = y @ s.c_inv_sqrt.T  # C^{-1/2} y  (c_inv_sqrt is symmetric)
+    z = ((y @ s.B) / s.D) @ s.B.T  # C^{-1/2} y
     znorm = np.linalg.norm(z, axis=1)
     c_y = math.sqrt(n) + 2 * n / (n + 2)
     clip = np.where(changed[order], np.minimum(1.0, c_y / np.maximum(znorm, 1e-300)), 1.0)
@@ -104,12 +104,10 @@ def _push(hist: np.ndarray, value: float) -> np.ndarray:
 
 
 def _eigen(s: CMAESState, gen: int) -> CMAESState:
-    C = np.triu(s.C) + np.triu(s.C, 1).T
+    C = 0.5 * (s.C + s.C.T)
     evals, B = np.linalg.eigh(C)
-    evals = np.maximum(evals, 1e-300)
-    D = np.sqrt(evals)
-    c_inv_sqrt = (B / D) @ B.T
-    return replace(s, C=C, B=B, D=D, c_inv_sqrt=c_inv_sqrt, eigen_generation=gen)
+    D = np.sqrt(np.maximum(evals, 1e-300))
+    return replace(s, C=C, B=B, D=D, eigen_generation=gen)
 
 
 def _stop_reason(opt: CMAES, s: CMAESState, costs_sorted: np.ndarray) -> str:
