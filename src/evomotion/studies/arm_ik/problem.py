@@ -36,6 +36,7 @@ class ArmIKConfig:
     finger_generations: int = 15  # then M finger generations,
     whole_generations: int = 3000  # then whole-limb generations (until solved)
     wall_seconds: float = 30.0  # give up after this long (whole run)
+    restart_after: int = 150  # whole-limb generations without a 1% gain -> restart (0 = never)
     tournament_k: int = 2  # parent tournament size
     blend_prob: float = 0.5  # per active gene: beta-blend, else inherit (uniform swap)
     circular_blend: bool = True  # blend full-circle angles along the shorter arc
@@ -43,6 +44,7 @@ class ArmIKConfig:
     mutation_min_deg: float = 1e-3  # perturbation magnitude is log-uniform in [min, max]
     mutation_max_deg: float = 60.0
     infeasible_fraction: float = 0.1  # IDEA: share of survivors kept infeasible
+    board_walls: bool = True  # a joint outside the board counts as one intersection
     cell_size: float = 0.0  # heuristic cell side (board units); 0 = diagonal / 150
     tolerance: float = 1e-3  # solved: every tip within tolerance * diagonal of its target
     stop_when_solved: bool = True
@@ -108,6 +110,11 @@ class ArmIKProblem:
         arm_hits = count_intersections(pose.arm_segments(), self.obstacles)
         fmask = self.layout.finger_mask.ravel()
         hits = arm_hits + count_intersections(pose.finger_segments(), self.obstacles, fmask)
+        if self.cfg.board_walls:  # the board is convex: a bone leaves it iff a joint does
+            out_arm = self._outside(pose.arm_joints[:, 1:]).sum(axis=1)
+            out_f = self._outside(pose.finger_joints[:, :, 1:]) & self.layout.finger_mask
+            arm_hits = arm_hits + out_arm
+            hits = hits + out_arm + out_f.sum(axis=(1, 2))
         tips = pose.tips
         straight = straight_distances(tips, self.scn.targets)
         D = straight
@@ -125,6 +132,10 @@ class ArmIKProblem:
         solved = (hits == 0) & np.all(tip_err <= self.tol, axis=1) & in_limits
         return Assessment(self.wrist_map.wrist_distance(pose.wrist), arm_hits, hits,
                           matched(D, assign).sum(axis=1), tip_err, assign, tips, solved)
+
+    def _outside(self, pts: np.ndarray) -> np.ndarray:
+        x, y = pts[..., 0], pts[..., 1]
+        return (x < 0) | (y < 0) | (x > self.scn.width) | (y > self.scn.height)
 
     def evaluate(self, genomes: np.ndarray) -> Evaluation:
         """Whole-limb fitness ``distance + diagonal * intersections`` (for generic optimizers)."""

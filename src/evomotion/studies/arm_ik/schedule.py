@@ -47,64 +47,107 @@ class RunResult:
     elapsed_s: float
     history: np.ndarray  # (generations + 1, dim): best whole limb after each generation
     stats: list[dict] = field(default_factory=list)
+    restarts: int = 0
+    final_population: np.ndarray | None = None
+    final_distance: np.ndarray | None = None  # whole-limb objective of the final population
 
 
 def _limb_key(a: Assessment) -> np.ndarray:
     return rank_order(a.intersections, a.distance)
 
 
+class _Run:
+    """Mutable state of one schedule run (population, best limb, counters)."""
+
+    def __init__(self, cfg: ArmIKConfig, prob: ArmIKProblem, seed: int, t0: float) -> None:
+        self.cfg, self.prob, self.t0 = cfg, prob, t0
+        self.rng = np.random.default_rng(seed)
+        self.gen = self.evals = 0
+        self.solved_at: float | None = None
+        self.stats: list[dict] = []
+        self.fresh_population()
+        i = int(np.argmin(_limb_key(self.A)))
+        self.best, self.best_a = self.pop[i].copy(), self.A.take(np.array([i]))
+        self.history = [self.best.copy()]
+        self.note_solution()
+
+    def fresh_population(self) -> None:
+        self.pop = self.prob.genome.sample(self.rng, self.cfg.pop_size)
+        self.A = self.prob.assess(self.pop)
+        self.evals += self.cfg.pop_size
+
+    def note_solution(self) -> None:
+        if self.best_a.solved[0] and self.solved_at is None:
+            self.solved_at = time.perf_counter() - self.t0
+
+    @property
+    def done(self) -> bool:
+        out_of_time = time.perf_counter() - self.t0 > self.cfg.wall_seconds
+        return out_of_time or (self.solved_at is not None and self.cfg.stop_when_solved)
+
+    def generation(self, mode: str) -> dict:
+        cfg, lay, N, rng = self.cfg, self.prob.layout, self.cfg.pop_size, self.rng
+        obj, hits = phase_objective(self.A, mode)
+        ia, ib = parents(rank_order(hits, obj), N // 2, rng, cfg.tournament_k)
+        kids = crossover(self.pop[ia], self.pop[ib], lay, mode, rng, cfg.blend_prob,
+                         cfg.circular_blend)
+        kids = mutate(kids, lay, mode, rng, cfg.mutation_rate, cfg.mutation_min_deg,
+                      cfg.mutation_max_deg)
+        K = self.prob.assess(kids)
+        self.evals += N
+        pool, PA = np.concatenate([self.pop, kids]), Assessment.concat(self.A, K)
+        obj, hits = phase_objective(PA, mode)
+        keep = survivors(hits, obj, N, rng, cfg.infeasible_fraction)
+        self.gen += 1
+        # best whole limb so far (a child may hold it even when its phase ranks it low)
+        j = int(np.argmin(_limb_key(K)))
+        if _limb_key(Assessment.concat(self.best_a, K.take(np.array([j]))))[1] == 0:
+            self.best, self.best_a = kids[j].copy(), K.take(np.array([j]))
+        self.pop, self.A = pool[keep], PA.take(keep)
+        self.history.append(self.best.copy())
+        self.note_solution()
+        row = _stats_row(self.gen, mode, self.evals, time.perf_counter() - self.t0, self.pop,
+                         self.A, self.best_a)
+        self.stats.append(row)
+        return row
+
+
 def evolve(cfg: ArmIKConfig, seed: int, problem: ArmIKProblem | None = None,
            on_generation: Callable[[dict], None] | None = None) -> RunResult:
-    """Run the schedule with ``numpy.random.default_rng(seed)``; time includes the heuristics."""
+    """Run the schedule with ``numpy.random.default_rng(seed)``; time includes the heuristics.
+
+    When the whole-limb phase gains less than 1% in ``restart_after`` generations, the
+    schedule restarts from a fresh population (the best limb found so far is kept).
+    """
     t0 = time.perf_counter()
     prob = problem if problem is not None else ArmIKProblem(cfg)
-    lay, N = prob.layout, cfg.pop_size
-    rng = np.random.default_rng(seed)
-    pop = prob.genome.sample(rng, N)
-    A = prob.assess(pop)
-    evals = N
-    i = int(np.argmin(_limb_key(A)))
-    best, best_a = pop[i].copy(), A.take(np.array([i]))
-    history = [best.copy()]
-    stats: list[dict] = []
-    solved_at: float | None = None
-    gen = 0
-    phases = [("arm", cfg.arm_generations), ("fingers", cfg.finger_generations),
-              ("whole", cfg.whole_generations)]
-    done = bool(best_a.solved[0])
-    if done:
-        solved_at = time.perf_counter() - t0
-    for mode, n_gen in phases:
-        for _ in range(n_gen):
-            if done or time.perf_counter() - t0 > cfg.wall_seconds:
+    run = _Run(cfg, prob, seed, t0)
+    restarts, whole_left = -1, cfg.whole_generations
+    while not run.done and (restarts < 0 or whole_left > 0):
+        restarts += 1
+        if restarts:
+            run.fresh_population()
+        for mode, n_gen in (("arm", cfg.arm_generations), ("fingers", cfg.finger_generations)):
+            for _ in range(n_gen):
+                if run.done:
+                    break
+                row = run.generation(mode)
+                if on_generation is not None:
+                    on_generation(row)
+        mark, mark_gen = np.inf, run.gen
+        while whole_left > 0 and not run.done:
+            d = float(run.A.distance[np.argmin(_limb_key(run.A))])
+            if d < 0.99 * mark:
+                mark, mark_gen = d, run.gen
+            elif cfg.restart_after and run.gen - mark_gen >= cfg.restart_after:
                 break
-            obj, hits = phase_objective(A, mode)
-            ia, ib = parents(rank_order(hits, obj), N // 2, rng, cfg.tournament_k)
-            kids = crossover(pop[ia], pop[ib], lay, mode, rng, cfg.blend_prob, cfg.circular_blend)
-            kids = mutate(kids, lay, mode, rng, cfg.mutation_rate, cfg.mutation_min_deg,
-                          cfg.mutation_max_deg)
-            K = prob.assess(kids)
-            evals += N
-            pool, PA = np.concatenate([pop, kids]), Assessment.concat(A, K)
-            obj, hits = phase_objective(PA, mode)
-            keep = survivors(hits, obj, N, rng, cfg.infeasible_fraction)
-            gen += 1
-            # best whole limb so far (the kids may hold it even if the phase ranks it low)
-            j = int(np.argmin(_limb_key(K)))
-            cand = Assessment.concat(best_a, K.take(np.array([j])))
-            if _limb_key(cand)[1] == 0:
-                best, best_a = kids[j].copy(), K.take(np.array([j]))
-            pop, A = pool[keep], PA.take(keep)
-            history.append(best.copy())
-            if best_a.solved[0] and solved_at is None:
-                solved_at = time.perf_counter() - t0
-                done = cfg.stop_when_solved
-            row = _stats_row(gen, mode, evals, time.perf_counter() - t0, pop, A, best_a)
-            stats.append(row)
+            whole_left -= 1
+            row = run.generation("whole")
             if on_generation is not None:
                 on_generation(row)
-    return RunResult(prob, best, best_a, bool(best_a.solved[0]), solved_at, gen, evals,
-                     time.perf_counter() - t0, np.array(history), stats)
+    return RunResult(prob, run.best, run.best_a, bool(run.best_a.solved[0]), run.solved_at,
+                     run.gen, run.evals, time.perf_counter() - t0, np.array(run.history),
+                     run.stats, max(restarts, 0), run.pop, run.A.distance)
 
 
 def _stats_row(gen: int, mode: str, evals: int, t: float, pop: np.ndarray, A: Assessment,
