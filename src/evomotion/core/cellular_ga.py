@@ -1,0 +1,234 @@
+"""Cellular genetic algorithm (cGA) on a toroidal 2D grid, as an ask/tell optimizer.
+
+Source: Alba & Dorronsoro, *Cellular Genetic Algorithms* (Springer 2008): each cell holds
+one individual; the cell is one parent, its mate is chosen among its neighbours (here by
+roulette, as in Zhang et al. 2014, seed 004, sec. 3.2.1), one-point crossover with
+probability ``crossover_rate``, mutation, and the offspring replaces the cell if better.
+
+Update policies (Alba & Dorronsoro 2008, sec. 2.3; Schoenauer et al.):
+
+- ``synchronous``: every cell breeds from the old population, all replaced at once;
+- ``line_sweep``: cells updated one by one in row-major order (the seed's "順序掃描");
+- ``fixed_random_sweep``: one random permutation drawn once and reused every generation;
+- ``new_random_sweep``: a fresh random permutation every generation;
+- ``uniform_choice``: ``pop_size`` cells drawn uniformly with replacement per generation.
+
+Asynchronous policies are executed *exactly* but vectorised: the update sequence is split
+into waves, where a cell's wave is one more than the latest wave of any earlier cell of the
+sequence in its (symmetric) neighbourhood. Cells in one wave never read each other, and
+every cell sees all earlier updates it would see sequentially, so a wave-by-wave update is
+the sequential update. One ``ask``/``tell`` pair handles one wave; ``state.generation``
+counts completed sweeps (``synchronous`` has one wave per generation).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from evomotion.core.neighbourhoods import NEIGHBOURHOODS, grid_shape, neighbour_table
+from evomotion.core.operators import CROSSOVERS, MUTATIONS
+from evomotion.core.operators.mutation import clip_to_bounds
+from evomotion.core.optimizer import Optimizer
+from evomotion.core.problem import GenomeSpec
+from evomotion.core.registry import lookup
+
+UPDATE_POLICIES: tuple[str, ...] = (
+    "synchronous", "line_sweep", "fixed_random_sweep", "new_random_sweep", "uniform_choice")
+MATE_SELECTIONS: tuple[str, ...] = ("roulette", "tournament", "best")
+REPLACEMENTS: tuple[str, ...] = ("if_better", "if_not_worse", "always")
+
+#: ``mutate(x[n, d], rng, rate) -> x'``: a problem-supplied mutation replacing the registry one
+MutateFn = Callable[[np.ndarray, np.random.Generator, float], np.ndarray]
+
+
+@dataclass(frozen=True)
+class CGAConfig:
+    """Settings of the cellular GA (``[algorithm]`` with ``name = "cga"``)."""
+
+    name: str = "cga"
+    pop_size: int = 100
+    rows: int = 0  # 0: most square grid with rows * cols == pop_size
+    neighbourhood: str = "L5"
+    update: str = "line_sweep"
+    mate_selection: str = "roulette"
+    crossover: str = "one_point"
+    crossover_params: dict[str, Any] = field(default_factory=dict)
+    crossover_rate: float = 1.0
+    mutation: str = "uniform_reset"
+    mutation_params: dict[str, Any] = field(default_factory=dict)
+    mutation_rate: float = 0.1
+    replacement: str = "if_better"
+
+    def validate(self) -> None:
+        grid_shape(self.pop_size, self.rows)
+        for key in ("crossover_rate", "mutation_rate"):
+            v = getattr(self, key)
+            if not 0.0 <= v <= 1.0:
+                raise ValueError(f"algorithm.{key} must be in [0, 1], got {v}")
+        lookup(dict.fromkeys(NEIGHBOURHOODS), "neighbourhood", self.neighbourhood)
+        lookup(dict.fromkeys(UPDATE_POLICIES), "update policy", self.update)
+        lookup(dict.fromkeys(MATE_SELECTIONS), "mate selection", self.mate_selection)
+        lookup(dict.fromkeys(REPLACEMENTS), "replacement", self.replacement)
+        lookup(CROSSOVERS, "crossover", self.crossover)
+        lookup(MUTATIONS, "mutation", self.mutation)
+
+
+@dataclass
+class CGAState:
+    pop: np.ndarray
+    cost: np.ndarray
+    best_x: np.ndarray
+    best_cost: float
+    sweep_order: np.ndarray  # the fixed random sweep (drawn at init)
+    sequence: np.ndarray  # cells of this generation's update sequence
+    waves: np.ndarray  # wave of each sequence position
+    cells: np.ndarray  # cells whose offspring were asked last
+    generation: int = 0
+    wave: int = 0
+    evaluated: bool = False
+
+
+def update_waves(sequence: np.ndarray, table: np.ndarray) -> np.ndarray:
+    """Wave index of each position of ``sequence`` (sequential semantics, see module doc)."""
+    last = np.full(table.shape[0], -1, dtype=np.int64)
+    waves = np.empty(len(sequence), dtype=np.int64)
+    for k, c in enumerate(sequence.tolist()):
+        w = int(last[table[c]].max()) + 1
+        waves[k] = w
+        last[c] = w
+    return waves
+
+
+def roulette_rows(cost: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """Column index per row by fitness-proportional selection on minimised ``cost[n, k]``.
+
+    Weights per row are ``worst - cost + 1e-3 * spread`` (uniform when the row is flat);
+    ``inf`` costs get weight 0 unless the whole row is ``inf``.
+    """
+    finite = np.isfinite(cost)
+    any_f = finite.any(1, keepdims=True)
+    c = np.where(finite, cost, 0.0)
+    hi = np.where(any_f, np.where(finite, cost, -np.inf).max(1, keepdims=True), 0.0)
+    lo = np.where(any_f, np.where(finite, cost, np.inf).min(1, keepdims=True), 0.0)
+    spread = hi - lo
+    w = np.where(finite, hi - c + np.where(spread > 0, 1e-3 * spread, 1.0), 0.0)
+    w[~any_f[:, 0]] = 1.0
+    cdf = np.cumsum(w, axis=1)
+    u = rng.random((cost.shape[0], 1)) * cdf[:, -1:]
+    return np.minimum((cdf <= u).sum(1), cost.shape[1] - 1)
+
+
+class CellularGA(Optimizer):
+    """Cellular GA; ``cfg`` is a :class:`CGAConfig`; ``mutate`` overrides the mutation."""
+
+    name = "cga"
+
+    def __init__(self, genome: GenomeSpec, cfg: CGAConfig, mutate: MutateFn | None = None):
+        super().__init__(genome)
+        cfg.validate()
+        self.cfg = cfg
+        self.rows, self.cols = grid_shape(cfg.pop_size, cfg.rows)
+        self._xo = CROSSOVERS[cfg.crossover]
+        self._mutate = mutate
+        self._tables: dict[int, np.ndarray] = {}
+        self._waves: dict[int, np.ndarray] = {}
+
+    def table(self, generation: int) -> np.ndarray:
+        key = generation % 2 if self.cfg.neighbourhood == "Margolus" else 0
+        if key not in self._tables:
+            self._tables[key] = neighbour_table(self.cfg.neighbourhood, self.rows, self.cols, key)
+        return self._tables[key]
+
+    def init(self, rng: np.random.Generator, pop: np.ndarray | None = None) -> CGAState:
+        n, d = self.cfg.pop_size, self.genome.dim
+        pop = self.genome.sample(rng, n) if pop is None else np.array(pop, dtype=float)
+        if pop.shape != (n, d):
+            raise ValueError(f"cga: initial population has shape {pop.shape}, want {(n, d)}")
+        empty = np.empty(0, dtype=np.int64)
+        return CGAState(pop=pop, cost=np.full(n, np.inf), best_x=np.full(d, np.nan),
+                        best_cost=np.inf, sweep_order=rng.permutation(n), sequence=empty,
+                        waves=empty, cells=empty)
+
+    def _schedule(self, state: CGAState, rng: np.random.Generator) -> None:
+        n, pol = self.cfg.pop_size, self.cfg.update
+        table = self.table(state.generation)
+        if pol == "synchronous":
+            state.sequence, state.waves = np.arange(n), np.zeros(n, dtype=np.int64)
+            return
+        seq = {"line_sweep": np.arange(n), "fixed_random_sweep": state.sweep_order,
+               "new_random_sweep": rng.permutation(n) if pol == "new_random_sweep" else None,
+               "uniform_choice": rng.integers(0, n, n) if pol == "uniform_choice" else None}[pol]
+        key = state.generation % 2 if self.cfg.neighbourhood == "Margolus" else 0
+        if pol in ("line_sweep", "fixed_random_sweep"):
+            if key not in self._waves:
+                self._waves[key] = update_waves(seq, table)
+            waves = self._waves[key]
+        else:
+            waves = update_waves(seq, table)
+        state.sequence, state.waves = np.asarray(seq), waves
+
+    def _ask(self, state: CGAState, rng: np.random.Generator):
+        if not state.evaluated:
+            return state.pop.copy(), state
+        if state.wave == 0:
+            self._schedule(state, rng)
+        c, g = self.cfg, self.genome
+        cells = state.sequence[state.waves == state.wave]
+        nbr = self.table(state.generation)[cells, 1:]
+        ncost = state.cost[nbr]
+        if c.mate_selection == "roulette":
+            j = roulette_rows(ncost, rng)
+        elif c.mate_selection == "tournament":
+            a, b = rng.integers(0, nbr.shape[1], (2, len(cells)))
+            rows = np.arange(len(cells))
+            j = np.where(ncost[rows, a] <= ncost[rows, b], a, b)
+        else:
+            j = np.argmin(ncost, axis=1)
+        mates = nbr[np.arange(len(cells)), j]
+        a, b = state.pop[cells], state.pop[mates]
+        kids = self._xo(a, b, rng, **c.crossover_params)
+        pick = rng.integers(0, 2, len(cells))
+        child = np.where(pick[:, None] == 0, kids[0], kids[1])
+        cross = rng.random(len(cells)) < c.crossover_rate
+        child = np.where(cross[:, None], child, a)
+        if self._mutate is not None:
+            child = self._mutate(child, rng, c.mutation_rate)
+        else:
+            child = MUTATIONS[c.mutation](child, g.lower, g.upper, rng, c.mutation_rate,
+                                          **c.mutation_params)
+        state.cells = cells
+        return clip_to_bounds(child, g.lower, g.upper), state
+
+    def _tell(self, state: CGAState, genomes, cost, rng):
+        if not state.evaluated:
+            state.pop, state.cost, state.evaluated = genomes.copy(), cost.copy(), True
+        else:
+            cells, old = state.cells, state.cost[state.cells]
+            rep = self.cfg.replacement
+            better = (cost < old if rep == "if_better" else cost <= old if rep == "if_not_worse"
+                      else np.ones(len(cells), bool))
+            state.pop[cells[better]] = genomes[better]
+            state.cost[cells[better]] = cost[better]
+            state.wave += 1
+            if state.wave > int(state.waves.max()):
+                state.wave, state.generation = 0, state.generation + 1
+        i = int(np.argmin(state.cost))
+        if state.cost[i] < state.best_cost:
+            state.best_cost, state.best_x = float(state.cost[i]), state.pop[i].copy()
+        return state
+
+    def best(self, state: CGAState):
+        return state.best_x, state.best_cost
+
+    def end_of_generation(self, state: CGAState) -> bool:
+        """True right after the last wave of a generation (or the initial evaluation)."""
+        return state.evaluated and state.wave == 0
+
+
+def make_cga(genome: GenomeSpec, cfg: CGAConfig, mutate: MutateFn | None = None) -> CellularGA:
+    """Factory for the ``ALGORITHMS`` registry (``"cga"``)."""
+    return CellularGA(genome, cfg, mutate)
