@@ -63,3 +63,18 @@ def test_readme_commands_are_the_ci_commands():
     assert "evomotion run" in main_job
     ci = (ROOT / ".ci" / "run").read_text()
     assert tests in ci
+
+
+def test_readme_examples_run(tmp_path):
+    readme = (ROOT / "README.md").read_text()
+    blocks = re.findall(r"```sh\n(.*?)```", readme, re.S)
+    examples = [ln for ln in blocks[2].splitlines() if ln.startswith("evomotion ")]
+    assert len(examples) >= 5
+    for line in examples:
+        args = line.split()[1:]
+        r = cli(*args, "--quiet", cwd=tmp_path) if args[0] in ("run", "resume") else \
+            cli(*args, cwd=tmp_path)
+        assert r.returncode == 0, (line, r.stderr)
+    assert (tmp_path / "runs" / "comparison.png").exists()
+    stats = (tmp_path / "runs" / "mine" / "stats.csv").read_text().splitlines()
+    assert stats[-1].startswith("100,")

@@ -63,10 +63,18 @@ def resume_cmd(
     evaluator: Annotated[str | None, typer.Option(help="Continue with another evaluator")] = None,
     workers: Annotated[int | None, typer.Option(help="Worker count")] = None,
     address: Annotated[str | None, typer.Option(help="Cluster address (ray/dask)")] = None,
+    sets: Annotated[list[str] | None, typer.Option(
+        "--set", help="Raise a [run] limit, e.g. run.generations=300")] = None,
     quiet: Annotated[bool, typer.Option("--quiet", "-q")] = False,
 ) -> None:
-    """Continue an interrupted run from its last checkpoint."""
-    from evomotion.run.config import config_from_dict, config_from_run_dir
+    """Continue an interrupted run from its last checkpoint (or extend a finished one)."""
+    from evomotion.run.config import (
+        apply_override,
+        config_from_dict,
+        config_from_run_dir,
+        config_to_toml,
+    )
+    from evomotion.run.folder import atomic_write_text
     from evomotion.run.runner import run_study
 
     name, raw = config_from_run_dir(run_dir)
@@ -77,7 +85,13 @@ def resume_cmd(
     for key, val in (("evaluator", evaluator), ("workers", workers), ("address", address)):
         if val is not None:
             raw["run"][key] = val
+    for item in sets or []:
+        if not item.startswith("run."):
+            raise InputError(f"resume only changes [run] keys (limits, evaluator); got {item!r}")
+        raw = apply_override(raw, item)
     cfg = config_from_dict(s, raw)
+    if sets:
+        atomic_write_text(run_dir / "config.toml", config_to_toml(cfg))
     res = run_study(s, cfg, run_dir, quiet=quiet, resume=True)
     if not quiet:
         typer.echo(f"{res.stop_reason}: best fitness {res.best_fitness:.6g} after "

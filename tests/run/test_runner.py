@@ -133,3 +133,16 @@ def test_run_folder_contents(tmp_path):
     for col in ("generation", "evaluations", "best", "mean", "median", "min", "max", "std",
                 "best_so_far", "wall_s", "evals_per_s", "diversity"):
         assert col in header
+
+
+def test_resume_extends_finished_run_identically(tmp_path):
+    from evomotion.errors import InputError
+
+    cfg10 = resolve_config(STUDY, None, ["run.generations=10", "problem.raise_above=9"])
+    cfg20 = resolve_config(STUDY, None, ["run.generations=20", "problem.raise_above=9"])
+    run_study(STUDY, cfg20, tmp_path / "full", quiet=True)
+    run_study(STUDY, cfg10, tmp_path / "ext", quiet=True)
+    with pytest.raises(InputError, match="already finished"):
+        run_study(STUDY, cfg10, tmp_path / "ext", quiet=True, resume=True)
+    run_study(STUDY, cfg20, tmp_path / "ext", quiet=True, resume=True)
+    _same_results(tmp_path / "full", tmp_path / "ext")

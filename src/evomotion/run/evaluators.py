@@ -105,6 +105,8 @@ class ProcessEvaluator:
 EVALUATORS: dict[str, str | type] = {
     "serial": SerialEvaluator,
     "process": ProcessEvaluator,
+    "ray": "evomotion.run.ray_evaluator:RayEvaluator",
+    "dask": "evomotion.run.dask_evaluator:DaskEvaluator",
 }
 
 

@@ -11,7 +11,7 @@ Faults: an actor that dies (crash, OOM kill, lost node) is replaced and its chun
 chunk that kills ``max_attempts`` actors in a row gets the worst fitness (``failed`` and a
 message in ``errors``, which the runner logs) and the run goes on. When no actor can be
 started any more (every node gone, or the driver lost its connection) a
-:class:`ClusterLostError` is raised: the runner then checkpoints the last completed
+:class:`ClusterError` is raised: the runner then checkpoints the last completed
 generation and ``evomotion resume DIR --evaluator serial`` continues on one machine.
 
 Ray is an optional extra (``pip install 'evomotion[ray]'``); it is imported when the
@@ -20,6 +20,7 @@ evaluator is built. See ``docs/cluster.md`` for a multi-machine recipe.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import time
@@ -30,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from evomotion.core.problem import Evaluation, Problem, failed_evaluation
+from evomotion.errors import InputError
 from evomotion.run.evaluators import evaluate_safely, split_chunks
 
 log = logging.getLogger("evomotion.run.ray")
@@ -37,8 +39,12 @@ log = logging.getLogger("evomotion.run.ray")
 WORKER_ENV = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
 
 
-class ClusterLostError(RuntimeError):
-    """No worker of the cluster can evaluate any more; the run must resume elsewhere."""
+class ClusterError(RuntimeError):
+    """The cluster cannot evaluate any more (lost, or its workers cannot run the problem).
+
+    The runner checkpoints the last completed generation; ``evomotion resume DIR
+    --evaluator serial`` (or ``process``) continues from there.
+    """
 
 
 class ProblemActor:
@@ -52,6 +58,9 @@ class ProblemActor:
     def ready(self) -> int:
         """The worker's process id (also proves the problem was built)."""
         return os.getpid()
+
+    def spec(self) -> tuple[str, tuple[str, ...]]:
+        return self.problem.sense, tuple(self.problem.metric_names)
 
     def environ(self, key: str) -> str | None:
         return os.environ.get(key)
@@ -69,19 +78,23 @@ class RayEvaluator:
     """
 
     name = "ray"
+    max_attempts = 3
+    start_timeout_s = 120.0
+    poll_s = 1.0
 
     def __init__(self, make_problem: Callable[[Any], Problem], problem_cfg: Any,
                  workers: int = 0, chunks_per_worker: int = 4, address: str = "",
-                 max_attempts: int = 3, start_timeout_s: float = 120.0,
-                 poll_s: float = 1.0) -> None:
-        import ray
+                 max_attempts: int | None = None, start_timeout_s: float | None = None) -> None:
+        try:
+            import ray
+        except ImportError:
+            raise InputError("the ray evaluator needs Ray: pip install 'evomotion[ray]'") from None
 
         self._ray = ray
         self.address = address
         self.chunks_per_worker = chunks_per_worker
-        self.max_attempts = max_attempts
-        self.start_timeout_s = start_timeout_s
-        self.poll_s = poll_s
+        self.max_attempts = max_attempts or self.max_attempts
+        self.start_timeout_s = start_timeout_s or self.start_timeout_s
         self.replaced = 0  # actors that died and were replaced
         self.failed_chunks = 0  # chunks given up after max_attempts
         self._make_problem, self._problem_cfg = make_problem, problem_cfg
@@ -92,22 +105,30 @@ class RayEvaluator:
                          else None, include_dashboard=False, logging_level="WARNING",
                          log_to_driver=False, runtime_env={"env_vars": WORKER_ENV})
             except ConnectionError as e:
-                raise ClusterLostError(f"cannot reach the Ray cluster at {address}: {e}") from e
-        probe = make_problem(problem_cfg)  # fail fast here, with a plain traceback
-        self.sense, self.metric_names = probe.sense, tuple(probe.metric_names)
+                raise ClusterError(f"cannot reach the Ray cluster at {address}: {e}") from e
         n = workers or int(ray.cluster_resources().get("CPU", 0))
         if n < 1:
-            raise ClusterLostError("the Ray cluster has no CPUs for evaluation workers")
+            raise ClusterError("the Ray cluster has no CPUs for evaluation workers")
         self._actor_cls = ray.remote(num_cpus=1, max_restarts=0)(ProblemActor)
         self.actors = [self._new_actor() for _ in range(n)]
         self._starting: dict[Any, tuple[int, float]] = {}
+        self._start_failures = 0  # consecutive replacement workers that failed to start
         ready = [a.ready.remote() for a in self.actors]
-        done, _ = ray.wait(ready, num_returns=n, timeout=start_timeout_s)
+        done, _ = ray.wait(ready, num_returns=n, timeout=self.start_timeout_s)
         if len(done) < n:
             self.close()
-            raise ClusterLostError(f"only {len(done)} of {n} Ray workers started within "
-                                   f"{start_timeout_s:g} s; does the cluster have {n} free CPUs?")
-        self.pids = ray.get(ready)
+            raise ClusterError(f"only {len(done)} of {n} Ray workers started within "
+                               f"{self.start_timeout_s:g} s; does the cluster have {n} free CPUs?")
+        try:
+            ray.get(ready)
+            self.sense, self.metric_names = ray.get(self.actors[0].spec.remote())
+        except ray.exceptions.RayActorError as e:
+            self.close()
+            raise ClusterError(f"Ray workers could not build the problem: {e}") from e
+
+    def worker_pids(self) -> list[int]:
+        """Process ids of the current actors (for diagnostics and tests)."""
+        return self._ray.get([a.ready.remote() for a in self.actors])
 
     def _new_actor(self):
         return self._actor_cls.options(runtime_env={"env_vars": WORKER_ENV}).remote(
@@ -115,10 +136,8 @@ class RayEvaluator:
 
     def _replace(self, slot: int) -> None:
         ray = self._ray
-        try:
+        with contextlib.suppress(Exception):  # it is already dead or unreachable
             ray.kill(self.actors[slot], no_restart=True)
-        except Exception:  # noqa: BLE001, S110 - it is already dead or unreachable
-            pass
         self.replaced += 1
         self.actors[slot] = self._new_actor()
         self._starting[self.actors[slot].ready.remote()] = (slot, time.monotonic())
@@ -156,10 +175,8 @@ class RayEvaluator:
                         tries[k] += 1
                         self._replace(slot)
                         self._chunk_lost(k, chunks[k], tries[k], e, parts, todo)
-        except ClusterLostError:
-            raise
-        except ray.exceptions.RaySystemError as e:
-            raise ClusterLostError(f"lost the Ray cluster {self._where()}: {e}") from e
+        except ray.exceptions.RayError as e:
+            raise ClusterError(f"Ray evaluation failed {self._where()}: {e}") from e
         return Evaluation.concat(parts)  # type: ignore[arg-type]
 
     def _chunk_lost(self, k: int, rows: slice, tries: int, error: Exception,
@@ -182,8 +199,13 @@ class RayEvaluator:
         try:
             self._ray.get(ref)
         except self._ray.exceptions.RayActorError as e:
-            raise ClusterLostError(f"a replacement Ray worker failed to start "
-                                   f"{self._where()}: {e}") from e
+            self._start_failures += 1
+            if self._start_failures >= self.max_attempts * len(self.actors):
+                raise ClusterError(f"{self._start_failures} replacement Ray workers in a "
+                                       f"row failed to start {self._where()}: {e}") from e
+            self._replace(slot)
+            return
+        self._start_failures = 0
         idle.append(slot)
 
     def _check_progress(self, running: dict, idle: deque) -> None:
@@ -192,7 +214,7 @@ class RayEvaluator:
             return
         oldest = min(t0 for _, t0 in self._starting.values())
         if time.monotonic() - oldest > self.start_timeout_s:
-            raise ClusterLostError(
+            raise ClusterError(
                 f"lost the Ray cluster {self._where()}: all {len(self.actors)} workers died and "
                 f"none could be restarted within {self.start_timeout_s:g} s")
 
@@ -202,10 +224,8 @@ class RayEvaluator:
     def close(self) -> None:
         ray = self._ray
         for a in getattr(self, "actors", []):
-            try:
+            with contextlib.suppress(Exception):  # best effort on a possibly lost cluster
                 ray.kill(a, no_restart=True)
-            except Exception:  # noqa: BLE001, S110 - best effort on a possibly lost cluster
-                pass
         self.actors = []
         self._starting = {}
         if self._own_ray and ray.is_initialized():

@@ -21,6 +21,7 @@ import numpy as np
 from evomotion.core.algorithms import ALGORITHMS
 from evomotion.core.problem import to_cost
 from evomotion.core.state import rng_from_state, rng_state, state_from_arrays, state_to_arrays
+from evomotion.errors import InputError
 from evomotion.run.checkpoint import load_checkpoint, save_checkpoint
 from evomotion.run.config import Config, config_to_toml
 from evomotion.run.console import Reporter
@@ -108,6 +109,12 @@ def run_study(study: Any, config: Config, out_dir: Path, quiet: bool = False,
         state = state_from_arrays(state_cls, st_arrays, st_meta)
         rng = rng_from_state(meta["rng"])
         c = meta["counters"]
+        done = c.get("stop_reason")
+        if done not in (None, "interrupted") and _limit_reached(config, c, opt.best(state)[1],
+                                                               sgn):
+            raise InputError(f"{out_dir}: the run already finished ({done}); raise its limit "
+                             "to continue, e.g. --set run.generations=N")
+        c["stop_reason"] = None
         stats.truncate(c["stats_offset"])
         log.truncate(c["log_offset"])
         log(f"resumed at generation {c['generation']} with evaluator {rc.evaluator}")
@@ -181,6 +188,7 @@ def run_study(study: Any, config: Config, out_dir: Path, quiet: bool = False,
                              "failed": nfail})
                 reporter.update(c["generation"], sgn * best_cost, ps["mean"], c["evaluations"])
                 reason = _stop_reason(opt, state, config, c, best_cost, ps["mean"] * sgn, sgn)
+                c["stop_reason"] = reason
                 snap = snapshot()
                 every = rc.checkpoint_every
                 if reason is None and every and c["generation"] % every == 0:
@@ -188,6 +196,8 @@ def run_study(study: Any, config: Config, out_dir: Path, quiet: bool = False,
                     _hook(study.on_checkpoint, context(), log)
     except KeyboardInterrupt:
         reason = "interrupted"
+        if snap is not None:
+            snap[1]["counters"]["stop_reason"] = reason
     except Exception as e:
         if snap is not None:
             save_checkpoint(out_dir, max(c["generation"], 0), *snap)
@@ -219,12 +229,9 @@ def _stop_reason(opt, state, config: Config, c: dict, best_cost: float, mean_cos
                  sgn: float) -> str | None:
     """The first stopping rule that fires (costs are minimised; ``fitness = sgn * cost``)."""
     rc = config.run
-    if c["generation"] >= rc.generations:
-        return "generations"
-    if rc.max_evaluations and c["evaluations"] >= rc.max_evaluations:
-        return "max_evaluations"
-    if rc.target is not None and best_cost <= sgn * rc.target:
-        return "target"
+    limit = _limit_reached(config, c, best_cost, sgn)
+    if limit is not None:
+        return limit
     if rc.stagnation_generations:
         n = rc.stagnation_generations
         c["hist_best"] = (c["hist_best"] + [best_cost])[-(n + 1):]
@@ -234,9 +241,20 @@ def _stop_reason(opt, state, config: Config, c: dict, best_cost: float, mean_cos
             dm = c["hist_mean"][0] - c["hist_mean"][-1]
             if db < rc.stagnation_eps and dm < rc.stagnation_eps:
                 return "stagnation"
+    return opt.stop(state)
+
+
+def _limit_reached(config: Config, c: dict, best_cost: float, sgn: float) -> str | None:
+    rc = config.run
+    if c["generation"] >= rc.generations:
+        return "generations"
+    if rc.max_evaluations and c["evaluations"] >= rc.max_evaluations:
+        return "max_evaluations"
+    if rc.target is not None and best_cost <= sgn * rc.target:
+        return "target"
     if rc.wall_seconds and c["wall_s"] >= rc.wall_seconds:
         return "wall_seconds"
-    return opt.stop(state)
+    return None
 
 
 def _hook(fn, ctx: RunContext, log) -> None:
