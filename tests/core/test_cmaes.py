@@ -67,9 +67,10 @@ def test_restart_increases_population_and_reports_reason():
                  target=-1)
     assert s.done and s.restarts == 2
     assert s.lam == opt.lam0 * 4
-    assert opt.stop_reason(s) in {"tolfun", "tolx", "noeffectaxis", "noeffectcoord",
+    assert opt.stop(s) in {"tolfun", "tolx", "noeffectaxis", "noeffectcoord",
                                   "tolstagnation", "conditioncov"}
     assert s.stop_log.count("@") == 3
+    assert opt.stop(opt.init(np.random.default_rng(0))) is None
 
 
 def test_bipop_uses_small_and_large_regimes():

@@ -228,9 +228,9 @@ class CMAES(Optimizer):
     def best(self, state: CMAESState) -> tuple[np.ndarray, float]:
         return state.best_x, float(state.best_cost)
 
-    def stop_reason(self, state: CMAESState) -> str:
-        """Why the search ended (``""`` while restarts or the run continue)."""
-        return state.stop_reason if state.done else ""
+    def stop(self, state: CMAESState) -> str | None:
+        """Why the search ended (``None`` while restarts or the run continue)."""
+        return state.stop_reason if state.done else None
 
     def chaos_patience(self, lam: int) -> int:
         return self.cfg.chaos_patience or 10 + int(math.ceil(30 * self.n / lam))
