@@ -35,6 +35,8 @@ def segments_intersect(p: np.ndarray, q: np.ndarray, strict: bool = False,
                        eps: float = 1e-12) -> np.ndarray:
     """Whether segments ``p[..., 2, 2]`` and ``q[..., 2, 2]`` intersect (broadcast)."""
     p, q = np.broadcast_arrays(np.asarray(p, dtype=float), np.asarray(q, dtype=float))
+    if p.ndim == 2:  # a single pair
+        return segments_intersect(p[None], q[None], strict, eps)[0]
     p1, p2, q1, q2 = p[..., 0, :], p[..., 1, :], q[..., 0, :], q[..., 1, :]
     s1, s2 = _sign(orient(q1, q2, p1), eps), _sign(orient(q1, q2, p2), eps)
     s3, s4 = _sign(orient(p1, p2, q1), eps), _sign(orient(p1, p2, q2), eps)
