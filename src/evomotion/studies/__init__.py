@@ -13,6 +13,7 @@ from evomotion.studies.base import Study
 
 STUDIES: dict[str, str] = {
     "functions": "evomotion.studies.functions.study:STUDY",
+    "humanoid-step": "evomotion.studies.humanoid_step.study:STUDY",
     "arm-ik": "evomotion.studies.arm_ik.study:STUDY",
 }
 
