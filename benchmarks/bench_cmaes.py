@@ -10,8 +10,9 @@ Prints three markdown tables:
 2. ask+tell wall time per generation at d = 10, 40, 200 (default lambda, cost = random
    numbers, so only the optimizer is timed).
 3. IPOP-CMA-ES plain vs +Tent, +Lévy, +both on Rastrigin (f15), Schaffer F7 (f17) and
-   Gallagher 101 peaks (f21) at d = 10, 20, fixed budget: successes, ERT and the median of
-   the best f reached (absolute, same instances for all variants).
+   Gallagher 101 peaks (f21) at d = 10, 20, fixed budget: successes, ERT, the median of
+   the best f reached (absolute f, same instances for all variants) and on how many
+   instances the variant ended better / worse than plain.
 """
 
 from __future__ import annotations
@@ -146,10 +147,11 @@ VARIANTS = {"plain": {}, "+tent": {"chaos": True}, "+levy": {"levy": True},
 
 
 def table_improved(funcs: list[int], dims: list[int], runs: int, budget_per_d: int) -> None:
-    print("\n| f | d | variant | succ | ERT | median best f |")
-    print("|---|---|---|---|---|---|")
+    print("\n| f | d | variant | succ | ERT | median best f | better/worse than plain |")
+    print("|---|---|---|---|---|---|---|")
     for d in dims:
         for f in funcs:
+            plain: list[float] = []
             for name, kw in VARIANTS.items():
                 evals, hits, best = [], [], []
                 for inst in range(1, runs + 1):
@@ -162,8 +164,13 @@ def table_improved(funcs: list[int], dims: list[int], runs: int, budget_per_d: i
                     hits.append(tp.hit_at)
                     best.append(b)
                 succ = sum(h is not None for h in hits)
+                if name == "plain":
+                    plain = best
+                tol = 1e-8
+                better = sum(b < p - tol for b, p in zip(best, plain, strict=True))
+                worse = sum(b > p + tol for b, p in zip(best, plain, strict=True))
                 print(f"| f{f} | {d} | {name} | {succ}/{runs} | {ert(evals, hits):.0f} | "
-                      f"{np.median(best):.4g} |")
+                      f"{np.median(best):.4g} | {better}/{worse} |")
 
 
 def main() -> None:

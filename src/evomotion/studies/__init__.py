@@ -15,6 +15,7 @@ STUDIES: dict[str, str] = {
     "functions": "evomotion.studies.functions.study:STUDY",
     "humanoid-step": "evomotion.studies.humanoid_step.study:STUDY",
     "arm-ik": "evomotion.studies.arm_ik.study:STUDY",
+    "biped-kick": "evomotion.studies.biped_kick.study:STUDY",
 }
 
 

@@ -1,0 +1,127 @@
+"""The kick problem: batched MuJoCo rollouts of kick motions and their fitness (maximised).
+
+Fitness (m) = ball travel along the goal direction (+x) - ``w_lateral`` |lateral travel|
+- ``fall_penalty_m`` if the robot fell - ``zmp_penalty_m`` * (fraction of the kick's steps whose
+CoP margin is below ``zmp_margin_m``). Ball travel is the displacement at the end of the
+rollout (``roll_after_s`` after the motion ends) plus the remaining rolling distance
+``v |v| / (2 a)`` with ``a`` the rolling deceleration measured in the scene
+(:func:`scene.measured_deceleration`), so the rollout need not wait for the ball to stop.
+
+Stability (seed step 5): per physics step the CoP of the two soles' net contact forces (MuJoCo
+``contact`` sensors) and its margin inside the support polygon (the sole rectangles in contact),
+computed with the support function over 32 directions (exact for edges normal to one of them,
+otherwise within 0.5 % of the polygon size). A CoP within ``zmp_margin_m`` of the edge means the
+stance foot starts to tip. Steps without any sole contact count as violations.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from evomotion.core.problem import Evaluation, GenomeSpec
+from evomotion.sim.rollout import BatchSimulator, fall_step, torso_track
+from evomotion.studies.biped_kick import scene
+from evomotion.studies.biped_kick.motion import GENES, SETTLE_S, execution_time_s, joint_targets
+
+METRICS = ("distance_m", "lateral_m", "fell", "zmp_violation", "min_margin_m",
+           "exec_time_s")
+DIRECTIONS = np.stack([np.cos(np.arange(32) * np.pi / 16), np.sin(np.arange(32) * np.pi / 16)],
+                      axis=1)
+
+
+@dataclass(frozen=True)
+class KickConfig:
+    """The ``[problem]`` section of the biped-kick study."""
+
+    rolling_m: float = 0.005
+    ball_dx_m: float = 0.0  # ball offset from its default place in front of the right toe
+    ball_dy_m: float = 0.0
+    w_lateral: float = 0.5
+    fall_penalty_m: float = 3.0
+    zmp_penalty_m: float = 2.0
+    zmp_margin_m: float = 0.005
+    roll_after_s: float = 0.8
+    fall_height_m: float = 0.2
+    fall_tilt_rad: float = 0.8
+    nthread: int = 0
+
+
+def support_margin_batch(sensors: np.ndarray, sl: dict[str, slice]) -> np.ndarray:
+    """CoP margin (m) inside the support polygon per step, ``[..., T]`` (-inf: no support)."""
+    corners, weights, points = [], [], []
+    for side in ("l", "r"):
+        c = sensors[..., sl[f"{side}_contact"]]
+        found = c[..., 0] > 0
+        fz = np.where(found, np.abs(c[..., 3]), 0.0)
+        centre = sensors[..., sl[f"{side}_sole"]][..., :2]
+        ax = sensors[..., sl[f"{side}_xaxis"]][..., :2]
+        ax = ax / np.maximum(np.linalg.norm(ax, axis=-1, keepdims=True), 1e-9)
+        ay = np.stack([-ax[..., 1], ax[..., 0]], axis=-1)
+        hx, hy = scene.SOLE_HALF_M
+        for sx, sy in ((1, 1), (1, -1), (-1, 1), (-1, -1)):
+            corner = centre + sx * hx * ax + sy * hy * ay
+            corners.append(np.where(found[..., None], corner, np.nan))
+        weights.append(fz)
+        points.append(c[..., 4:6])
+    w = np.stack(weights, axis=-1)
+    total = w.sum(axis=-1)
+    cop = (w[..., None] * np.stack(points, axis=-2)).sum(-2) / np.maximum(total, 1e-12)[..., None]
+    C = np.stack(corners, axis=-2)  # [..., 8, 2]
+    h = np.nanmax(np.where(np.isnan(C[..., 0])[..., None], -np.inf, C @ DIRECTIONS.T), axis=-2)
+    margin = np.min(h - cop @ DIRECTIONS.T, axis=-1)
+    return np.where(total > 0, margin, -np.inf)
+
+
+class KickProblem:
+    """Maximise the ball's travel to the goal with a stable, non-falling kick."""
+
+    sense = "max"
+    metric_names = METRICS
+
+    def __init__(self, cfg: KickConfig = KickConfig()) -> None:
+        self.cfg = cfg
+        self.genome = GenomeSpec(np.array([g[1] for g in GENES]), np.array([g[2] for g in GENES]),
+                                 names=tuple(g[0] for g in GENES))
+        self.model = scene.load_scene(cfg.rolling_m)
+        self.dt = float(self.model.opt.timestep)
+        self.sl = scene.sensor_slices(self.model)
+        self.iq, self.iv = scene.ball_qpos_index(self.model), scene.ball_qvel_index(self.model)
+        self.decel = scene.measured_deceleration(cfg.rolling_m)
+        self.sim = BatchSimulator(self.model, cfg.nthread)
+
+    def ball_xy(self) -> np.ndarray:
+        return scene.default_ball_xy(self.model) + np.array([self.cfg.ball_dx_m,
+                                                             self.cfg.ball_dy_m])
+
+    def evaluate(self, genomes: np.ndarray, ball_xy: np.ndarray | None = None) -> Evaluation:
+        g = np.atleast_2d(np.asarray(genomes, dtype=float))
+        exec_t = execution_time_s(g)
+        nstep = int(np.ceil((SETTLE_S + exec_t.max() + self.cfg.roll_after_s) / self.dt))
+        times = self.dt * np.arange(1, nstep + 1)
+        ctrl = joint_targets(g, times)
+        ball0 = self.ball_xy() if ball_xy is None else np.asarray(ball_xy, dtype=float)
+        state0 = scene.initial_scene_state(self.model, ball0)
+        states, sensors = self.sim.run_with_sensors(state0, ctrl)
+        qb = states[:, -1, 1 + self.iq:1 + self.iq + 2]
+        nq = self.model.nq
+        vb = states[:, -1, 1 + nq + self.iv:1 + nq + self.iv + 2]
+        final = qb + vb * np.linalg.norm(vb, axis=1, keepdims=True) / (2 * self.decel)
+        travel = final - ball0
+        fell = fall_step(torso_track(states), self.cfg.fall_height_m,
+                         self.cfg.fall_tilt_rad) < nstep
+        margin = support_margin_batch(sensors, self.sl)
+        in_kick = (times[None, :] >= SETTLE_S) & (times[None, :] <= SETTLE_S + exec_t[:, None])
+        bad = (margin < self.cfg.zmp_margin_m) & in_kick
+        viol = bad.sum(1) / np.maximum(in_kick.sum(1), 1)
+        min_margin = np.min(np.where(in_kick, margin, np.inf), axis=1)
+        fitness = (travel[:, 0] - self.cfg.w_lateral * np.abs(travel[:, 1])
+                   - self.cfg.fall_penalty_m * fell - self.cfg.zmp_penalty_m * viol)
+        return Evaluation(fitness, {"distance_m": travel[:, 0], "lateral_m": travel[:, 1],
+                                    "fell": fell.astype(float), "zmp_violation": viol,
+                                    "min_margin_m": min_margin, "exec_time_s": exec_t})
+
+
+def make_problem(cfg: KickConfig) -> KickProblem:
+    return KickProblem(cfg)

@@ -1,0 +1,116 @@
+"""The kick scene: the NAO H25 model plus a RoboCup SPL ball on a floor with rolling friction.
+
+Ball: 100 mm diameter, 45 g (the issue's figures for the SPL ball; the SPL rule book specifies a
+black-and-white foam ball of 100 mm diameter — its mass is taken from the issue, not re-verified),
+a solid sphere (foam) with ``condim = 6`` so that MuJoCo applies torsional and rolling friction.
+Rolling friction ``rolling_m`` (a length: rolling torque = rolling_m * normal force) models the
+carpet; for a solid ball the rolling deceleration is ``a = rolling_m g / (1.4 r)``: 0.005 m gives
+0.70 m/s^2, so a 3 m/s kick rolls about 6.4 m (a plausible SPL carpet; our assumption).
+
+The scene adds (without editing the NAO files) the ball body and sensors: per sole the
+``contact`` sensor with the floor reduced to the net force (``found, force[3], pos[3]``) and the
+sole site's ``framexaxis``. The sensor order is fixed in :data:`SENSOR_LAYOUT`.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import mujoco
+import numpy as np
+
+from evomotion.sim import nao
+
+BALL_RADIUS_M = 0.05
+BALL_MASS_KG = 0.045
+SOLE_HALF_M = (0.08, 0.0444)  # half length and half width of the sole box in the NAO MJCF
+
+_BALL = """<body name="ball" pos="{x} {y} {z}"><freejoint name="ball"/>
+<geom name="ball" type="sphere" size="{r}" mass="{m}" condim="6" contype="2" conaffinity="2"
+ friction="0.7 0.005 {roll}" rgba="0.95 0.95 0.95 1"/></body>
+</worldbody>"""
+_SENSORS = """<sensor>
+<contact name="l_contact" geom1="l_sole" geom2="floor" data="found force pos" reduce="netforce"/>
+<contact name="r_contact" geom1="r_sole" geom2="floor" data="found force pos" reduce="netforce"/>
+<framexaxis name="l_xaxis" objtype="site" objname="l_sole_site"/>
+<framexaxis name="r_xaxis" objtype="site" objname="r_sole_site"/>
+</sensor>
+</mujoco>"""
+
+
+def scene_xml(ball_xy: tuple[float, float] = (0.2, -0.05), rolling_m: float = 0.005) -> str:
+    xml = nao._model_xml()
+    ball = _BALL.format(x=ball_xy[0], y=ball_xy[1], z=BALL_RADIUS_M + 1e-4, r=BALL_RADIUS_M,
+                        m=BALL_MASS_KG, roll=rolling_m)
+    xml = xml.replace("</worldbody>", ball, 1)
+    end = xml.rindex("</mujoco>")
+    return xml[:end] + _SENSORS
+
+
+@lru_cache(maxsize=4)
+def load_scene(rolling_m: float = 0.005) -> mujoco.MjModel:
+    return mujoco.MjModel.from_xml_string(scene_xml(rolling_m=rolling_m))
+
+
+def sensor_slices(model: mujoco.MjModel) -> dict[str, slice]:
+    """Slices of ``sensordata`` by sensor name."""
+    out = {}
+    for i in range(model.nsensor):
+        adr, dim = model.sensor_adr[i], model.sensor_dim[i]
+        out[model.sensor(i).name] = slice(int(adr), int(adr + dim))
+    return out
+
+
+def ball_qpos_index(model: mujoco.MjModel) -> int:
+    return int(model.jnt_qposadr[model.joint("ball").id])
+
+
+def ball_qvel_index(model: mujoco.MjModel) -> int:
+    return int(model.jnt_dofadr[model.joint("ball").id])
+
+
+def initial_scene_state(model: mujoco.MjModel, ball_xy: np.ndarray,
+                        pose: np.ndarray | None = None) -> np.ndarray:
+    """Full-physics state: the NAO in ``pose`` (default the crouch) and the ball resting at
+    ``ball_xy`` (world)."""
+    data = nao.initial_data(model, pose)
+    i = ball_qpos_index(model)
+    data.qpos[i:i + 3] = [ball_xy[0], ball_xy[1], BALL_RADIUS_M + 1e-4]
+    data.qpos[i + 3:i + 7] = [1, 0, 0, 0]
+    mujoco.mj_forward(model, data)
+    state = np.empty(mujoco.mj_stateSize(model, nao.STATE_SPEC))
+    mujoco.mj_getState(model, data, state, nao.STATE_SPEC)
+    return state
+
+
+def default_ball_xy(model: mujoco.MjModel, gap_m: float = 0.02, pose: np.ndarray | None = None,
+                    foot: str = "r") -> np.ndarray:
+    """Ball ``gap_m`` in front of the ``foot`` ("l"/"r") sole's toe, centred on the sole."""
+    data = nao.initial_data(model, pose)
+    sole = data.site(f"{foot}_sole_site").xpos
+    return np.array([sole[0] + SOLE_HALF_M[0] + BALL_RADIUS_M + gap_m, sole[1]])
+
+
+def rolling_deceleration(rolling_m: float, g: float = 9.81) -> float:
+    """Deceleration (m/s^2) of a solid ball rolling without slipping under rolling friction."""
+    return rolling_m * g / (1.4 * BALL_RADIUS_M)
+
+
+@lru_cache(maxsize=4)
+def measured_deceleration(rolling_m: float = 0.005, v0_m_s: float = 1.5) -> float:
+    """Rolling deceleration (m/s^2) measured in the scene: the ball rolls alone (far from the
+    robot) from ``v0_m_s`` for 1 s; slope of its speed (a 10 % lower value than
+    :func:`rolling_deceleration`, from MuJoCo's soft contact)."""
+    model = load_scene(rolling_m)
+    data = mujoco.MjData(model)
+    mujoco.mj_setState(model, data, initial_scene_state(model, np.array([1.0, 0.5])),
+                       nao.STATE_SPEC)
+    iv = ball_qvel_index(model)
+    data.qvel[iv:iv + 6] = [v0_m_s, 0, 0, 0, v0_m_s / BALL_RADIUS_M, 0]
+    n = int(round(1.0 / model.opt.timestep))
+    v = np.empty(n)
+    for k in range(n):
+        mujoco.mj_step(model, data)
+        v[k] = data.qvel[iv]
+    t = model.opt.timestep * np.arange(1, n + 1)
+    return float(-np.polyfit(t[n // 10:], v[n // 10:], 1)[0])
