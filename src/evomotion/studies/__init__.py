@@ -12,6 +12,7 @@ from evomotion.core.registry import lookup
 from evomotion.studies.base import Study
 
 STUDIES: dict[str, str] = {
+    "grid-path": "evomotion.studies.grid_path.study:STUDY",
     "functions": "evomotion.studies.functions.study:STUDY",
     "humanoid-step": "evomotion.studies.humanoid_step.study:STUDY",
     "arm-ik": "evomotion.studies.arm_ik.study:STUDY",

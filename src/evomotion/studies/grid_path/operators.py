@@ -1,0 +1,138 @@
+"""The seed's validity-keeping path operators on the perpendicular encoding.
+
+Zhang et al. (2014, sec. 3.1 and 3.2.3):
+
+- initial paths: each P_i is drawn as a random *free* cell on its perpendicular L_i, and
+  re-drawn while the segment from P_{i-1} crosses an obstacle ("重新生成下一柵格,繼續判斷
+  直至路徑有效"); we bound the re-draws (``retries``) and restart paths whose last segment
+  into G stays invalid (``restarts``); a path still invalid then keeps its penalty;
+- mutation: pick one path point at random (the start point leaves the path unchanged),
+  replace it by a free position on its perpendicular, and repeat while the path is invalid
+  (bounded by ``retries``; on failure the point is left as it was).
+
+Everything is vectorised over the individuals; the loops run over genes and retries.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from evomotion.studies.grid_path.encoding import PerpendicularEncoding
+from evomotion.studies.grid_path.geometry import segments_valid
+
+
+def free_pieces(enc: PerpendicularEncoding, blocked: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Free stretches of every perpendicular: ``lo[g, K]``, ``hi[g, K]``, ``count[g]``.
+
+    Each stretch is the part of L_g inside one free cell, as an interval of y'.
+    """
+    feet, nrm = enc.foot_points(), enc.normal
+    pieces: list[list[tuple[float, float]]] = []
+    h, w = blocked.shape
+    for g in range(enc.dim):
+        a, b = enc.lower[g], enc.upper[g]
+        cuts = [a, b]
+        for axis in (0, 1):
+            if abs(nrm[axis]) > 1e-15:
+                v0, v1 = sorted((feet[g, axis] + a * nrm[axis], feet[g, axis] + b * nrm[axis]))
+                ks = np.arange(np.ceil(v0), np.floor(v1) + 1)
+                cuts.extend(((ks - feet[g, axis]) / nrm[axis]).tolist())
+        cuts = np.unique(np.clip(cuts, a, b))
+        mids = 0.5 * (cuts[1:] + cuts[:-1])
+        cells = np.floor(feet[g] + mids[:, None] * nrm).astype(int)
+        inside = (cells[:, 0] >= 0) & (cells[:, 0] < w) & (cells[:, 1] >= 0) & (cells[:, 1] < h)
+        ok = inside & (cuts[1:] > cuts[:-1])
+        ok[ok] &= ~blocked[cells[ok, 1], cells[ok, 0]]
+        pieces.append(list(zip(cuts[:-1][ok], cuts[1:][ok], strict=True)))
+    k = max(1, max(len(p) for p in pieces))
+    lo = np.zeros((enc.dim, k))
+    hi = np.zeros((enc.dim, k))
+    count = np.array([len(p) for p in pieces])
+    for g, p in enumerate(pieces):
+        if p:
+            lo[g, :len(p)], hi[g, :len(p)] = np.array(p).T
+        else:  # fully blocked perpendicular: fall back to its whole extent
+            lo[g, 0], hi[g, 0], count[g] = enc.lower[g], enc.upper[g], 1
+    return lo, hi, count
+
+
+@dataclass
+class PathOperators:
+    """Seed initialisation and mutation for one map, encoding and validity rule."""
+
+    enc: PerpendicularEncoding
+    blocked: np.ndarray
+    rule: str
+    retries: int = 20
+    restarts: int = 20
+
+    def __post_init__(self) -> None:
+        self.lo, self.hi, self.count = free_pieces(self.enc, self.blocked)
+
+    def draw(self, genes: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        """A random free position y' on each perpendicular ``genes[k]`` (a free cell chosen
+        uniformly, then a uniform point inside its stretch, strictly inside it)."""
+        j = (rng.random(genes.size) * self.count[genes]).astype(int)
+        lo, hi = self.lo[genes, j], self.hi[genes, j]
+        return lo + (hi - lo) * rng.uniform(0.05, 0.95, genes.size)
+
+    def _point(self, genes: np.ndarray, y: np.ndarray) -> np.ndarray:
+        return self.enc.snap(self.enc.foot_points()[genes] + y[:, None] * self.enc.normal)
+
+    def initial_population(self, n: int, rng: np.random.Generator) -> np.ndarray:
+        """``n`` chromosomes built point by point as in the seed (see module doc)."""
+        d = self.enc.dim
+        x = np.zeros((n, d))
+        todo = np.arange(n)
+        for _ in range(self.restarts + 1):
+            prev = np.broadcast_to(self.enc.start, (todo.size, 2)).copy()
+            bad = np.zeros(todo.size, dtype=bool)
+            for g in range(d):
+                gg = np.full(todo.size, g)
+                y = self.draw(gg, rng)
+                pend = np.arange(todo.size)
+                for _ in range(self.retries):
+                    ok = segments_valid(self.blocked, prev[pend], self._point(gg[pend], y[pend]),
+                                        self.rule)
+                    pend = pend[~ok]
+                    if pend.size == 0:
+                        break
+                    y[pend] = self.draw(gg[pend], rng)
+                else:
+                    bad[pend] |= ~segments_valid(self.blocked, prev[pend],
+                                                 self._point(gg[pend], y[pend]), self.rule)
+                x[todo, g] = y
+                prev = self._point(gg, y)
+            goal = np.broadcast_to(self.enc.goal, (todo.size, 2))
+            todo = todo[bad | ~segments_valid(self.blocked, prev, goal, self.rule)]
+            if todo.size == 0:
+                break
+        return x
+
+    def mutate(self, x: np.ndarray, rng: np.random.Generator, rate: float) -> np.ndarray:
+        """Seed mutation on each row with probability ``rate`` (see module doc)."""
+        x = np.array(x, dtype=float)
+        n, d = x.shape
+        rows = np.flatnonzero(rng.random(n) < rate)
+        point = rng.integers(0, d + 1, rows.size)  # 0 is the start point: no change
+        rows, genes = rows[point > 0], point[point > 0] - 1
+        if rows.size == 0:
+            return x
+        poly = self.enc.decode(x[rows])
+        k = np.arange(rows.size)
+        left, right = poly[k, genes], poly[k, genes + 2]
+        # all re-draws at once: the first valid one of each row is the sequential outcome
+        R = self.retries
+        gr = np.repeat(genes, R)
+        y = self.draw(gr, rng)
+        p = self._point(gr, y)
+        ends = np.concatenate([np.repeat(left, R, 0), p])
+        other = np.concatenate([p, np.repeat(right, R, 0)])
+        ok = segments_valid(self.blocked, ends, other, self.rule).reshape(2, -1).all(0)
+        ok = ok.reshape(rows.size, R)
+        hit = ok.any(1)
+        first = np.argmax(ok, axis=1)
+        x[rows[hit], genes[hit]] = y.reshape(rows.size, R)[hit, first[hit]]
+        return x

@@ -1,0 +1,115 @@
+"""The grid-path problem: batch fitness = path length + penalty per invalid segment.
+
+Fitness (minimised), for the decoded polyline S, P_1..P_{n-1}, G::
+
+    f = sum_i |P_{i+1} - P_i| + penalty * (number of invalid segments)
+
+with ``penalty = width + height`` cells unless set (longer than any detour a valid path
+makes on the map, so every valid path beats every invalid one of similar shape). The
+seed's ``m`` sets the number of perpendiculars, ``n = floor(|SG| / (m sqrt 2))`` (see
+:mod:`.encoding`); ``n_parts > 0`` overrides it (the "more perpendiculars" variant).
+
+Validity uses the ``"closed"`` rule (centres model) in ``discrete`` mode and the ``"open"``
+rule (free model) in ``continuous`` mode unless ``rule`` says otherwise.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from evomotion.core.problem import Evaluation, GenomeSpec
+from evomotion.errors import InputError
+from evomotion.studies.grid_path.encoding import PerpendicularEncoding, parts_from_m
+from evomotion.studies.grid_path.geometry import RULES, polyline_segments_valid
+from evomotion.studies.grid_path.maps import GridMap, random_map, read_map
+from evomotion.studies.grid_path.operators import PathOperators
+
+BUNDLED = ("seed10a", "seed10b", "seed15", "seed20")
+
+
+@dataclass(frozen=True)
+class GridPathConfig:
+    """The ``[problem]`` section of the grid-path study."""
+
+    map: str = "seed10a"  # bundled name, a .map / 0-1 file, or "random:SIZE:DENSITY:SEED"
+    start: str = ""  # "x,y" cell indices; default bottom-left cell
+    goal: str = ""  # default top-right cell
+    mode: str = "discrete"  # "discrete" (seed) or "continuous"
+    m: float = 1.2  # seed's perpendicular spacing factor
+    n_parts: int = 0  # > 0 overrides m
+    rule: str = ""  # "" = closed for discrete, open for continuous
+    penalty: float = 0.0  # per invalid segment; 0 = width + height
+    retries: int = 20  # validity re-draws in initialisation and mutation
+    repair: bool = False  # polish the final best path (see repair.py)
+
+
+def _cell(text: str, what: str) -> tuple[int, int] | None:
+    if not text:
+        return None
+    try:
+        x, y = (int(v) for v in text.split(","))
+    except ValueError:
+        raise InputError(f"problem.{what} must be 'x,y' cell indices, got {text!r}") from None
+    return x, y
+
+
+def load_map(spec: str, start: tuple[int, int] | None = None,
+             goal: tuple[int, int] | None = None) -> GridMap:
+    """A bundled map by name, a file path, or ``random:SIZE:DENSITY:SEED``."""
+    if spec.startswith("random:"):
+        try:
+            _, size, dens, seed = spec.split(":")
+            m = random_map(int(size), float(dens), np.random.default_rng(int(seed)))
+        except ValueError:
+            raise InputError(f"expected 'random:SIZE:DENSITY:SEED', got {spec!r}") from None
+        return GridMap(m.blocked, m.start, m.goal, spec).with_endpoints(start, goal)
+    if spec in BUNDLED:
+        ref = resources.files("evomotion.studies.grid_path") / "maps" / f"{spec}.map"
+        with resources.as_file(ref) as p:
+            return read_map(p, start, goal)
+    if not Path(spec).exists():
+        raise InputError(f"map {spec!r} is neither a file nor a bundled map "
+                         f"({', '.join(BUNDLED)}) nor 'random:SIZE:DENSITY:SEED'")
+    return read_map(spec, start, goal)
+
+
+class GridPathProblem:
+    """Batch evaluation of perpendicular-encoded paths on one map."""
+
+    sense = "min"
+    metric_names = ("length", "n_invalid")
+
+    def __init__(self, cfg: GridPathConfig) -> None:
+        self.cfg = cfg
+        self.map = load_map(cfg.map, _cell(cfg.start, "start"), _cell(cfg.goal, "goal"))
+        if cfg.mode not in ("discrete", "continuous"):
+            raise InputError(f"problem.mode must be 'discrete' or 'continuous', got {cfg.mode!r}")
+        self.rule = cfg.rule or ("closed" if cfg.mode == "discrete" else "open")
+        if self.rule not in RULES:
+            raise InputError(f"problem.rule must be one of {', '.join(RULES)}, got {cfg.rule!r}")
+        length = float(np.hypot(*(self.map.goal_xy - self.map.start_xy)))
+        n = cfg.n_parts if cfg.n_parts > 0 else parts_from_m(length, cfg.m)
+        self.enc = PerpendicularEncoding.build(self.map, n, cfg.mode)
+        self.penalty = cfg.penalty or float(self.map.width + self.map.height)
+        self.genome: GenomeSpec = self.enc.genome()
+
+    @cached_property
+    def operators(self) -> PathOperators:
+        return PathOperators(self.enc, self.map.blocked, self.rule, retries=self.cfg.retries)
+
+    def decode(self, genomes: np.ndarray) -> np.ndarray:
+        return self.enc.decode(genomes)
+
+    def evaluate(self, genomes: np.ndarray) -> Evaluation:
+        pts = self.enc.decode(genomes)
+        seg = np.hypot(*np.moveaxis(np.diff(pts, axis=1), -1, 0))
+        ok = polyline_segments_valid(self.map.blocked, pts, self.rule)
+        length = seg.sum(axis=1)
+        n_invalid = (~ok).sum(axis=1)
+        return Evaluation(length + self.penalty * n_invalid,
+                          {"length": length, "n_invalid": n_invalid.astype(float)})
