@@ -114,3 +114,14 @@ def test_visibility_distance_goes_around_the_wall():
                                               "5\n4 4\n6 4\n6 6\n4 6\n4 4\n"))
     d2 = VisibilityGraph.build(closed).distances(np.array([[[1.0, 5.0]]]))
     assert np.isclose(d2[0, 0, 0], np.hypot(3, 1) * 2 + 2)  # over the square's top side
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(0, 10_000), st.booleans())
+def test_fast_count_matches_pairwise_test(seed, integer):
+    rng = np.random.default_rng(seed)
+    draw = (lambda *s: rng.integers(0, 4, s).astype(float)) if integer else \
+        (lambda *s: rng.random(s) * 4)
+    segs, obst = draw(6, 5, 2, 2), draw(7, 2, 2)
+    slow = segments_intersect(segs[:, :, None], obst[None, None]).sum(axis=(1, 2))
+    np.testing.assert_array_equal(count_intersections(segs, obst), slow)

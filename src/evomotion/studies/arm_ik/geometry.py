@@ -56,20 +56,40 @@ def segments_intersect(p: np.ndarray, q: np.ndarray, strict: bool = False,
     return hit
 
 
+def segment_hits(segs: np.ndarray, obstacles: np.ndarray) -> np.ndarray:
+    """``int[n, S]``: how many obstacle edges ``obstacles[M, 2, 2]`` each limb segment
+    ``segs[n, S, 2, 2]`` meets. Fast path: proper crossings from the orientation products; only
+    pairs where both products are ``<= 0`` without a proper crossing (touching, collinear) go
+    through :func:`segments_intersect`."""
+    n, s = segs.shape[:2]
+    if obstacles.shape[0] == 0 or s == 0:
+        return np.zeros((n, s), dtype=int)
+    px1, py1 = segs[:, :, None, 0, 0], segs[:, :, None, 0, 1]
+    px2, py2 = segs[:, :, None, 1, 0], segs[:, :, None, 1, 1]
+    qx1, qy1 = obstacles[:, 0, 0], obstacles[:, 0, 1]
+    qx2, qy2 = obstacles[:, 1, 0], obstacles[:, 1, 1]
+    ex, ey = qx2 - qx1, qy2 - qy1
+    fx, fy = px2 - px1, py2 - py1
+    a12 = (ex * (py1 - qy1) - ey * (px1 - qx1)) * (ex * (py2 - qy1) - ey * (px2 - qx1))
+    a34 = (fx * (qy1 - py1) - fy * (qx1 - px1)) * (fx * (qy2 - py1) - fy * (qx2 - px1))
+    hit = (a12 < 0) & (a34 < 0)
+    idx = np.nonzero((a12 <= 0) & (a34 <= 0) & ~hit)
+    if idx[0].size:
+        hit[idx] = segments_intersect(segs[idx[0], idx[1]], obstacles[idx[2]])
+    return hit.sum(axis=2)
+
+
 def count_intersections(segs: np.ndarray, obstacles: np.ndarray,
                         mask: np.ndarray | None = None) -> np.ndarray:
     """Number of (limb segment, obstacle edge) pairs that intersect, per individual.
 
-    ``segs[n, S, 2, 2]``, ``obstacles[M, 2, 2]``, ``mask[S]`` or ``mask[n, S]`` selects the
-    segments that count (padded zero-length bones are masked out). Returns ``int[n]``.
+    ``mask[S]`` or ``mask[n, S]`` selects the segments that count (padded zero-length bones
+    are masked out). Returns ``int[n]``.
     """
-    n, s = segs.shape[:2]
-    if obstacles.shape[0] == 0 or s == 0:
-        return np.zeros(n, dtype=int)
-    hit = segments_intersect(segs[:, :, None], obstacles[None, None])  # (n, S, M)
+    per = segment_hits(segs, obstacles)
     if mask is not None:
-        hit &= np.broadcast_to(mask, (n, s))[..., None]
-    return hit.sum(axis=(1, 2))
+        per = per * np.broadcast_to(mask, per.shape)
+    return per.sum(axis=1)
 
 
 def points_in_polygons(pts: np.ndarray, polygons: list[np.ndarray]) -> np.ndarray:

@@ -8,7 +8,7 @@ import numpy as np
 
 from evomotion.core.problem import Evaluation, GenomeSpec
 from evomotion.errors import InputError
-from evomotion.studies.arm_ik.geometry import count_intersections
+from evomotion.studies.arm_ik.geometry import segment_hits
 from evomotion.studies.arm_ik.heuristics import WristMap, build_wrist_map
 from evomotion.studies.arm_ik.kinematics import Layout, forward
 from evomotion.studies.arm_ik.objective import (
@@ -107,9 +107,10 @@ class ArmIKProblem:
     def assess(self, genomes: np.ndarray) -> Assessment:
         g = np.atleast_2d(np.asarray(genomes, dtype=float))
         pose = forward(self.scn, self.layout, g)
-        arm_hits = count_intersections(pose.arm_segments(), self.obstacles)
-        fmask = self.layout.finger_mask.ravel()
-        hits = arm_hits + count_intersections(pose.finger_segments(), self.obstacles, fmask)
+        segs = np.concatenate([pose.arm_segments(), pose.finger_segments()], axis=1)
+        mask = np.concatenate([np.ones(self.layout.n_arm, bool), self.layout.finger_mask.ravel()])
+        per = segment_hits(segs, self.obstacles) * mask
+        hits, arm_hits = per.sum(axis=1), per[:, : self.layout.n_arm].sum(axis=1)
         if self.cfg.board_walls:  # the board is convex: a bone leaves it iff a joint does
             out_arm = self._outside(pose.arm_joints[:, 1:]).sum(axis=1)
             out_f = self._outside(pose.finger_joints[:, :, 1:]) & self.layout.finger_mask

@@ -50,6 +50,7 @@ class RunResult:
     restarts: int = 0
     final_population: np.ndarray | None = None
     final_distance: np.ndarray | None = None  # whole-limb objective of the final population
+    time_to_solution_cpu_s: float | None = None  # process CPU time (robust on a busy machine)
 
 
 def _limb_key(a: Assessment) -> np.ndarray:
@@ -61,6 +62,8 @@ class _Run:
 
     def __init__(self, cfg: ArmIKConfig, prob: ArmIKProblem, seed: int, t0: float) -> None:
         self.cfg, self.prob, self.t0 = cfg, prob, t0
+        self.c0 = time.process_time()
+        self.solved_cpu: float | None = None
         self.rng = np.random.default_rng(seed)
         self.gen = self.evals = 0
         self.solved_at: float | None = None
@@ -79,6 +82,7 @@ class _Run:
     def note_solution(self) -> None:
         if self.best_a.solved[0] and self.solved_at is None:
             self.solved_at = time.perf_counter() - self.t0
+            self.solved_cpu = time.process_time() - self.c0
 
     @property
     def done(self) -> bool:
@@ -147,7 +151,7 @@ def evolve(cfg: ArmIKConfig, seed: int, problem: ArmIKProblem | None = None,
                 on_generation(row)
     return RunResult(prob, run.best, run.best_a, bool(run.best_a.solved[0]), run.solved_at,
                      run.gen, run.evals, time.perf_counter() - t0, np.array(run.history),
-                     run.stats, max(restarts, 0), run.pop, run.A.distance)
+                     run.stats, max(restarts, 0), run.pop, run.A.distance, run.solved_cpu)
 
 
 def _stats_row(gen: int, mode: str, evals: int, t: float, pop: np.ndarray, A: Assessment,
