@@ -17,6 +17,7 @@ STUDIES: dict[str, str] = {
     "humanoid-step": "evomotion.studies.humanoid_step.study:STUDY",
     "arm-ik": "evomotion.studies.arm_ik.study:STUDY",
     "biped-kick": "evomotion.studies.biped_kick.study:STUDY",
+    "quadruped-plan": "evomotion.studies.quadruped_plan.study:STUDY",
 }
 
 

@@ -1,0 +1,188 @@
+"""Independent re-verification of a ``plan.json`` (seed 003 model).
+
+Written apart from ``rules``/``model``: feet are checked in leg polar coordinates, margins
+through ``scipy.spatial.ConvexHull``, and body moves by sampling the path (``PATH_SAMPLES``
+points) instead of the analytic limits the planner uses. The first violation raises
+:class:`PlanViolationError` naming the state.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from scipy.spatial import ConvexHull
+
+TOL = 1e-6  # [units] / [rad]
+PATH_SAMPLES = 64
+RULE_COUNT = {"A": 11, "B": 27}
+
+
+class PlanViolationError(Exception):
+    """A plan state or transition that breaks the model; ``str()`` is one line."""
+
+
+def _wrap(a: float) -> float:
+    return (a + math.pi) % (2 * math.pi) - math.pi
+
+
+class _Geometry:
+    def __init__(self, m: dict[str, Any]) -> None:
+        self.a, self.b = float(m["a"]), float(m["b"])
+        self.lmin, self.lmax = float(m["l_min"]), float(m["l_max"])
+        self.hw = float(m["sector_half_width"])
+        self.min_margin = float(m.get("min_margin", 0.0))
+        a2, b2 = self.a / 2, self.b / 2
+        self.hips = np.array([[-a2, b2], [-a2, -b2], [a2, -b2], [a2, b2]])
+        self.nominal = np.array([math.pi, math.pi, 0.0, 0.0])
+
+    def body_feet(self, body: np.ndarray, feet: np.ndarray) -> np.ndarray:
+        c, s = math.cos(body[2]), math.sin(body[2])
+        d = feet - body[:2]
+        return np.stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]], axis=1)
+
+    def polar(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        rel = p - self.hips
+        length = np.hypot(rel[:, 0], rel[:, 1])
+        off = np.angle(np.exp(1j * (np.arctan2(rel[:, 1], rel[:, 0]) - self.nominal)))
+        return length, off
+
+    def outside(self, p: np.ndarray) -> int | None:
+        """First leg whose body-frame foot is outside its sector, else None."""
+        length, off = self.polar(p)
+        bad = (length < self.lmin - TOL) | (length > self.lmax + TOL) | (np.abs(off) >
+                                                                         self.hw + TOL)
+        return int(np.argmax(bad)) if bad.any() else None
+
+    def rear_offset(self, leg: int) -> float:
+        """Angle offset of the sector edge pointing to body -Y (the seed's maximum angle)."""
+        return self.hw if math.sin(self.nominal[leg] + self.hw) < 0 else -self.hw
+
+
+def hull_margin(points: np.ndarray, centre: np.ndarray) -> float:
+    """Signed distance of ``centre`` to the boundary of the hull of ``points`` (> 0 inside)."""
+    try:
+        hull = ConvexHull(points)
+    except Exception:  # degenerate (collinear) support
+        return -math.inf
+    eq = hull.equations  # n . x + d <= 0 inside, |n| = 1
+    return float(-np.max(eq[:, :2] @ centre + eq[:, 2]))
+
+
+def check_plan(doc: dict[str, Any]) -> dict[str, float]:
+    """Verify every state and transition; return a summary or raise PlanViolationError."""
+    g = _Geometry(doc["model"])
+    goal = np.array(doc["goal"], dtype=float)
+    tol_goal = float(doc["goal_tolerance"])
+    sense = int(doc.get("sense", -1))
+    n_rules = RULE_COUNT.get(doc["rule_set"])
+    if n_rules is None:
+        raise PlanViolationError(f"unknown rule set {doc['rule_set']!r}")
+    zone = doc.get("zone")
+    states = doc["states"]
+    bodies = [np.array(s["body"], dtype=float) for s in states]
+    feet = [np.array(s["feet"], dtype=float) for s in states]
+    legs = 0
+    travel = 0.0
+    for i, st in enumerate(states):
+        where = f"state {i} (rule {st['rule']})"
+        p = g.body_feet(bodies[i], feet[i])
+        leg = g.outside(p)
+        if leg is not None:
+            raise PlanViolationError(f"{where}: foot {leg} is outside its workspace")
+        if zone is not None:
+            zc = np.array([zone["x"], zone["y"]])
+            if np.linalg.norm(bodies[i][:2] - zc) < zone["radius"] - TOL or np.any(
+                    np.linalg.norm(feet[i] - zc, axis=1) < zone["radius"] - TOL):
+                raise PlanViolationError(f"{where}: body or foot inside the exclusion zone")
+        rule = st["rule"]
+        if i == 0:
+            if rule != 0:
+                raise PlanViolationError(f"{where}: the start state must have rule 0")
+            margin = hull_margin(feet[0], bodies[0][:2])
+        elif not 1 <= rule <= n_rules:
+            raise PlanViolationError(f"{where}: no such rule in set {doc['rule_set']}")
+        elif rule <= 3:
+            _check_body_move(g, bodies[i - 1], feet[i - 1], bodies[i], feet[i], rule, goal,
+                             sense, zone, where)
+            travel += float(np.linalg.norm(bodies[i][:2] - bodies[i - 1][:2]))
+            margin = hull_margin(feet[i], bodies[i][:2])
+        else:
+            leg = (rule - 4) % 4
+            _check_leg_move(g, bodies[i - 1], feet[i - 1], bodies[i], feet[i], rule, leg, where)
+            legs += 1
+            margin = hull_margin(np.delete(feet[i - 1], leg, axis=0), bodies[i][:2])
+            if margin < g.min_margin - 1e-9:
+                raise PlanViolationError(f"{where}: leg {leg} lifted with margin {margin:.4g} < "
+                                    f"{g.min_margin:g}")
+        if margin < -1e-9:
+            raise PlanViolationError(f"{where}: statically unstable (margin {margin:.4g})")
+        if abs(margin - float(st["margin"])) > TOL:
+            raise PlanViolationError(f"{where}: margin {st['margin']:.6g} recorded, "
+                                f"{margin:.6g} recomputed")
+    dist = float(np.linalg.norm(bodies[-1][:2] - goal))
+    if dist > tol_goal + TOL:
+        raise PlanViolationError(f"state {len(states) - 1}: ends {dist:.3f} from the goal "
+                            f"(tolerance {tol_goal:g})")
+    return {"states": len(states), "leg_moves": legs, "travel": travel,
+            "leg_moves_per_unit": legs / travel if travel > 0 else math.inf}
+
+
+def _check_body_move(g: _Geometry, b0: np.ndarray, f0: np.ndarray, b1: np.ndarray,
+                     f1: np.ndarray, rule: int, goal: np.ndarray, sense: int,
+                     zone: dict | None, where: str) -> None:
+    if np.max(np.abs(f1 - f0)) > TOL:
+        raise PlanViolationError(f"{where}: a foot moved during a body move")
+    ts = np.linspace(0.0, 1.0, PATH_SAMPLES)
+    if rule == 1:
+        if np.linalg.norm(b1[:2] - b0[:2]) > TOL:
+            raise PlanViolationError(f"{where}: a rotation moved the body centre")
+        turn = _wrap(b1[2] - b0[2])
+        heading = b0[2] + (-math.pi / 2 if sense < 0 else math.pi / 2)
+        bearing = math.atan2(goal[1] - b0[1], goal[0] - b0[0])
+        before = _wrap(bearing - heading)
+        if sense == 0 and abs(before) > math.pi / 2:
+            before = _wrap(before - math.pi)
+        if abs(turn) < TOL or turn * before < 0 or abs(turn) > abs(before) + TOL:
+            raise PlanViolationError(f"{where}: the rotation does not reduce the heading error")
+        path = [np.array([b0[0], b0[1], b0[2] + t * turn]) for t in ts]
+    else:
+        d = b1[:2] - b0[:2]
+        axis = np.array([-math.sin(b0[2]), math.cos(b0[2])])
+        along = float(d @ axis)
+        if abs(_wrap(b1[2] - b0[2])) > TOL or np.linalg.norm(d - along * axis) > TOL:
+            raise PlanViolationError(f"{where}: a translation not along the body Y axis")
+        if sense != 0 and along * sense < 0:
+            raise PlanViolationError(f"{where}: a translation against the walking sense")
+        if rule == 2 and abs(abs(along) - g.b / 3) > TOL:
+            raise PlanViolationError(f"{where}: rule 2 must translate by b/3, not {abs(along):.4f}")
+        if rule == 3 and abs(along) > abs(float((goal - b0[:2]) @ axis)) + TOL:
+            raise PlanViolationError(f"{where}: rule 3 overshoots the goal along the axis")
+        path = [np.array([b0[0] + t * d[0], b0[1] + t * d[1], b0[2]]) for t in ts]
+    for b in path:
+        leg = g.outside(g.body_feet(b, f0))
+        if leg is not None:
+            raise PlanViolationError(f"{where}: foot {leg} leaves its workspace during the move")
+        if zone is not None and math.hypot(b[0] - zone["x"], b[1] - zone["y"]) < \
+                zone["radius"] - TOL:
+            raise PlanViolationError(f"{where}: the body passes through the exclusion zone")
+
+
+def _check_leg_move(g: _Geometry, b0: np.ndarray, f0: np.ndarray, b1: np.ndarray,
+                    f1: np.ndarray, rule: int, leg: int, where: str) -> None:
+    if np.max(np.abs(b1 - b0)) > TOL:
+        raise PlanViolationError(f"{where}: the body moved during a leg move")
+    others = [k for k in range(4) if k != leg]
+    if np.max(np.abs(f1[others] - f0[others])) > TOL:
+        raise PlanViolationError(f"{where}: a foot other than leg {leg} moved")
+    l0, o0 = g.polar(g.body_feet(b0, f0))
+    l1, o1 = g.polar(g.body_feet(b1, f1))
+    rear = g.rear_offset(leg)
+    group = (rule - 4) // 4  # 0: max/max, 1: mid/nominal, 2: max L, 3: min L, 4: max, 5: min
+    want_len = [g.lmax, 0.5 * (g.lmin + g.lmax), g.lmax, g.lmin, l0[leg], l0[leg]][group]
+    want_off = [rear, 0.0, o0[leg], o0[leg], rear, -rear][group]
+    if abs(l1[leg] - want_len) > TOL or abs(_wrap(o1[leg] - want_off)) > TOL:
+        raise PlanViolationError(f"{where}: leg {leg} is not where rule {rule} puts it")
+    if np.max(np.abs(f1[leg] - f0[leg])) < TOL:
+        raise PlanViolationError(f"{where}: rule {rule} does not move leg {leg}")

@@ -1,0 +1,135 @@
+"""Configuration and one planning run: build the search problem, pick the method, search.
+
+Methods: ``best-first`` (the seed's algorithm with its function 1, 2 or 3), ``astar``
+(A* on plan length with the admissible heuristic of ``evaluation``) and
+``weighted-astar`` (f = g + weight h).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from evomotion.core.search import SearchResult, astar, best_first
+from evomotion.errors import InputError
+from evomotion.studies.quadruped_plan.evaluation import (
+    SEED_CONSTANTS,
+    plan_length_heuristic,
+    seed_evaluation,
+)
+from evomotion.studies.quadruped_plan.model import QuadrupedModel
+from evomotion.studies.quadruped_plan.rules import ExclusionZone, WalkProblem
+
+METHODS = ("best-first", "astar", "weighted-astar")
+
+
+@dataclass(frozen=True)
+class QuadrupedPlanConfig:
+    """The ``[problem]`` section. Lengths in the seed's units, angles in radians.
+
+    ``k1``/``k2``/``k3`` < 0 mean the seed's constants for ``function`` and ``rule_set``.
+    ``zone_radius`` > 0 adds an exclusion zone (body centre and feet stay out of it).
+    ``sense``: walking direction, -1 = body -Y (default, see docs), +1 = +Y, 0 = either.
+    """
+
+    start_x: float = 0.0
+    start_y: float = 0.0
+    start_phi: float = 1.5 * math.pi
+    goal_x: float = -10.0
+    goal_y: float = 10.0
+    goal_tolerance: float = 0.25
+    rule_set: str = "B"
+    method: str = "best-first"
+    function: int = 3
+    k1: float = -1.0
+    k2: float = -1.0
+    k3: float = -1.0
+    weight: float = 3.0
+    max_expansions: int = 200_000
+    max_seconds: float = 60.0
+    sense: int = -1
+    a: float = 2.5
+    b: float = 3.0
+    l_min: float = 1.0
+    l_max: float = 2.0
+    sector_half_width: float = math.pi / 4
+    min_margin: float = 0.0
+    zone_x: float = 0.0
+    zone_y: float = 0.0
+    zone_radius: float = 0.0
+    gif_max_frames: int = 150
+
+
+def validate(cfg: QuadrupedPlanConfig) -> None:
+    if cfg.rule_set not in ("A", "B"):
+        raise InputError(f"problem.rule_set: expected 'A' or 'B', got {cfg.rule_set!r}")
+    if cfg.method not in METHODS:
+        raise InputError(f"problem.method: expected one of {', '.join(METHODS)}, "
+                         f"got {cfg.method!r}")
+    if cfg.function not in (1, 2, 3):
+        raise InputError(f"problem.function: expected 1, 2 or 3, got {cfg.function}")
+    if cfg.sense not in (-1, 0, 1):
+        raise InputError(f"problem.sense: expected -1, 0 or 1, got {cfg.sense}")
+    if cfg.max_expansions < 0 or cfg.max_seconds < 0:
+        raise InputError("problem.max_expansions and problem.max_seconds must be >= 0")
+    if cfg.weight < 1:
+        raise InputError(f"problem.weight: expected >= 1, got {cfg.weight}")
+    if cfg.goal_tolerance <= 0:
+        raise InputError("problem.goal_tolerance: expected > 0")
+
+
+def constants(cfg: QuadrupedPlanConfig) -> tuple[float, float, float]:
+    seed = SEED_CONSTANTS[(cfg.function, cfg.rule_set)]
+    return tuple(v if v >= 0 else s for v, s in zip((cfg.k1, cfg.k2, cfg.k3), seed,
+                                                      strict=True))  # type: ignore[return-value]
+
+
+def make_model(cfg: QuadrupedPlanConfig) -> QuadrupedModel:
+    try:
+        return QuadrupedModel(a=cfg.a, b=cfg.b, l_min=cfg.l_min, l_max=cfg.l_max,
+                              sector_half_width=cfg.sector_half_width,
+                              min_margin=cfg.min_margin)
+    except ValueError as e:
+        raise InputError(f"problem: {e}") from None
+
+
+def make_zone(cfg: QuadrupedPlanConfig) -> ExclusionZone | None:
+    return ExclusionZone(cfg.zone_x, cfg.zone_y, cfg.zone_radius) if cfg.zone_radius > 0 \
+        else None
+
+
+def make_problem(cfg: QuadrupedPlanConfig) -> WalkProblem:
+    """The search problem: start with the legs in their nominal positions."""
+    validate(cfg)
+    model = make_model(cfg)
+    zone = make_zone(cfg)
+    if zone is not None and zone.contains(cfg.start_x, cfg.start_y):
+        raise InputError("problem.zone_*: the start lies inside the exclusion zone")
+    start = model.nominal_state(cfg.start_x, cfg.start_y, cfg.start_phi)
+    return WalkProblem(model, start, (cfg.goal_x, cfg.goal_y), cfg.rule_set,
+                       cfg.goal_tolerance, cfg.sense, zone)
+
+
+def unreachable_reason(cfg: QuadrupedPlanConfig) -> str | None:
+    """A reason known before searching that no plan exists, else None."""
+    zone = make_zone(cfg)
+    if zone is not None and math.hypot(cfg.goal_x - zone.x, cfg.goal_y - zone.y) + \
+            cfg.goal_tolerance <= zone.radius:
+        return (f"no plan: the goal ({cfg.goal_x:g}, {cfg.goal_y:g}) lies inside the "
+                f"exclusion zone (centre ({zone.x:g}, {zone.y:g}), radius {zone.radius:g}), "
+                "which the body may not enter")
+    return None
+
+
+def solve(cfg: QuadrupedPlanConfig, problem: WalkProblem | None = None,
+          max_seconds: float | None = None) -> SearchResult:
+    """Run the configured search on ``problem`` (built from ``cfg`` when None)."""
+    problem = problem or make_problem(cfg)
+    secs = cfg.max_seconds if max_seconds is None else max_seconds
+    if cfg.method == "best-first":
+        ev = seed_evaluation(cfg.function, constants(cfg), (cfg.goal_x, cfg.goal_y), cfg.sense)
+        return best_first(problem, ev, cfg.max_expansions, secs)
+    h = plan_length_heuristic(problem.model, (cfg.goal_x, cfg.goal_y), cfg.goal_tolerance,
+                              cfg.sense)
+    weight = 1.0 if cfg.method == "astar" else cfg.weight
+    return astar(problem, h, weight, cfg.max_expansions, secs)
