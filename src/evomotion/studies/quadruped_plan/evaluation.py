@@ -48,6 +48,8 @@ def seed_evaluation(function: int, k: tuple[float, float, float], goal: tuple[fl
                     sense: int = -1) -> Callable[..., float]:
     """The evaluation ``evaluate(pf, pg, ps, child, rule, cost)`` of seed function 1, 2 or 3."""
     k1, k2, k3 = k
+    if function != 3:
+        k3 = 0.0  # only function (3) counts leg moves
     if function not in (1, 2, 3):
         raise ValueError(f"unknown evaluation function {function}; available: 1, 2, 3")
     gx, gy = goal

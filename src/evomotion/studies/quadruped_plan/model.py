@@ -163,10 +163,10 @@ def translation_limit(model: QuadrupedModel, state: tuple[float, ...], sign: flo
         ux = side * (state[3 + 2 * leg] - hx)
         ry = sign * (state[4 + 2 * leg] - hy)
         t = min(ry + ux * cot, ry + math.sqrt(max(0.0, lmax2 - ux * ux)))
-        if ux < model.l_min:
-            c = math.sqrt(lmin2 - ux * ux)
-            if ry > -c:
-                t = min(t, ry - c)
+        # the inner circle blocks the way down only from above it (a foot on the circle's
+        # vertical tangent, ux = l_min, slides past it)
+        if ux < model.l_min - EPS and ry > 0:
+            t = min(t, ry - math.sqrt(lmin2 - ux * ux))
         best = min(best, t)
     return max(0.0, best)
 
