@@ -34,7 +34,7 @@ import numpy as np
 from evomotion.core.problem import Evaluation, Problem, failed_evaluation
 from evomotion.errors import InputError
 from evomotion.run.evaluators import evaluate_safely, split_chunks
-from evomotion.run.ray_evaluator import WORKER_ENV, ClusterError
+from evomotion.run.ray_evaluator import WORKER_ENV, ClusterError, worker_config
 
 log = logging.getLogger("evomotion.run.dask")
 
@@ -75,7 +75,7 @@ class DaskEvaluator:
         self.address = address
         self.chunks_per_worker = chunks_per_worker
         self.start_timeout_s = start_timeout_s or self.start_timeout_s
-        self._make_problem, self._problem_cfg = make_problem, problem_cfg
+        self._make_problem, self._problem_cfg = make_problem, worker_config(problem_cfg)
         self._token = uuid.uuid4().hex
         self._generation = 0
         self.cluster = None
@@ -85,7 +85,8 @@ class DaskEvaluator:
             else:
                 self.cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1,
                                             threads_per_worker=1, processes=True,
-                                            dashboard_address=None,
+                                            # a free localhost port (None still binds 8787)
+                                            dashboard_address="127.0.0.1:0",
                                             silence_logs=logging.WARNING)
                 self.client = Client(self.cluster)
             self.client.wait_for_workers(1, timeout=self.start_timeout_s)
@@ -102,9 +103,11 @@ class DaskEvaluator:
         self._generation += 1
         tag = f"evomotion-{self._token[:8]}-{self._generation}"
         try:
-            futures = [self.client.submit(evaluate_chunk, self._token, self._make_problem,
-                                          self._problem_cfg, genomes[s], pure=False,
-                                          key=f"{tag}-{k}") for k, s in enumerate(chunks)]
+            m = len(chunks)  # one message to the scheduler for the whole generation
+            futures = self.client.map(evaluate_chunk, [self._token] * m,
+                                      [self._make_problem] * m, [self._problem_cfg] * m,
+                                      [genomes[s] for s in chunks], pure=False,
+                                      key=[f"{tag}-{k}" for k in range(m)])
             no_worker_since = None
             while True:
                 try:

@@ -21,6 +21,7 @@ evaluator is built. See ``docs/cluster.md`` for a multi-machine recipe.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import logging
 import os
 import time
@@ -37,6 +38,16 @@ from evomotion.run.evaluators import evaluate_safely, split_chunks
 log = logging.getLogger("evomotion.run.ray")
 
 WORKER_ENV = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
+
+
+def worker_config(problem_cfg: Any) -> Any:
+    """The problem config a one-core worker builds from: a ``threads`` field left at 0 (all
+    cores, e.g. ``mujoco.rollout`` threads) becomes 1, since the workers already fill every
+    core, one per core; an explicit thread count is kept."""
+    if (dataclasses.is_dataclass(problem_cfg) and hasattr(problem_cfg, "threads")
+            and getattr(problem_cfg, "threads") == 0):
+        return dataclasses.replace(problem_cfg, threads=1)
+    return problem_cfg
 
 
 class ClusterError(RuntimeError):
@@ -97,7 +108,7 @@ class RayEvaluator:
         self.start_timeout_s = start_timeout_s or self.start_timeout_s
         self.replaced = 0  # actors that died and were replaced
         self.failed_chunks = 0  # chunks given up after max_attempts
-        self._make_problem, self._problem_cfg = make_problem, problem_cfg
+        self._make_problem, self._problem_cfg = make_problem, worker_config(problem_cfg)
         self._own_ray = not ray.is_initialized()
         if self._own_ray:
             try:
