@@ -21,9 +21,9 @@ def test_interpolate_controls_hits_keys_and_is_linear(nkeys, seed):
     values = rng.normal(size=(3, nkeys, 2))
     nstep = int(round(times[-1] / dt)) + 5
     ctrl = interpolate_controls(times, values, dt, nstep)
-    t = dt * (np.arange(nstep) + 1)
+    t = dt * np.arange(nstep)
     for k in range(1, nkeys):
-        i = int(round(times[k] / dt)) - 1
+        i = int(round(times[k] / dt))
         np.testing.assert_allclose(ctrl[:, i], values[:, k], atol=1e-9)
     expected = np.stack([[np.interp(t, times, values[b, :, j]) for j in range(2)]
                          for b in range(3)]).transpose(0, 2, 1)

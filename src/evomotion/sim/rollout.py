@@ -9,6 +9,7 @@ from the recorded states (``mjSTATE_FULLPHYSICS``: time, qpos, qvel, ...).
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import mujoco
@@ -33,15 +34,49 @@ class BatchSimulator:
 
     def run(self, initial_state: np.ndarray, ctrl: np.ndarray) -> np.ndarray:
         """``states[batch, nstep, nstate]`` after each step for ``ctrl[batch, nstep, nu]``."""
+        return self.run_with_sensors(initial_state, ctrl)[0]
+
+    def run_with_sensors(self, initial_state: np.ndarray,
+                         ctrl: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(``states[batch, nstep, nstate]``, ``sensordata[batch, nstep, nsensordata]``)."""
         ctrl = np.ascontiguousarray(ctrl, dtype=np.float64)
         batch, nstep, _ = ctrl.shape
-        init = np.ascontiguousarray(np.broadcast_to(initial_state, (batch, self.nstate)))
+        init = np.ascontiguousarray(
+            np.broadcast_to(initial_state, (batch, self.nstate)), dtype=np.float64)
         if self._runner is not None:
-            state, _ = self._runner.rollout(self.model, self.datas, init, ctrl, nstep=nstep)
+            out = self._runner.rollout(self.model, self.datas, init, ctrl, nstep=nstep)
         else:
-            state, _ = mj_rollout.rollout(self.model, self.datas[0], init, ctrl, nstep=nstep)
+            out = mj_rollout.rollout(self.model, self.datas[0], init, ctrl, nstep=nstep)
         self.steps_simulated += batch * nstep
-        return state
+        return out
+
+    def run_until(self, initial_state: np.ndarray, ctrl: np.ndarray,
+                  stopped: Callable[[np.ndarray], np.ndarray],
+                  segment_steps: int) -> tuple[np.ndarray, np.ndarray]:
+        """Like :meth:`run_with_sensors`, but in segments of ``segment_steps`` steps: after each
+        segment, trajectories for which ``stopped(states_segment) -> bool[batch]`` is true are
+        not simulated further; their remaining rows repeat their last state and sensor values.
+        (A fallen robot stays fallen, so falls are still found from the recorded states.)"""
+        batch, nstep, _ = ctrl.shape
+        states = np.empty((batch, nstep, self.nstate))
+        sensors = np.empty((batch, nstep, self.model.nsensordata))
+        current = np.ascontiguousarray(
+            np.broadcast_to(initial_state, (batch, self.nstate)), dtype=np.float64)
+        active = np.arange(batch)
+        for start in range(0, nstep, segment_steps):
+            stop = min(start + segment_steps, nstep)
+            s, d = self.run_with_sensors(current[active], ctrl[active, start:stop])
+            states[active, start:stop], sensors[active, start:stop] = s, d
+            current[active] = s[:, -1]
+            done = stopped(s)
+            if done.any() and stop < nstep:
+                gone = active[done]
+                states[gone, stop:] = s[done, -1][:, None]
+                sensors[gone, stop:] = d[done, -1][:, None]
+                active = active[~done]
+            if active.size == 0:
+                break
+        return states, sensors
 
     def close(self) -> None:
         if self._runner is not None:
@@ -84,9 +119,10 @@ def fall_step(track: TorsoTrack, fall_height_m: float, fall_tilt_rad: float) -> 
 def interpolate_controls(times_s: np.ndarray, values: np.ndarray, dt: float,
                          nstep: int) -> np.ndarray:
     """Linear interpolation of key poses ``values[..., K, nu]`` at ``times_s[K]`` onto the
-    physics steps ``t = dt * (i + 1)``, ``i < nstep`` (held constant outside the keys).
+    physics steps ``t = dt * i``, ``i < nstep`` (the target applied during step ``i``; held
+    constant outside the keys).
     Returns ``[..., nstep, nu]``."""
-    t = dt * (np.arange(nstep) + 1.0)
+    t = dt * np.arange(nstep)
     idx = np.clip(np.searchsorted(times_s, t, side="right") - 1, 0, len(times_s) - 1)
     nxt = np.minimum(idx + 1, len(times_s) - 1)
     span = np.where(nxt > idx, times_s[nxt] - times_s[idx], 1.0)

@@ -28,7 +28,7 @@ def motion_targets(motion: Motion, dt: float, nstep: int) -> tuple[np.ndarray, n
     """(first pose[22], controls[nstep, 22]) for the model's actuators (``nao.JOINTS``)."""
     base = nao.pose_vector()
     t_s = motion.times_ms / 1000.0
-    t = dt * (np.arange(nstep) + 1.0)
+    t = dt * np.arange(nstep)  # the target applied during physics step i (from t = i dt)
     ctrl = np.tile(base, (nstep, 1))
     first = base.copy()
     for j, name in enumerate(nao.JOINTS):

@@ -1,0 +1,64 @@
+"""Run-folder artifacts of ``humanoid-step``: ``best.motion``, ``best.mp4``, ``fitness.png``."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from evomotion.run.context import RunContext
+from evomotion.run.folder import atomic_write_text
+from evomotion.sim import nao
+from evomotion.studies.humanoid_step.motion import Motion, format_motion
+from evomotion.studies.humanoid_step.problem import HumanoidStepProblem
+
+POSE_MS = 40  # Webots motions (and the seed's Motion.save) sample a pose every 40 ms
+
+
+def genome_motion(problem: HumanoidStepProblem, genome: np.ndarray) -> Motion:
+    """The whole robot (22 joints) every 40 ms over the step time, as a Webots motion."""
+    times_ms = np.arange(0, int(round(problem.cfg.motion_s * 1000)) + 1, POSE_MS)
+    ctrl = problem.controls(np.atleast_2d(genome), times_ms / 1000.0)[0]
+    return Motion(nao.JOINTS, times_ms, ctrl)
+
+
+def write_best_motion(ctx: RunContext) -> Path | None:
+    if ctx.best_genome is None or not np.all(np.isfinite(ctx.best_genome)):
+        return None
+    path = ctx.out_dir / "best.motion"
+    atomic_write_text(path, format_motion(genome_motion(ctx.problem, ctx.best_genome)))
+    return path
+
+
+def on_checkpoint(ctx: RunContext) -> None:
+    write_best_motion(ctx)
+
+
+def finalize(ctx: RunContext) -> None:
+    """best.motion, its replay summary (best_replay.json), best.mp4 and fitness.png."""
+    from evomotion.run.plots import plot_fitness
+    from evomotion.studies.humanoid_step.replay import replay
+
+    stats = ctx.out_dir / "stats.csv"
+    if stats.exists():
+        plot_fitness(stats, ctx.out_dir / "fitness", title="humanoid-step")
+    path = write_best_motion(ctx)
+    if path is None:
+        return
+    video: Path | None = ctx.out_dir / "best.mp4"
+    try:
+        summary = replay(path, video=video, hold_s=ctx.problem.cfg.hold_s)
+    except Exception as exc:  # no GL backend: keep everything but the video
+        from evomotion.sim.render import RenderUnavailableError
+
+        if not isinstance(exc, RenderUnavailableError):
+            raise
+        ctx.log(f"best.mp4 skipped: {exc}")
+        video = None
+        summary = replay(path, hold_s=ctx.problem.cfg.hold_s)
+    atomic_write_text(ctx.out_dir / "best_replay.json", json.dumps(summary, indent=2) + "\n")
+    dx, dy = summary["displacement_m"]
+    ctx.log(f"best.motion replayed: dx={dx:+.3f} m dy={dy:+.3f} m, "
+            f"{'fell' if summary['fell'] else 'stayed up'}"
+            + (f"; video {video.name}" if video else ""))

@@ -1,0 +1,147 @@
+"""The forward-step problem of seed 000: evaluate a batch of leg trajectories on the NAO.
+
+Each genome is decoded (see :mod:`.encoding`) into targets for the 10 leg servos on every
+physics step of ``motion_s + hold_s`` seconds; the other 12 servos hold the initial pose.
+The whole batch is rolled out with ``mujoco.rollout`` (threads = ``threads``) and scored from
+the recorded torso states:
+
+``fitness = time_to_fall_s + distance_weight * clip(forward_m, -forward_cap_m, forward_cap_m)``
+(maximised; seconds, with ``distance_weight`` = 10 s/m and ``forward_cap_m`` = 0.2 m by default)
+
+- ``time_to_fall_s``: time of the first fallen state (torso origin below ``fall_height_m`` or
+  its up axis tilted more than ``fall_tilt_deg``), or the full ``motion_s + hold_s`` when the
+  robot stays up (seed: "time from the start of the motion until the fall");
+- ``forward_m``: displacement along +x (the robot's initial heading) of the midpoint of the
+  two sole centres, at the end or at the moment of the fall. Measuring the feet, not the
+  torso, means that leaning or diving forward earns nothing: only moving the feet does.
+The cap keeps a lunge or a dive (feet thrown 0.5 m forward, then a fall) from beating a robot
+that stays up: distance credit is at most 2 s, less than a full ``motion_s + hold_s``.
+A *step* is ``forward_m >= step_min_m`` (5 cm) without falling (so upright at the end: the
+last knot is the initial pose, held for ``hold_s``).
+
+Rollouts run in segments of ``segment_s``; robots that have fallen are not simulated further
+(their remaining states repeat the fallen state), which saves most of the physics early in a
+run when nearly every individual falls.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from evomotion.core.problem import Evaluation, GenomeSpec
+from evomotion.sim import nao
+from evomotion.sim.rollout import BatchSimulator, fall_step, torso_track
+from evomotion.studies.humanoid_step.encoding import ServoEncoding
+
+#: Seed 000, Table 1: servo angle limits (rad) used as GA bounds.
+SEED_TABLE1: dict[str, tuple[float, float]] = {
+    "LKneePitch": (0.0, 2.2689), "RKneePitch": (0.0, 2.2689),
+    "LAnkleRoll": (-0.7854, 0.4363), "RAnkleRoll": (-0.4363, 0.7854),
+    "LHipRoll": (-0.4363, 0.7854), "RHipRoll": (-0.7854, 0.4363),
+    "LAnklePitch": (-1.309, 0.7854), "RAnklePitch": (-1.309, 0.7854),
+    "LHipPitch": (-1.7453, 0.4363), "RHipPitch": (-1.7453, 0.4363),
+}
+METRICS = ("time_to_fall_s", "forward_m", "lateral_m", "heading_change_rad", "fell", "stepped")
+
+
+@dataclass(frozen=True)
+class HumanoidStepConfig:
+    """The ``[problem]`` section of ``humanoid-step``."""
+
+    encoding: str = "linear"  # linear | spline | harmonic
+    intervals: int = 20  # K time intervals of the step (seed: 20)
+    motion_s: float = 2.0  # duration of the step motion T (s)
+    hold_s: float = 1.0  # initial pose held after the motion (s)
+    distance_weight: float = 10.0  # fitness per metre forward (s/m)
+    forward_cap_m: float = 0.2  # forward distance credited at most (m)
+    fall_height_m: float = 0.20
+    fall_tilt_deg: float = 45.0
+    step_min_m: float = 0.05
+    bounds_scale: float = 1.0  # 1 = seed Table 1 (intersected with the model ranges)
+    threads: int = 0  # mujoco.rollout threads; 0 = all cores
+    segment_s: float = 0.2  # fallen robots stop being simulated at these boundaries (s)
+
+
+def servo_bounds(model, scale: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """Seed Table 1 intersected with the model's joint ranges for ``nao.LEG_SERVOS``; with
+    ``scale < 1`` each interval shrinks towards the initial pose by that factor."""
+    rng = nao.joint_ranges(model, nao.LEG_SERVOS)
+    t1 = np.array([SEED_TABLE1[n] for n in nao.LEG_SERVOS])
+    lo, hi = np.maximum(rng[:, 0], t1[:, 0]), np.minimum(rng[:, 1], t1[:, 1])
+    q0 = leg_initial_pose()
+    return q0 + scale * (lo - q0), q0 + scale * (hi - q0)
+
+
+def leg_initial_pose() -> np.ndarray:
+    full = nao.pose_vector()
+    return np.array([full[nao.JOINTS.index(n)] for n in nao.LEG_SERVOS])
+
+
+class HumanoidStepProblem:
+    """Batch evaluation of forward-step trajectories (fitness maximised)."""
+
+    sense = "max"
+    metric_names = METRICS
+
+    def __init__(self, cfg: HumanoidStepConfig | None = None) -> None:
+        self.cfg = cfg = cfg or HumanoidStepConfig()
+        self.model = nao.load_model()
+        self.dt = float(self.model.opt.timestep)
+        lo, hi = servo_bounds(self.model, cfg.bounds_scale)
+        self.encoding = ServoEncoding(cfg.encoding, leg_initial_pose(), lo, hi, cfg.intervals,
+                                      cfg.motion_s)
+        self.genome: GenomeSpec = self.encoding.genome(nao.LEG_SERVOS)
+        self.nstep = int(round((cfg.motion_s + cfg.hold_s) / self.dt))
+        self.t_step = self.dt * np.arange(self.nstep)  # target applied during step i
+        self.leg_columns = np.array([nao.JOINTS.index(n) for n in nao.LEG_SERVOS])
+        self.base = nao.pose_vector()
+        self.state0 = nao.initial_state(self.model)
+        data0 = nao.initial_data(self.model)
+        self.sole0 = 0.5 * (data0.site("l_sole_site").xpos + data0.site("r_sole_site").xpos)
+        self.segment_steps = max(1, int(round(cfg.segment_s / self.dt)))
+        self.sim = BatchSimulator(self.model, cfg.threads)
+
+    def controls(self, genomes: np.ndarray, t: np.ndarray | None = None) -> np.ndarray:
+        """Actuator targets ``[pop, nstep, 22]`` for a batch of genomes."""
+        t = self.t_step if t is None else t
+        legs = self.encoding.targets(genomes, t)
+        ctrl = np.broadcast_to(self.base, (legs.shape[0], legs.shape[1], self.base.size)).copy()
+        ctrl[:, :, self.leg_columns] = legs
+        return ctrl
+
+    def _fallen(self, states: np.ndarray) -> np.ndarray:
+        c = self.cfg
+        return fall_step(torso_track(states), c.fall_height_m,
+                         np.radians(c.fall_tilt_deg)) < states.shape[1]
+
+    def simulate(self, genomes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Recorded (states, sole positions) of a batch, fallen robots stopped early."""
+        return self.sim.run_until(self.state0, self.controls(genomes), self._fallen,
+                                  self.segment_steps)
+
+    def score(self, states: np.ndarray, sensors: np.ndarray) -> Evaluation:
+        """Fitness and metrics from recorded states ``[pop, nstep, nstate]`` and sensors."""
+        c = self.cfg
+        track = torso_track(states)
+        fall = fall_step(track, c.fall_height_m, np.radians(c.fall_tilt_deg))
+        fell = fall < self.nstep
+        last = np.minimum(fall, self.nstep - 1)
+        rows = np.arange(states.shape[0])
+        soles = sensors[rows, last]
+        end = 0.5 * (soles[:, 0:2] + soles[:, 3:5])
+        t_fall = np.where(fell, (fall + 1) * self.dt, self.nstep * self.dt)
+        forward, lateral = end[:, 0] - self.sole0[0], end[:, 1] - self.sole0[1]
+        credit = np.clip(forward, -c.forward_cap_m, c.forward_cap_m)
+        fitness = t_fall + c.distance_weight * credit
+        metrics = {
+            "time_to_fall_s": t_fall, "forward_m": forward, "lateral_m": lateral,
+            "heading_change_rad": track.yaw_rad[rows, last] - track.yaw_rad[:, 0],
+            "fell": fell.astype(float),
+            "stepped": ((forward >= c.step_min_m) & ~fell).astype(float),
+        }
+        return Evaluation(fitness, metrics)
+
+    def evaluate(self, genomes: np.ndarray) -> Evaluation:
+        return self.score(*self.simulate(np.atleast_2d(genomes)))

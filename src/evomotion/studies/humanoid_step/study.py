@@ -1,0 +1,56 @@
+"""``humanoid-step``: seed 000, a GA that teaches a simulated NAO a forward step."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from evomotion.studies.base import Study
+from evomotion.studies.humanoid_step.artifacts import finalize, on_checkpoint
+from evomotion.studies.humanoid_step.problem import HumanoidStepConfig, HumanoidStepProblem
+
+cli = typer.Typer(help="Seed 000: a forward step of the NAO, evolved by a GA.",
+                  no_args_is_help=True)
+
+
+@cli.command("replay")
+def replay_cmd(path: Path = typer.Argument(..., exists=True, dir_okay=False),
+               json_out: bool = typer.Option(False, "--json", help="print JSON only"),
+               video: Path | None = typer.Option(None, "--video", help="write an MP4")) -> None:
+    """Replay a Webots .motion file on the NAO model."""
+    from evomotion.studies.humanoid_step.replay import replay_command
+
+    replay_command(path, json_out=json_out, video=video)
+
+
+@cli.command("study")
+def study_cmd(out: Path = typer.Option(Path("runs/humanoid-step-study"), "--out"),
+              quick: bool = typer.Option(False, "--quick", help="tiny budget (tests, smoke)"),
+              seeds: int = typer.Option(10, help="seeds for blx_alpha and arithmetic"),
+              generations: int = typer.Option(100, help="generations per run"),
+              pop: int = typer.Option(100, help="population size")) -> None:
+    """The seed's experiment: five crossovers, BLX-alpha vs arithmetic on several seeds."""
+    from evomotion.studies.humanoid_step.experiment import run_experiment
+
+    run_experiment(out, quick=quick, seeds=seeds, generations=generations, pop=pop)
+
+
+STUDY = Study(
+    name="humanoid-step",
+    description="Seed 000: a GA evolves a forward step of a NAO H25 in MuJoCo "
+                "(10 leg servos x K knots, fitness = time to fall + forward distance).",
+    problem_config=HumanoidStepConfig,
+    make_problem=HumanoidStepProblem,
+    defaults={
+        "algorithm": {"pop_size": 100, "crossover": "blx_alpha",
+                      "crossover_params": {"alpha": 0.7}, "mutation": "perturb_k",
+                      "mutation_rate": 0.3, "mutation_params": {"k": 10, "delta": 0.08},
+                      "selection": "roulette", "elitism": 0.1},
+        "run": {"generations": 40, "checkpoint_every": 10},
+        "problem": {"intervals": 10, "bounds_scale": 0.25},
+    },
+    on_checkpoint=on_checkpoint,
+    finalize=finalize,
+    cli=cli,
+)
