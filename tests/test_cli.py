@@ -78,3 +78,19 @@ def test_readme_examples_run(tmp_path):
     assert (tmp_path / "runs" / "comparison.png").exists()
     stats = (tmp_path / "runs" / "mine" / "stats.csv").read_text().splitlines()
     assert stats[-1].startswith("100,")
+
+
+def test_replay_json_only_on_stdout():
+    motion = ROOT.parent / "shared" / "fixtures" / "webots-motions" / "HandWave.motion"
+    if not motion.exists():
+        pytest.skip("shared fixtures not present")
+    r = cli("replay", str(motion), "--json")
+    assert r.returncode == 0, r.stderr
+    out = json.loads(r.stdout)
+    assert set(out) == {"displacement_m", "heading_change_rad", "fell", "fall_time_s"}
+    assert out["fell"] is False
+
+
+def test_replay_missing_file_is_one_line_error(tmp_path):
+    r = cli("replay", str(tmp_path / "none.motion"))
+    assert r.returncode == 2 and "Traceback" not in r.stderr and "no such motion" in r.stderr

@@ -118,6 +118,20 @@ def plot_cmd(
         typer.echo(str(p))
 
 
+@app.command("replay")
+def replay_cmd(
+    motion: Annotated[Path, typer.Argument(help="A Webots .motion file")],
+    json_out: Annotated[bool, typer.Option("--json", help="Only JSON on stdout")] = False,
+    video: Annotated[Path | None, typer.Option(help="Write an MP4 of the replay")] = None,
+) -> None:
+    """Play a Webots .motion on the NAO model: displacement, heading change, fall."""
+    from evomotion.studies.humanoid_step.replay import replay_command
+
+    if not motion.is_file():
+        raise InputError(f"{motion}: no such motion file")
+    replay_command(motion, json_out=json_out, video=video)
+
+
 def _mount_study_app(argv: list[str]) -> None:
     """Mount ``evomotion <study> ...`` subcommands for the study named on the command line."""
     if len(argv) > 1 and argv[1] in STUDIES:
