@@ -60,8 +60,7 @@ class BatchSimulator:
         batch, nstep, _ = ctrl.shape
         states = np.empty((batch, nstep, self.nstate))
         sensors = np.empty((batch, nstep, self.model.nsensordata))
-        current = np.ascontiguousarray(
-            np.broadcast_to(initial_state, (batch, self.nstate)), dtype=np.float64)
+        current = np.array(np.broadcast_to(initial_state, (batch, self.nstate)), np.float64)
         active = np.arange(batch)
         for start in range(0, nstep, segment_steps):
             stop = min(start + segment_steps, nstep)

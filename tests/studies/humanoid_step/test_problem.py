@@ -1,0 +1,60 @@
+import numpy as np
+import pytest
+
+from evomotion.studies.humanoid_step.problem import HumanoidStepConfig, HumanoidStepProblem
+
+
+@pytest.fixture(scope="module")
+def problem():
+    cfg = HumanoidStepConfig(intervals=4, motion_s=0.6, hold_s=0.4, threads=2)
+    return HumanoidStepProblem(cfg)
+
+
+def _still(problem, n=1):
+    """Genomes whose knots all equal the initial pose."""
+    return np.tile(np.repeat(problem.encoding.q0, problem.cfg.intervals - 1), (n, 1))
+
+
+def test_standing_still_survives_with_no_distance(problem):
+    ev = problem.evaluate(_still(problem))
+    assert ev.metrics["fell"][0] == 0.0
+    assert ev.metrics["time_to_fall_s"][0] == pytest.approx(1.0)
+    assert abs(ev.metrics["forward_m"][0]) < 0.005
+    assert ev.fitness[0] == pytest.approx(1.0 + 10.0 * ev.metrics["forward_m"][0])
+    assert ev.metrics["stepped"][0] == 0.0
+    assert set(ev.metrics) == set(problem.metric_names)
+
+
+def test_folding_the_legs_falls_early(problem):
+    g = _still(problem)
+    s = problem.genome.slices
+    for name in ("RHipPitch", "LHipPitch"):
+        g[0, s[name]] = problem.genome.lower[s[name]]  # hips flexed to the limit: pitch over
+    ev = problem.evaluate(g)
+    assert ev.metrics["fell"][0] == 1.0
+    assert ev.metrics["time_to_fall_s"][0] < 1.0
+    assert ev.fitness[0] < 1.0 + 10.0 * problem.cfg.forward_cap_m
+
+
+def test_batch_equals_one_by_one(problem):
+    rng = np.random.default_rng(3)
+    q = _still(problem, 3)
+    g = np.clip(q + rng.normal(0, 0.08, q.shape), problem.genome.lower, problem.genome.upper)
+    ev = problem.evaluate(g)
+    for i in range(3):
+        one = problem.evaluate(g[i:i + 1])
+        assert one.fitness[0] == ev.fitness[i]
+        for k in problem.metric_names:
+            assert one.metrics[k][0] == ev.metrics[k][i]
+
+
+def test_controls_hold_other_servos_and_pin_ends(problem):
+    rng = np.random.default_rng(4)
+    g = problem.genome.sample(rng, 2)
+    ctrl = problem.controls(g)
+    assert ctrl.shape == (2, problem.nstep, 22)
+    other = np.setdiff1d(np.arange(22), problem.leg_columns)
+    np.testing.assert_array_equal(ctrl[:, :, other], np.broadcast_to(
+        problem.base[other], (2, problem.nstep, other.size)))
+    np.testing.assert_allclose(ctrl[:, 0], np.broadcast_to(problem.base, (2, 22)))
+    np.testing.assert_allclose(ctrl[:, -1], np.broadcast_to(problem.base, (2, 22)))

@@ -1,0 +1,53 @@
+import json
+
+import numpy as np
+from typer.testing import CliRunner
+
+from evomotion.run.config import resolve_config
+from evomotion.run.runner import run_study
+from evomotion.sim import nao
+from evomotion.studies import get_study
+from evomotion.studies.humanoid_step.artifacts import genome_motion
+from evomotion.studies.humanoid_step.motion import format_motion, read_motion
+from evomotion.studies.humanoid_step.replay import replay
+from evomotion.studies.humanoid_step.study import cli
+
+
+def test_defaults_follow_the_seed():
+    study = get_study("humanoid-step")
+    cfg = resolve_config(study, None, [])
+    a = cfg.algorithm
+    assert (a.pop_size, a.crossover, a.crossover_params["alpha"]) == (100, "blx_alpha", 0.7)
+    assert (a.mutation, a.mutation_rate, a.selection, a.elitism) == (
+        "perturb_k", 0.3, "roulette", 0.1)
+
+
+def test_tiny_run_writes_artifacts(tmp_path):
+    study = get_study("humanoid-step")
+    cfg = resolve_config(study, None, [
+        "algorithm.pop_size=6", "run.generations=2", "run.checkpoint_every=1",
+        "problem.intervals=4", "problem.motion_s=0.4", "problem.hold_s=0.2",
+        "problem.threads=1"])
+    res = run_study(study, cfg, tmp_path, quiet=True)
+    assert res.exit_code == 0
+    for name in ("best.motion", "fitness.png", "best_replay.json", "stats.csv"):
+        assert (tmp_path / name).exists(), name
+    assert (tmp_path / "best.mp4").stat().st_size > 1000
+    text = (tmp_path / "best.motion").read_text()
+    m = read_motion(tmp_path / "best.motion")
+    assert m.joints == nao.JOINTS
+    assert m.times_ms.tolist() == list(range(0, 401, 40))
+    assert format_motion(m) == text  # this project's reader reads it back identically
+    problem = study.make_problem(cfg.problem)
+    again = genome_motion(problem, res.best_genome)
+    np.testing.assert_array_equal(again.values, m.values)
+    summary = json.loads((tmp_path / "best_replay.json").read_text())
+    assert summary == replay(tmp_path / "best.motion", hold_s=0.2)
+
+
+def test_cli_replay_json():
+    result = CliRunner().invoke(
+        cli, ["replay", "/work/shared/fixtures/webots-motions/TurnLeft40.motion", "--json"])
+    assert result.exit_code == 0, result.output
+    data = json.loads(result.stdout)
+    assert data["heading_change_rad"] > 0.5 and data["fell"] is False
