@@ -9,6 +9,8 @@
 
     python benchmarks/bench_arm_ik.py --part speed
     python benchmarks/bench_arm_ik.py --part success --seeds 20 --matching optimal greedy
+    python benchmarks/bench_arm_ik.py --part ablation --seeds 10 --wall 10 \
+        --scenario three_fingers four_fingers
 """
 
 from __future__ import annotations
@@ -115,9 +117,37 @@ def success(seeds: int, matchings: list[str], wall: float, scenarios: list[str])
                   flush=True)
 
 
+ABLATIONS: dict[str, dict] = {
+    "default": {},
+    "greedy matching (seed)": {"matching": "greedy"},
+    "assignment in chromosome": {"matching": "chromosome"},
+    "no short-arc blend": {"circular_blend": False},
+    "fixed 5 deg mutation": {"mutation_min_deg": 5.0, "mutation_max_deg": 5.0},
+    "no restarts": {"restart_after": 0},
+    "obstacle-aware distance": {"distance": "obstacle"},
+}
+
+
+def ablation(seeds: int, wall: float, scenarios: list[str]) -> None:
+    """Success / median CPU time with one change at a time against the defaults."""
+    print("| variant | scenario | solved | median CPU s | median generations |")
+    print("|---|---|---|---|---|")
+    for label, kw in ABLATIONS.items():
+        for name in scenarios:
+            cfg = ArmIKConfig(scenario=name, pictures=False, wall_seconds=wall, **kw)
+            cpu_t, gens, ok = [], [], 0
+            for s in range(seeds):
+                r = evolve(cfg, s)
+                ok += r.solved
+                cpu_t.append(r.time_to_solution_cpu_s if r.solved else np.inf)
+                gens.append(r.generations)
+            print(f"| {label} | {name} | {ok}/{seeds} | {np.median(cpu_t):.2f} | "
+                  f"{np.median(gens):.0f} |", flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--part", choices=["speed", "success", "all"], default="all")
+    ap.add_argument("--part", choices=["speed", "success", "ablation", "all"], default="all")
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--matching", nargs="+", default=["optimal", "greedy"])
     ap.add_argument("--wall", type=float, default=30.0, help="budget per run (s)")
@@ -128,6 +158,8 @@ def main() -> None:
         speed()
     if args.part in ("success", "all"):
         success(args.seeds, args.matching, args.wall, args.scenario)
+    if args.part == "ablation":
+        ablation(args.seeds, args.wall, args.scenario)
 
 
 if __name__ == "__main__":

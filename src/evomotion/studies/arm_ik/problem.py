@@ -31,12 +31,12 @@ class ArmIKConfig:
     scenario: str = "seed_example"  # bundled name or path to a scenario file
     matching: str = "optimal"  # greedy | optimal | chromosome
     distance: str = "straight"  # straight | obstacle (way around the obstacles)
-    pop_size: int = 100
+    pop_size: int = 60
     arm_generations: int = 15  # seed schedule: N arm generations,
     finger_generations: int = 15  # then M finger generations,
     whole_generations: int = 3000  # then whole-limb generations (until solved)
     wall_seconds: float = 30.0  # give up after this long (whole run)
-    restart_after: int = 150  # whole-limb generations without a 1% gain -> restart (0 = never)
+    restart_after: int = 60  # whole-limb generations without a 1% gain -> restart (0 = never)
     tournament_k: int = 2  # parent tournament size
     blend_prob: float = 0.5  # per active gene: beta-blend, else inherit (uniform swap)
     circular_blend: bool = True  # blend full-circle angles along the shorter arc

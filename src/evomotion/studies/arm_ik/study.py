@@ -59,7 +59,6 @@ STUDY = Study(
     description="Arm + fingers inverse kinematics among obstacles (seed 001)",
     problem_config=ArmIKConfig,
     make_problem=make_problem,
-    defaults={"run": {"generations": 3000}},
     cli=cli,
     run=run,
 )
