@@ -6,10 +6,14 @@ Between two consecutive cuts the open piece lies inside one cell, or runs along 
 line. Testing the cuts and the midpoints of the pieces therefore decides exactly which
 closed squares and which open squares the segment meets; no sampling is involved.
 
-Two validity rules (cells outside the map count as blocked):
+Two validity rules (a segment must stay inside the map rectangle, whose outside counts as
+blocked):
 
-- ``"open"``  (the *free* model): the segment must not meet the interior of a blocked
-  cell; touching its edges or corners is allowed;
+- ``"open"``  (the *free* model): the segment must not meet the interior of the obstacle
+  region O (the union of the closed blocked squares and the outside of the map); touching
+  O's boundary is allowed: running along an obstacle's edge, touching a corner, passing the
+  pinch point between two diagonal blocked cells. An edge shared by two blocked cells is
+  interior to O, so paths never slip between adjacent blocked cells;
 - ``"closed"`` (the *centres* model): the segment must not touch a blocked cell at all,
   corners included (a diagonal step past a blocked corner is invalid, as in octile moves
   without corner cutting).
@@ -79,13 +83,16 @@ def segments_valid(blocked: np.ndarray, p0: np.ndarray, p1: np.ndarray,
     cy = np.floor(np.where(ony, ry, y)).astype(np.int64) + 1
     np.clip(cx, 0, w - 1, out=cx)
     np.clip(cy, 0, h - 1, out=cy)
-    if rule == "open":
-        hit = pad[cy, cx] & ~onx & ~ony
-        return ~hit.any(axis=1)
-    cxl = np.maximum(cx - onx, 0)  # the cell to the left when on a vertical line
+    hb, wb = np.asarray(blocked).shape
+    inside = ((np.minimum(p0, p1) >= -EPS).all(1) & (np.maximum(p0[:, 0], p1[:, 0]) <= wb + EPS)
+              & (np.maximum(p0[:, 1], p1[:, 1]) <= hb + EPS))  # the map is convex
+    cxl = np.maximum(cx - onx, 0)  # the other cell when the point is on a vertical line
     cyl = np.maximum(cy - ony, 0)
-    hit = pad[cy, cx] | pad[cy, cxl] | pad[cyl, cx] | pad[cyl, cxl]
-    return ~hit.any(axis=1)
+    a, b, c, e = pad[cy, cx], pad[cy, cxl], pad[cyl, cx], pad[cyl, cxl]
+    # a point lies in the closed cells around it; it is inside the obstacle region's interior
+    # when all of them are blocked (an edge shared by two blocked cells is interior)
+    hit = (a & b & c & e) if rule == "open" else (a | b | c | e)
+    return inside & ~hit.any(axis=1)
 
 
 def polyline_segments_valid(blocked: np.ndarray, points: np.ndarray,
