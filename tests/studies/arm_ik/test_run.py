@@ -77,3 +77,10 @@ def test_cli_check(tmp_path):
     r = CliRunner().invoke(cli, ["check", str(bad)])
     assert r.exit_code != 0
     assert "number of targets, got end of file" in str(r.exception)
+
+
+def test_cli_study_table():
+    r = CliRunner().invoke(cli, ["study", "--seeds", "1", "--scenario", "seed_example",
+                                 "--matching", "optimal"])
+    assert r.exit_code == 0, r.output
+    assert "| seed_example | optimal | 1/1 (100%) |" in r.output
