@@ -102,3 +102,16 @@ def test_rotation_limit_matches_sampled_arc(polars: tuple, direction: float) -> 
     if r < math.pi:
         assert not all(_inside(_rotated(feet, direction * v))
                        for v in np.linspace(r, r + 0.02, 50))
+
+
+@settings(max_examples=60, deadline=None)
+@given(feasible, st.floats(-0.5, 0.5))
+def test_fast_lift_check_matches_reference_margin(polars: tuple, threshold: float) -> None:
+    from evomotion.studies.quadruped_plan.rules import _liftable
+
+    s = _state(polars)
+    fast = _liftable(s, threshold)
+    for leg in range(4):
+        m = lift_margin(s, leg)
+        if abs(m - threshold) > 1e-9:
+            assert fast[leg] == (m >= threshold)

@@ -114,3 +114,16 @@ def test_plans_from_make_problem_pass_the_checker() -> None:
     summary = check_plan(plan_document(p.model, res.states, res.rules, p.goal,
                                        cfg.goal_tolerance, cfg.sense, cfg.rule_set, None, {}))
     assert summary["states"] == len(res.states) and summary["leg_moves"] > 0
+
+
+def test_heuristic_room_term_matches_foot_room() -> None:
+    from evomotion.studies.quadruped_plan.evaluation import foot_room, heuristic_constants
+
+    chord, _, gain = heuristic_constants(M)
+    p = WalkProblem(M, M.nominal_state(0, 0, 1.5 * math.pi), GOAL, "B")
+    h = plan_length_heuristic(M, GOAL, 0.25)
+    for _, s, _ in p.successors(p.start()):
+        d = vzd(s, GOAL) - 0.25
+        want = math.ceil(d / chord - 1e-9) + max(
+            0, math.ceil((4 * d - foot_room(M, s, -1)) / max(chord, gain) - 1e-9))
+        assert h(s) == want

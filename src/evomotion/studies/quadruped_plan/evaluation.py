@@ -125,15 +125,20 @@ def plan_length_heuristic(model: QuadrupedModel, goal: tuple[float, float],
     chord, stance, gain = heuristic_constants(model)
     per_move = max(chord, gain)
     gx, gy = goal
+    # foot_room(s) = room0 + sense * (sum of the feet's body y)
+    room0 = 4 * model.l_max * math.sin(model.sector_half_width) - sense * sum(
+        hy for _, hy in model.hips)
+    ceil, hypot = math.ceil, math.hypot
 
     def h(s: tuple[float, ...]) -> float:
-        d = math.hypot(gx - s[0], gy - s[1]) - goal_tolerance
+        d = hypot(gx - s[0], gy - s[1]) - goal_tolerance
         if d <= 0:
             return 0.0
-        trans = math.ceil(d / chord - 1e-9)
+        trans = ceil(d / chord - 1e-9)
         if sense == 0:
-            return trans + 4 * max(0, math.ceil(d / stance - 1e-9) - 1)
-        need = (4 * d - foot_room(model, s, sense)) / per_move
-        return trans + max(0, math.ceil(need - 1e-9))
+            return trans + 4 * max(0, ceil(d / stance - 1e-9) - 1)
+        room = room0 + sense * (s[4] + s[6] + s[8] + s[10])
+        need = (4 * d - room) / per_move
+        return trans + max(0, ceil(need - 1e-9))
 
     return h

@@ -46,6 +46,19 @@ class QuadrupedModel:
             raise ValueError("sector_half_width must be in (0, pi/2)")
         if self.a <= 0 or self.b <= 0:
             raise ValueError("body sides a, b must be positive")
+        # constants of the hot geometry (translation and rotation limits), per leg
+        tn = math.tan(self.sector_half_width)
+        trans, rot = [], []
+        for (hx, hy), side in zip(self.hips, self.sides, strict=True):
+            trans.append((hx, hy, side))
+            h = math.hypot(hx, hy)
+            wedge = []
+            for nx, ny in ((side * tn, -1.0), (side * tn, 1.0)):
+                wedge.append((math.atan2(ny, nx), (nx * hx + ny * hy) / math.hypot(nx, ny)))
+            rot.append((h, math.atan2(hy, hx), h * h - self.l_max ** 2,
+                        h * h - self.l_min ** 2, tuple(wedge)))
+        object.__setattr__(self, "_trans", tuple(trans))
+        object.__setattr__(self, "_rot", tuple(rot))
 
     @property
     def hips(self) -> tuple[tuple[float, float], ...]:
@@ -157,57 +170,54 @@ def translation_limit(model: QuadrupedModel, state: tuple[float, ...], sign: flo
     the first exit from the wedge, the outer circle, or entry into the inner circle.
     """
     cot = 1.0 / math.tan(model.sector_half_width)
-    lmax2, lmin2 = model.l_max ** 2, model.l_min ** 2
+    lmax2, lmin, sqrt = model.l_max ** 2, model.l_min, math.sqrt
     best = math.inf
-    for leg, ((hx, hy), side) in enumerate(zip(model.hips, model.sides, strict=True)):
-        ux = side * (state[3 + 2 * leg] - hx)
-        ry = sign * (state[4 + 2 * leg] - hy)
-        t = min(ry + ux * cot, ry + math.sqrt(max(0.0, lmax2 - ux * ux)))
+    for i, (hx, hy, side) in enumerate(model._trans):
+        ux = side * (state[3 + 2 * i] - hx)
+        ry = sign * (state[4 + 2 * i] - hy)
+        t = ry + ux * cot
+        r = lmax2 - ux * ux
+        t = min(t, ry + sqrt(r)) if r > 0 else min(t, ry)
         # the inner circle blocks the way down only from above it (a foot on the circle's
         # vertical tangent, ux = l_min, slides past it)
-        if ux < model.l_min - EPS and ry > 0:
-            t = min(t, ry - math.sqrt(lmin2 - ux * ux))
-        best = min(best, t)
-    return max(0.0, best)
-
-
-def _keep_in(theta: float, centre: float, k: float, move: float) -> float:
-    """Angle the foot may travel (direction ``move`` = +-1) while cos(theta - centre) >= k."""
-    if k <= -1.0:
-        return math.inf
-    off = (theta - centre + math.pi) % TWO_PI - math.pi
-    return max(0.0, math.acos(min(k, 1.0)) - move * off)
-
-
-def _keep_out(theta: float, centre: float, k: float, move: float) -> float:
-    """Angle the foot may travel while cos(theta - centre) <= k (outside the inner circle)."""
-    if k >= 1.0:
-        return math.inf
-    a = math.acos(max(k, -1.0))
-    o = (move * (theta - centre)) % TWO_PI
-    return max(0.0, TWO_PI - a - o)
+        if ux < lmin - EPS and ry > 0:
+            t = min(t, ry - sqrt(lmin * lmin - ux * ux))
+        if t < best:
+            best = t
+    return best if best > 0.0 else 0.0
 
 
 def rotation_limit(model: QuadrupedModel, state: tuple[float, ...], direction: float) -> float:
     """Largest body rotation [rad] about its centre in ``direction`` (+1 = counter-clockwise)
     keeping every foot inside its sector along the whole arc (the feet turn by -angle in body
-    coordinates, on circles about the body centre)."""
-    tn = math.tan(model.sector_half_width)
+    coordinates, on circles about the body centre). Each boundary (outer and inner circle,
+    the two wedge edges) is an arc condition cos(theta - c) >= k or <= k on that circle."""
     move = -direction
     best = math.inf
-    for leg, ((hx, hy), side) in enumerate(zip(model.hips, model.sides, strict=True)):
-        px, py = state[3 + 2 * leg], state[4 + 2 * leg]
-        r = math.hypot(px, py)
-        if r < EPS:
+    pi, acos = math.pi, math.acos
+    for i, (h, th, out_c, in_c, wedge) in enumerate(model._rot):
+        px, py = state[3 + 2 * i], state[4 + 2 * i]
+        r2 = px * px + py * py
+        if r2 < EPS * EPS:
             return 0.0
+        r = math.sqrt(r2)
         theta = math.atan2(py, px)
-        h = math.hypot(hx, hy)
-        th = math.atan2(hy, hx)
-        best = min(best,
-                   _keep_in(theta, th, (r * r + h * h - model.l_max ** 2) / (2 * r * h), move),
-                   _keep_out(theta, th, (r * r + h * h - model.l_min ** 2) / (2 * r * h), move))
-        for nx, ny in ((side * tn, -1.0), (side * tn, 1.0)):
-            nn = math.hypot(nx, ny)
-            best = min(best, _keep_in(theta, math.atan2(ny, nx), (nx * hx + ny * hy) / (r * nn),
-                                      move))
+        # keep inside the outer circle: an arc about the hip direction
+        k = (r2 + out_c) / (2 * r * h)
+        if k > -1.0:
+            off = (theta - th + pi) % TWO_PI - pi
+            best = min(best, acos(k if k < 1.0 else 1.0) - move * off)
+        # keep outside the inner circle: the forbidden arc lies ahead or behind
+        k = (r2 + in_c) / (2 * r * h)
+        if k < 1.0:
+            a = acos(k if k > -1.0 else -1.0)
+            best = min(best, TWO_PI - a - (move * (theta - th)) % TWO_PI)
+        # keep on the inner side of both wedge edges
+        for centre, nh in wedge:
+            k = nh / r
+            if k > -1.0:
+                off = (theta - centre + pi) % TWO_PI - pi
+                best = min(best, acos(k if k < 1.0 else 1.0) - move * off)
+        if best <= 0.0:
+            return 0.0
     return best

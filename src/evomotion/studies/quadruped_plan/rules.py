@@ -107,6 +107,9 @@ class WalkProblem:
             for leg in range(4):
                 self._fixed.append((rule0 + leg, leg, *model.foot_at(leg, length, angle(leg))))
         self._stable = model.min_margin - STABILITY_TOL
+        q = 1.0 / POS_GRID
+        self._fixed_q = [(r, leg, fx, fy, round(fx * q), round(fy * q))
+                         for r, leg, fx, fy in self._fixed]
 
     @staticmethod
     def _with_key(v: tuple[float, ...]) -> tuple:
@@ -173,14 +176,13 @@ class WalkProblem:
 
     # -- leg moves --------------------------------------------------------------------------
     def _leg_moves(self, s: tuple, out: list) -> None:
-        stable = self._stable
-        lift = [_lift_margin(s, leg) >= stable for leg in range(4)]
+        lift = _liftable(s, self._stable)
         if not (lift[0] or lift[1] or lift[2] or lift[3]):
             return
-        targets = self._fixed
+        q = 1.0 / POS_GRID
+        targets = [t for t in self._fixed_q if lift[t[1]]]
         if self.n_rules == 27:
-            targets = list(targets)
-            model = self.model
+            lmax, lmin = self.model.l_max, self.model.l_min
             for leg in range(4):
                 if not lift[leg]:
                     continue
@@ -189,36 +191,49 @@ class WalkProblem:
                 length = math.hypot(rx, ry)
                 ux, uy = rx / length, ry / length
                 (mx, my), (nx, ny) = self._unit_max[leg], self._unit_min[leg]
-                targets += ((12 + leg, leg, hx + model.l_max * ux, hy + model.l_max * uy),
-                            (16 + leg, leg, hx + model.l_min * ux, hy + model.l_min * uy),
-                            (20 + leg, leg, hx + length * mx, hy + length * my),
-                            (24 + leg, leg, hx + length * nx, hy + length * ny))
+                for rule, fx, fy in ((12 + leg, hx + lmax * ux, hy + lmax * uy),
+                                     (16 + leg, hx + lmin * ux, hy + lmin * uy),
+                                     (20 + leg, hx + length * mx, hy + length * my),
+                                     (24 + leg, hx + length * nx, hy + length * ny)):
+                    targets.append((rule, leg, fx, fy, round(fx * q), round(fy * q)))
         zone = self.zone
         if zone is not None:
             c, sn = math.cos(s[2]), math.sin(s[2])
-        q = 1.0 / POS_GRID
         key = s[11]
-        for rule, leg, fx, fy in targets:
-            if not lift[leg]:
-                continue
+        append = out.append
+        for rule, leg, fx, fy, qx, qy in targets:
             j = 3 + 2 * leg
-            if abs(fx - s[j]) < 1e-7 and abs(fy - s[j + 1]) < 1e-7:
-                continue
+            dx, dy = fx - s[j], fy - s[j + 1]
+            if -1e-7 < dx < 1e-7 and -1e-7 < dy < 1e-7:
+                continue  # the rule would not move the leg
             if zone is not None and zone.contains(s[0] + c * fx - sn * fy,
                                                   s[1] + sn * fx + c * fy):
                 continue
-            kq = key[:j] + (round(fx * q), round(fy * q)) + key[j + 2:]
-            out.append((rule, s[:j] + (fx, fy) + s[j + 2:11] + (kq,), 1.0))
+            append((rule, (*s[:j], fx, fy, *s[j + 2:11],
+                           (*key[:j], qx, qy, *key[j + 2:])), 1.0))
 
 
-def _lift_margin(s: tuple[float, ...], leg: int) -> float:
-    """Margin of the body centre (origin) in the triangle of the three feet other than leg."""
-    pts = [(s[3 + 2 * i], s[4 + 2 * i]) for i in range(4) if i != leg]
-    (ax, ay), (bx, by), (cx, cy) = pts
-    orient = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
-    if orient == 0:
+def _liftable(s: tuple, stable: float) -> list[bool]:
+    """For each leg: is the body centre (origin) at least ``stable`` inside the triangle of
+    the three other feet?"""
+    ax, ay, bx, by, cx, cy, dx, dy = s[3:11]
+    hyp = math.hypot
+    # signed edge terms (cross products of the foot vectors) and edge lengths
+    ab, bc, cd, da = ax * by - ay * bx, bx * cy - by * cx, cx * dy - cy * dx, dx * ay - dy * ax
+    ac, bd = ax * cy - ay * cx, bx * dy - by * dx
+    lab, lbc, lcd, lda = hyp(bx - ax, by - ay), hyp(cx - bx, cy - by), hyp(dx - cx, dy - cy), \
+        hyp(ax - dx, ay - dy)
+    lac, lbd = hyp(cx - ax, cy - ay), hyp(dx - bx, dy - by)
+    return [_tri(bc, cd, -bd, lbc, lcd, lbd) >= stable,  # without 0: b, c, d
+            _tri(cd, da, ac, lcd, lda, lac) >= stable,   # without 1: c, d, a
+            _tri(da, ab, bd, lda, lab, lbd) >= stable,   # without 2: d, a, b
+            _tri(ab, bc, -ac, lab, lbc, lac) >= stable]  # without 3: a, b, c
+
+
+def _tri(e1: float, e2: float, e3: float, l1: float, l2: float, l3: float) -> float:
+    """Margin of the origin in a triangle from its three edge cross terms and lengths."""
+    orient = e1 + e2 + e3  # twice the signed area
+    if orient == 0 or l1 == 0 or l2 == 0 or l3 == 0:
         return -math.inf
-    d = ((ax * by - ay * bx) / math.hypot(bx - ax, by - ay),
-         (bx * cy - by * cx) / math.hypot(cx - bx, cy - by),
-         (cx * ay - cy * ax) / math.hypot(ax - cx, ay - cy))
-    return min(d) if orient > 0 else -max(d)
+    d1, d2, d3 = e1 / l1, e2 / l2, e3 / l3
+    return min(d1, d2, d3) if orient > 0 else -max(d1, d2, d3)
