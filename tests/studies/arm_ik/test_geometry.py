@@ -9,6 +9,7 @@ from hypothesis import strategies as st
 from evomotion.studies.arm_ik.geometry import (
     count_intersections,
     points_in_polygons,
+    proper_crossings,
     segments_intersect,
 )
 from evomotion.studies.arm_ik.scenario import parse_scenario_text
@@ -125,3 +126,9 @@ def test_fast_count_matches_pairwise_test(seed, integer):
     segs, obst = draw(6, 5, 2, 2), draw(7, 2, 2)
     slow = segments_intersect(segs[:, :, None], obst[None, None]).sum(axis=(1, 2))
     np.testing.assert_array_equal(count_intersections(segs, obst), slow)
+
+
+def test_proper_crossings_equals_strict_test():
+    rng = np.random.default_rng(4)
+    p, q = rng.integers(0, 4, (300, 2, 2)).astype(float), rng.integers(0, 4, (300, 2, 2)) * 1.0
+    np.testing.assert_array_equal(proper_crossings(p, q), segments_intersect(p, q, strict=True))

@@ -56,6 +56,17 @@ def segments_intersect(p: np.ndarray, q: np.ndarray, strict: bool = False,
     return hit
 
 
+def proper_crossings(p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """Strict test (proper crossings only, no tolerance) by orientation products, broadcast
+    over ``p[..., 2, 2]`` and ``q[..., 2, 2]`` without materialising the broadcast inputs."""
+    px1, py1, px2, py2 = p[..., 0, 0], p[..., 0, 1], p[..., 1, 0], p[..., 1, 1]
+    qx1, qy1, qx2, qy2 = q[..., 0, 0], q[..., 0, 1], q[..., 1, 0], q[..., 1, 1]
+    ex, ey, fx, fy = qx2 - qx1, qy2 - qy1, px2 - px1, py2 - py1
+    a12 = (ex * (py1 - qy1) - ey * (px1 - qx1)) * (ex * (py2 - qy1) - ey * (px2 - qx1))
+    a34 = (fx * (qy1 - py1) - fy * (qx1 - px1)) * (fx * (qy2 - py1) - fy * (qx2 - px1))
+    return (a12 < 0) & (a34 < 0)
+
+
 def segment_hits(segs: np.ndarray, obstacles: np.ndarray) -> np.ndarray:
     """``int[n, S]``: how many obstacle edges ``obstacles[M, 2, 2]`` each limb segment
     ``segs[n, S, 2, 2]`` meets. Fast path: proper crossings from the orientation products; only

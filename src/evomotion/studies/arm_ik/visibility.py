@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.sparse import csgraph
 
-from evomotion.studies.arm_ik.geometry import points_in_polygons, segments_intersect
+from evomotion.studies.arm_ik.geometry import points_in_polygons, proper_crossings
 from evomotion.studies.arm_ik.scenario import Scenario
 
 
@@ -26,7 +26,7 @@ def _visible(a: np.ndarray, b: np.ndarray, edges: np.ndarray,
     if edges.shape[0] == 0:
         return np.ones(a.shape[:-1], dtype=bool)
     seg = np.stack([a, b], axis=-2)[..., None, :, :]
-    cross = segments_intersect(seg, edges, strict=True).any(axis=-1)
+    cross = proper_crossings(seg, edges).any(axis=-1)
     if closed:
         cross |= points_in_polygons((a + b) / 2, closed)
     return ~cross
