@@ -125,6 +125,10 @@ ABLATIONS: dict[str, dict] = {
     "fixed 5 deg mutation": {"mutation_min_deg": 5.0, "mutation_max_deg": 5.0},
     "no restarts": {"restart_after": 0},
     "obstacle-aware distance": {"distance": "obstacle"},
+    "survival with replacement (seed)": {"survival": "tournament"},
+    "seed-like (all four seed choices)": {"matching": "greedy", "circular_blend": False,
+                                          "mutation_min_deg": 5.0, "mutation_max_deg": 5.0,
+                                          "restart_after": 0, "survival": "tournament"},
 }
 
 

@@ -105,3 +105,11 @@ def test_survivors_keep_best_no_duplicates_and_idea_fraction():
         assert int(np.argmin(np.where(hits == 0, obj, np.inf))) in keep
         if frac:
             assert np.count_nonzero(hits[keep] > 0) >= round(frac * n)
+
+
+def test_seed_literal_survival_draws_with_replacement():
+    rng = np.random.default_rng(5)
+    hits, obj = np.zeros(40, int), np.arange(40.0)
+    keep = survivors(hits, obj, 20, rng, 0.1, pairwise=False)
+    assert keep.size == 20 and keep.max() < 40
+    assert np.unique(keep).size < 20 or 39 not in keep  # copies, and the worst never wins

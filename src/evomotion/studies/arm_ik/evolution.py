@@ -93,9 +93,15 @@ def parents(rank: np.ndarray, n_pairs: int, rng: np.random.Generator,
 
 
 def survivors(hits: np.ndarray, objective: np.ndarray, n: int, rng: np.random.Generator,
-              infeasible_fraction: float) -> np.ndarray:
-    """Indices of ``n`` survivors out of the pool ``2n`` = parents + children."""
+              infeasible_fraction: float, pairwise: bool = True) -> np.ndarray:
+    """Indices of ``n`` survivors out of the pool ``2n`` = parents + children.
+
+    ``pairwise=False`` is the literal reading of the seed: ``n`` binary tournaments drawn with
+    replacement from the pool (copies possible, the best may be lost; no IDEA step).
+    """
     rank = rank_order(hits, objective)
+    if not pairwise:
+        return lookup(SELECTIONS, "selection", "tournament")(rank.astype(float), n, rng, k=2)
     perm = rng.permutation(hits.size).reshape(2, n)
     win = np.where(rank[perm[0]] < rank[perm[1]], perm[0], perm[1])
     lose = np.where(rank[perm[0]] < rank[perm[1]], perm[1], perm[0])

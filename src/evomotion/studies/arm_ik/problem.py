@@ -44,6 +44,7 @@ class ArmIKConfig:
     mutation_min_deg: float = 1e-3  # perturbation magnitude is log-uniform in [min, max]
     mutation_max_deg: float = 60.0
     infeasible_fraction: float = 0.1  # IDEA: share of survivors kept infeasible
+    survival: str = "pairwise"  # pairwise | tournament (seed's literal: with replacement)
     board_walls: bool = True  # a joint outside the board counts as one intersection
     cell_size: float = 0.0  # heuristic cell side (board units); 0 = diagonal / 150
     tolerance: float = 1e-3  # solved: every tip within tolerance * diagonal of its target
@@ -58,6 +59,9 @@ class ArmIKConfig:
         if self.distance not in DISTANCES:
             raise InputError(f"problem.distance: expected one of {', '.join(DISTANCES)}, "
                              f"got {self.distance!r}")
+        if self.survival not in ("pairwise", "tournament"):
+            raise InputError(f"problem.survival: expected pairwise or tournament, "
+                             f"got {self.survival!r}")
         if self.pop_size < 4 or self.pop_size % 2:
             raise InputError(f"problem.pop_size: expected an even number >= 4, got {self.pop_size}")
         if not 0 <= self.infeasible_fraction < 1:

@@ -101,7 +101,8 @@ class _Run:
         self.evals += N
         pool, PA = np.concatenate([self.pop, kids]), Assessment.concat(self.A, K)
         obj, hits = phase_objective(PA, mode)
-        keep = survivors(hits, obj, N, rng, cfg.infeasible_fraction)
+        keep = survivors(hits, obj, N, rng, cfg.infeasible_fraction,
+                         cfg.survival == "pairwise")
         self.gen += 1
         # best whole limb so far (a child may hold it even when its phase ranks it low)
         j = int(np.argmin(_limb_key(K)))
