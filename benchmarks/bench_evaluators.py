@@ -108,6 +108,24 @@ def chunk_overhead(args) -> dict[str, tuple[float, float]]:
     return out
 
 
+def standing_cost(n: int = 40) -> float:
+    """Serial seconds per humanoid-step individual that stays up the whole rollout (genomes
+    near the initial pose): the full-length cost an evolved population approaches."""
+    study = get_study("humanoid-step")
+    cfg = resolve_config(study, None, ["problem.threads=1"]).problem
+    problem = study.make_problem(cfg)
+    enc = problem.encoding
+    pose = np.repeat(enc.q0, enc.intervals - 1)
+    noise = np.random.default_rng(0).normal(0.0, 0.005, (n, pose.size)) * problem.genome.span
+    genomes = np.clip(pose + noise, problem.genome.lower, problem.genome.upper)
+    t0 = time.perf_counter()
+    ev = problem.evaluate(genomes)
+    c = (time.perf_counter() - t0) / n
+    print(f"humanoid-step standing population: {1e3 * c:.2f} ms/individual serial, "
+          f"{100 * np.mean(ev.metrics['fell'] > 0):.0f}% fell", flush=True)
+    return c
+
+
 def estimate(c: float, o_wall: float, o_cpu: float, n: int, workers: int, k: int) -> float:
     """Estimated generation time (s) on ``workers`` workers with ``k`` chunks per worker."""
     compute = n * c / workers
@@ -134,14 +152,19 @@ def main() -> None:
         print(f"ray / process at population {big}: {ratio:.3f} (target <= 1.15)")
     overhead = chunk_overhead(args)
     if ("serial", big) in times:
-        c = times["serial", big] / big
+        costs = {"random population": times["serial", big] / big}
+        if args.study == "humanoid-step":
+            costs["standing population"] = standing_cost()
         w = args.cluster_workers
-        for name, (o_wall, o_cpu) in overhead.items():
-            for n in args.pops:
-                best = min((estimate(c, o_wall, o_cpu, n, w, k), k) for k in (1, 2, 4, 8))
-                print(f"estimate {name:8s} {w} workers, population {n:5d}: "
-                      f"{best[0]:.3f} s/generation, speed-up {n * c / best[0]:.0f}x over serial "
-                      f"(chunks_per_worker {best[1]}; c = {1e3 * c:.2f} ms/individual)")
+        for what, c in costs.items():
+            for name, (o_wall, o_cpu) in overhead.items():
+                if name == "process":  # one machine only
+                    continue
+                for n in args.pops:
+                    best = min((estimate(c, o_wall, o_cpu, n, w, k), k) for k in (1, 2, 4, 8))
+                    print(f"estimate {name:5s} {w} workers, pop {n:5d}, {what} "
+                          f"(c = {1e3 * c:.2f} ms): {best[0]:.3f} s/generation, speed-up "
+                          f"{n * c / best[0]:.0f}x over serial (chunks_per_worker {best[1]})")
 
 
 if __name__ == "__main__":
