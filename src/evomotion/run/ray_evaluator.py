@@ -8,7 +8,7 @@ in submission order, so the :class:`~evomotion.core.problem.Evaluation` is bit-i
 ``serial`` (problems are deterministic functions of each genome).
 
 Faults: an actor that dies (crash, OOM kill, lost node) is replaced and its chunk re-run; a
-chunk that kills ``max_attempts`` actors in a row gets the worst fitness (``failed`` and a
+chunk that kills ``max_attempts`` actors gets the worst fitness (``failed`` and a
 message in ``errors``, which the runner logs) and the run goes on. When no actor can be
 started any more (every node gone, or the driver lost its connection) a
 :class:`ClusterError` is raised: the runner then checkpoints the last completed
@@ -81,7 +81,8 @@ class ProblemActor:
 
 
 class RayEvaluator:
-    """Evaluate on a Ray cluster: ``address`` ``HOST:PORT`` (or ``auto``); local when empty.
+    """Evaluate on a Ray cluster at ``address`` (``HOST:PORT``, or ``auto``: the one this
+    machine belongs to); a new local cluster when ``address`` is empty.
 
     ``workers = 0`` starts one actor per CPU of the cluster. ``max_attempts``: how many actors
     a chunk may lose before its individuals are marked worst. ``start_timeout_s``: how long
@@ -112,8 +113,10 @@ class RayEvaluator:
         self._own_ray = not ray.is_initialized()
         if self._own_ray:
             try:
-                ray.init(address=address or None, num_cpus=(workers or None) if not address
-                         else None, include_dashboard=False, logging_level="WARNING",
+                # "local": always a fresh local cluster, never one found in /tmp/ray
+                ray.init(address=address or "local",
+                         num_cpus=None if address else (workers or None),
+                         include_dashboard=False, logging_level="WARNING",
                          log_to_driver=False, runtime_env={"env_vars": WORKER_ENV})
             except ConnectionError as e:
                 raise ClusterError(f"cannot reach the Ray cluster at {address}: {e}") from e
