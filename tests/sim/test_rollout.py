@@ -51,3 +51,23 @@ def test_threads_give_identical_states():
     np.testing.assert_array_equal(a, b)
     track = torso_track(a)
     assert track.xyz.shape == (4, 100, 3)
+
+
+def test_run_until_stops_fallen_trajectories():
+    model = nao.load_model()
+    s0 = nao.initial_state(model)
+    ctrl = np.tile(nao.pose_vector(), (3, 60, 1))
+    calls = []
+
+    def stopped(seg):
+        calls.append(seg.shape[0])
+        return np.array([True, False, False])[: seg.shape[0]] if len(calls) == 1 else \
+            np.zeros(seg.shape[0], bool)
+
+    with BatchSimulator(model, 1) as sim:
+        states, sensors = sim.run_until(s0, ctrl, stopped, segment_steps=20)
+        assert sim.steps_simulated == 3 * 20 + 2 * 40
+    assert calls == [3, 2, 2]
+    np.testing.assert_array_equal(states[0, 20:], np.broadcast_to(states[0, 19], (40, 58)))
+    assert sensors.shape == (3, 60, 6)
+    assert not np.array_equal(states[1, 20:30], np.broadcast_to(states[1, 19], (10, 58)))

@@ -1,55 +1,93 @@
 """Offscreen rendering of a NAO trajectory to MP4 (MuJoCo ``Renderer`` + imageio-ffmpeg).
 
-The GL backend comes from ``MUJOCO_GL`` (``osmesa`` by default, see :mod:`evomotion.sim`;
-``egl`` on GPU machines). Shadows are switched off (about 6x faster on llvmpipe). A camera
-follows the torso from the robot's right side. Where no backend works,
-:class:`RenderUnavailableError` says so and callers skip only the video.
+The GL backend comes from ``MUJOCO_GL`` (OSMesa or EGL, chosen in :mod:`evomotion.sim`),
+which MuJoCo reads once, when it is first imported. Because any earlier ``import mujoco`` in
+the process fixes the backend (and an OSMesa teardown can crash), frames are rendered in a
+fresh child process (``python -m evomotion.sim.render``) that receives the trajectory on
+stdin. Shadows are off (about 6x faster on llvmpipe); a camera follows the torso from the
+robot's right side. Where no backend works, :class:`RenderUnavailableError` says so and callers
+skip only the video.
 """
 
 from __future__ import annotations
 
+import io
+import subprocess
+import sys
 from pathlib import Path
 
-import mujoco
 import numpy as np
+
+from evomotion.sim.nao import MODEL_PATH
+
+UNAVAILABLE = "RENDER-UNAVAILABLE: "
 
 
 class RenderUnavailableError(RuntimeError):
     """No working OpenGL backend for offscreen rendering."""
 
 
-def _camera(model: mujoco.MjModel, data: mujoco.MjData) -> mujoco.MjvCamera:
-    cam = mujoco.MjvCamera()
-    cam.type = mujoco.mjtCamera.mjCAMERA_FREE
-    cam.lookat[:] = data.body("torso").xpos
-    cam.lookat[2] = 0.2
-    cam.distance, cam.azimuth, cam.elevation = 1.1, -70.0, -12.0
-    return cam
-
-
-def render_video(model: mujoco.MjModel, qpos: np.ndarray, dt: float, out_path: str | Path,
-                 fps: int = 25, width: int = 480, height: int = 352) -> Path:
-    """Render ``qpos[T, nq]`` (one row per physics step of ``dt`` s) at ``fps`` to ``out_path``."""
-    import imageio.v3 as iio
-
+def render_video(qpos: np.ndarray, dt: float, out_path: str | Path, fps: int = 25,
+                 width: int = 480, height: int = 352, model_path: Path = MODEL_PATH) -> Path:
+    """Render ``qpos[T, nq]`` (one row per physics step of ``dt`` s) at ``fps`` to an MP4."""
     out_path = Path(out_path)
+    buf = io.BytesIO()
     stride = max(1, int(round(1.0 / (fps * dt))))
-    frames_q = qpos[::stride]
+    np.save(buf, np.ascontiguousarray(qpos[::stride], dtype=np.float64))
+    cmd = [sys.executable, "-m", "evomotion.sim.render", str(model_path), str(out_path),
+           str(fps), str(width), str(height)]
+    proc = subprocess.run(cmd, input=buf.getvalue(), capture_output=True, timeout=600)
+    err = proc.stderr.decode(errors="replace")
+    if proc.returncode != 0:
+        if UNAVAILABLE in err:
+            raise RenderUnavailableError(err.split(UNAVAILABLE, 1)[1].strip().splitlines()[0])
+        raise RuntimeError(f"rendering failed: {err.strip().splitlines()[-1] if err else '?'}")
+    return out_path
+
+
+def _render_frames(model_path: str, frames_q: np.ndarray, width: int, height: int):
+    import mujoco
+
+    model = mujoco.MjModel.from_xml_path(model_path)
     data = mujoco.MjData(model)
     try:
         renderer = mujoco.Renderer(model, height=height, width=width)
-    except Exception as exc:  # no GL context (no OSMesa/EGL): report clearly
-        raise RenderUnavailableError(f"offscreen rendering unavailable ({exc}); "
-                                "install libosmesa6 or set MUJOCO_GL=egl") from None
+    except Exception as exc:  # no GL context (no OSMesa/EGL)
+        raise RenderUnavailableError(
+            f"offscreen rendering unavailable ({exc}); install libosmesa6 "
+            "(MUJOCO_GL=osmesa) or use EGL (MUJOCO_GL=egl)") from None
+    cam = mujoco.MjvCamera()
+    cam.distance, cam.azimuth, cam.elevation = 1.1, -70.0, -12.0
     frames = []
     try:
         for q in frames_q:
             data.qpos[:] = q
             mujoco.mj_kinematics(model, data)
-            renderer.update_scene(data, camera=_camera(model, data))
+            cam.lookat[:] = data.body("torso").xpos
+            cam.lookat[2] = 0.2
+            renderer.update_scene(data, camera=cam)
             renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = False
             frames.append(renderer.render().copy())
     finally:
         renderer.close()
-    iio.imwrite(out_path, np.stack(frames), fps=fps, codec="libx264")
-    return out_path
+    return np.stack(frames)
+
+
+def main(argv: list[str]) -> int:
+    import evomotion.sim  # noqa: F401  (chooses MUJOCO_GL before mujoco is imported)
+
+    model_path, out_path, fps, width, height = argv
+    frames_q = np.load(io.BytesIO(sys.stdin.buffer.read()))
+    try:
+        frames = _render_frames(model_path, frames_q, int(width), int(height))
+    except RenderUnavailableError as exc:
+        print(f"{UNAVAILABLE}{exc}", file=sys.stderr)
+        return 3
+    import imageio.v3 as iio
+
+    iio.imwrite(out_path, frames, fps=int(fps), codec="libx264")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

@@ -9,6 +9,7 @@ from the recorded states (``mjSTATE_FULLPHYSICS``: time, qpos, qvel, ...).
 from __future__ import annotations
 
 import os
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -31,6 +32,7 @@ class BatchSimulator:
         self._runner = mj_rollout.Rollout(nthread=self.nthread) if self.nthread > 1 else None
         self.nstate = mujoco.mj_stateSize(model, STATE_SPEC)
         self.steps_simulated = 0
+        self.rollout_seconds = 0.0  # wall time spent inside mujoco.rollout
 
     def run(self, initial_state: np.ndarray, ctrl: np.ndarray) -> np.ndarray:
         """``states[batch, nstep, nstate]`` after each step for ``ctrl[batch, nstep, nu]``."""
@@ -43,10 +45,12 @@ class BatchSimulator:
         batch, nstep, _ = ctrl.shape
         init = np.ascontiguousarray(
             np.broadcast_to(initial_state, (batch, self.nstate)), dtype=np.float64)
+        t0 = time.perf_counter()
         if self._runner is not None:
             out = self._runner.rollout(self.model, self.datas, init, ctrl, nstep=nstep)
         else:
             out = mj_rollout.rollout(self.model, self.datas[0], init, ctrl, nstep=nstep)
+        self.rollout_seconds += time.perf_counter() - t0
         self.steps_simulated += batch * nstep
         return out
 

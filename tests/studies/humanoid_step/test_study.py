@@ -51,3 +51,20 @@ def test_cli_replay_json():
     assert result.exit_code == 0, result.output
     data = json.loads(result.stdout)
     assert data["heading_change_rad"] > 0.5 and data["fell"] is False
+
+
+def test_quick_experiment_writes_table(tmp_path):
+    from evomotion.studies.humanoid_step.experiment import CROSSOVERS, run_experiment
+
+    lines = []
+    results = run_experiment(tmp_path, quick=True, workers=1, echo=lines.append)
+    assert {r["crossover"] for r in results} == set(CROSSOVERS)
+    for name in ("results.csv", "summary.md", "curves.png"):
+        assert (tmp_path / name).exists()
+    assert len(list((tmp_path / "curves").glob("*.csv"))) == len(CROSSOVERS)
+    table = lines[0]
+    for label in CROSSOVERS:
+        assert f"| {label} |" in table
+    for r in results:
+        assert len(r["curve"]) == 3  # generations 0..2
+        assert all(row[1] >= row[2] >= row[3] for row in r["curve"])  # max >= mean >= min

@@ -12,6 +12,7 @@ defined poses only. After the motion the last pose is held for ``hold_s`` second
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -70,13 +71,20 @@ def replay(path: str | Path, video: str | Path | None = None, hold_s: float = 1.
     if video is not None:
         from evomotion.sim.render import render_video
 
-        render_video(result["model"], result["qpos"], result["dt"], video)
+        render_video(result["qpos"], result["dt"], video)
     return result["summary"]
 
 
 def replay_command(path: Path, json_out: bool = False, video: Path | None = None) -> None:
-    """CLI body of ``evomotion replay``: JSON only on stdout with ``json_out``."""
-    summary = replay(path, video=video)
+    """CLI body of ``evomotion replay``: JSON only on stdout with ``json_out``. Without a GL
+    backend the video is skipped with a note on stderr."""
+    from evomotion.sim.render import RenderUnavailableError
+
+    try:
+        summary = replay(path, video=video)
+    except RenderUnavailableError as exc:
+        print(f"video skipped: {exc}", file=sys.stderr)
+        summary, video = replay(path), None
     if json_out:
         print(json.dumps(summary))
         return

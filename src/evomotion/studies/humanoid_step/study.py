@@ -29,11 +29,13 @@ def study_cmd(out: Path = typer.Option(Path("runs/humanoid-step-study"), "--out"
               quick: bool = typer.Option(False, "--quick", help="tiny budget (tests, smoke)"),
               seeds: int = typer.Option(10, help="seeds for blx_alpha and arithmetic"),
               generations: int = typer.Option(100, help="generations per run"),
-              pop: int = typer.Option(100, help="population size")) -> None:
+              pop: int = typer.Option(100, help="population size"),
+              workers: int = typer.Option(0, help="parallel runs (0 = all cores)")) -> None:
     """The seed's experiment: five crossovers, BLX-alpha vs arithmetic on several seeds."""
     from evomotion.studies.humanoid_step.experiment import run_experiment
 
-    run_experiment(out, quick=quick, seeds=seeds, generations=generations, pop=pop)
+    run_experiment(out, quick=quick, seeds=seeds, generations=generations, pop=pop,
+                   workers=workers)
 
 
 STUDY = Study(

@@ -1,0 +1,153 @@
+"""The seed's experiment (`evomotion humanoid-step study`): five crossovers compared.
+
+Seed 000, section 3: population 100, mutation probability 0.3, K = 20 intervals, roulette
+selection, elitism 0.1; crossovers one-point, arithmetic, geometric, linear and BLX-alpha
+(alpha = 0.7). The seed reports that BLX-alpha reaches a forward step after about 70
+generations and the arithmetic crossover after about 140. Here BLX-alpha and arithmetic run
+on ``seeds`` seeds each, the other three on ``max(1, seeds // 3)``. Per run we record the
+best/mean/min fitness per generation and the first generation in which an individual makes a
+*step* (feet >= 5 cm forward, not fallen; see :mod:`.problem`). Runs are independent and are
+spread over ``workers`` processes (one ``mujoco.rollout`` thread each).
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import os
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from pathlib import Path
+
+import numpy as np
+
+from evomotion.core.algorithms import ALGORITHMS
+from evomotion.core.problem import to_cost
+from evomotion.studies.humanoid_step.problem import HumanoidStepConfig, HumanoidStepProblem
+
+CROSSOVERS: dict[str, dict] = {  # label -> engine crossover + params
+    "one_point": {"crossover": "one_point"},
+    "arithmetic": {"crossover": "arithmetic_whole"},
+    "geometric": {"crossover": "geometric"},
+    "linear": {"crossover": "linear"},
+    "blx_alpha": {"crossover": "blx_alpha", "crossover_params": {"alpha": 0.7}},
+}
+ALGO = {"mutation": "perturb_k", "mutation_rate": 0.3, "mutation_params": {"k": 10, "delta": 0.08},
+        "selection": "roulette", "elitism": 0.1}
+
+
+def run_one(label: str, seed: int, pop: int, generations: int,
+            problem_cfg: HumanoidStepConfig) -> dict:
+    """One GA run; returns its curve and the first generation with a step (or None)."""
+    cfg_cls, factory = ALGORITHMS["ga"]
+    algo = cfg_cls(pop_size=pop, **ALGO, **CROSSOVERS[label])
+    problem = HumanoidStepProblem(problem_cfg)
+    opt = factory(problem.genome, algo)
+    rng = np.random.default_rng(seed)
+    state = opt.init(rng)
+    curve, first_step = [], None
+    for gen in range(generations + 1):
+        genomes, state = opt.ask(state, rng)
+        ev = problem.evaluate(genomes)
+        state = opt.tell(state, genomes, to_cost(ev.fitness, "max"), rng)
+        if first_step is None and ev.metrics["stepped"].any():
+            first_step = gen
+        _, pcost = opt.population(state)
+        fit = -np.asarray(pcost)
+        fit = fit[np.isfinite(fit)]
+        curve.append((gen, fit.max(), fit.mean(), fit.min(), int(ev.metrics["stepped"].sum())))
+    problem.sim.close()
+    return {"crossover": label, "seed": seed, "first_step_generation": first_step,
+            "final_best": float(curve[-1][1]), "curve": curve}
+
+
+def plan(seeds: int) -> list[tuple[str, int]]:
+    others = max(1, seeds // 3)
+    jobs = [(label, s) for label in CROSSOVERS
+            for s in range(seeds if label in ("blx_alpha", "arithmetic") else others)]
+    return sorted(jobs, key=lambda j: j[1])  # seed-major: a cut-short study stays balanced
+
+
+def run_experiment(out: Path, quick: bool = False, seeds: int = 10, generations: int = 100,
+                   pop: int = 100, workers: int = 0, echo=print) -> list[dict]:
+    """Run the plan, write ``results.csv``, ``curves/*.csv``, ``summary.md``, ``curves.png``."""
+    problem_cfg = HumanoidStepConfig(intervals=20, bounds_scale=0.25, threads=1)
+    if quick:
+        seeds, generations, pop = 1, 2, 8
+        problem_cfg = dataclasses.replace(problem_cfg, intervals=4, motion_s=0.4, hold_s=0.2)
+    out = Path(out)
+    (out / "curves").mkdir(parents=True, exist_ok=True)
+    jobs = plan(seeds)
+    workers = workers or min(len(jobs), os.cpu_count() or 1)
+    args = [(label, s, pop, generations, problem_cfg) for label, s in jobs]
+    with open(out / "results.csv", "w", newline="") as f:
+        csv.writer(f).writerow(["crossover", "seed", "first_step_generation", "final_best"])
+    results = []
+    if workers == 1:
+        for a in args:
+            results.append(_save(out, run_one(*a)))
+    else:
+        with ProcessPoolExecutor(workers) as pool:
+            futures = [pool.submit(run_one, *a) for a in args]
+            for fut in as_completed(futures):
+                results.append(_save(out, fut.result()))
+    results.sort(key=lambda r: (list(CROSSOVERS).index(r["crossover"]), r["seed"]))
+    table = summary_table(results, generations)
+    (out / "summary.md").write_text(
+        f"# humanoid-step study: pop {pop}, {generations} generations, K = "
+        f"{problem_cfg.intervals}, bounds_scale {problem_cfg.bounds_scale}\n\n{table}\n")
+    plot_curves(results, out / "curves.png")
+    echo(table)
+    return results
+
+
+def _save(out: Path, r: dict) -> dict:
+    """Write one finished run (its curve and its results row) as soon as it ends."""
+    with open(out / "curves" / f"{r['crossover']}_seed{r['seed']}.csv", "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["generation", "max", "mean", "min", "stepped"])
+        w.writerows(r["curve"])
+    with open(out / "results.csv", "a", newline="") as f:
+        csv.writer(f).writerow([r["crossover"], r["seed"], r["first_step_generation"],
+                                r["final_best"]])
+    return r
+
+
+def summary_table(results: list[dict], generations: int) -> str:
+    rows = ["| crossover | runs | runs with a step | median generations to first step "
+            "| median final best |", "|---|---|---|---|---|"]
+    for label in CROSSOVERS:
+        rs = [r for r in results if r["crossover"] == label]
+        if not rs:
+            continue
+        gens = [r["first_step_generation"] for r in rs if r["first_step_generation"] is not None]
+        # runs without a step count as > generations (the median is then a lower bound)
+        g_all = sorted(g if g is not None else np.inf
+                       for g in (r["first_step_generation"] for r in rs))
+        med = float(np.median(g_all))
+        med_s = f"> {generations}" if not np.isfinite(med) else f"{med:g}"
+        rows.append(f"| {label} | {len(rs)} | {len(gens)} | {med_s} | "
+                    f"{np.median([r['final_best'] for r in rs]):.3f} |")
+    return "\n".join(rows)
+
+
+def plot_curves(results: list[dict], png: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 4))
+    for label in CROSSOVERS:
+        curves = [np.array(r["curve"], float) for r in results if r["crossover"] == label]
+        if not curves:
+            continue
+        best = np.median(np.stack([c[:, 1] for c in curves]), axis=0)
+        mean = np.median(np.stack([c[:, 2] for c in curves]), axis=0)
+        line, = ax.plot(curves[0][:, 0], best, label=f"{label} max ({len(curves)} runs)")
+        ax.plot(curves[0][:, 0], mean, ls="--", color=line.get_color(), lw=0.8)
+    ax.set_xlabel("generation")
+    ax.set_ylabel("fitness (median over runs; dashed = mean)")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(png, dpi=120)
+    plt.close(fig)
