@@ -165,3 +165,11 @@ def test_unreachable_scheduler_is_a_clear_error():
     with pytest.raises(ClusterError, match="cannot reach the Dask scheduler"):
         DaskEvaluator(TOY.make_problem, TOY.problem_config(), address="tcp://127.0.0.1:9",
                       start_timeout_s=1.0)
+
+
+def test_missing_dask_is_a_one_line_input_error(monkeypatch):
+    from evomotion.errors import InputError
+
+    monkeypatch.setitem(sys.modules, "distributed", None)  # "import distributed" now fails
+    with pytest.raises(InputError, match=r"pip install 'evomotion\[dask\]'"):
+        make_evaluator("dask", TOY.make_problem, TOY.problem_config())

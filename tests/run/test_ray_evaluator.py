@@ -181,3 +181,11 @@ def test_losing_the_cluster_checkpoints_and_serial_resume_is_identical(cluster, 
         main(["evomotion", "resume", str(out), "-q", "--evaluator", "serial"])
     assert done.value.code == 0
     assert_same_run(tmp_path / "serial", out)
+
+
+def test_missing_ray_is_a_one_line_input_error(monkeypatch):
+    from evomotion.errors import InputError
+
+    monkeypatch.setitem(sys.modules, "ray", None)  # "import ray" now fails
+    with pytest.raises(InputError, match=r"pip install 'evomotion\[ray\]'"):
+        make_evaluator("ray", TOY.make_problem, TOY.problem_config())
