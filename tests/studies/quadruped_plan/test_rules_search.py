@@ -12,10 +12,10 @@ from evomotion.studies.quadruped_plan.checker import check_plan
 from evomotion.studies.quadruped_plan.evaluation import (
     SEED_CONSTANTS,
     dev,
-    plan_length_heuristic,
     seed_evaluation,
     vzd,
 )
+from evomotion.studies.quadruped_plan.heuristic import plan_length_heuristic
 from evomotion.studies.quadruped_plan.model import QuadrupedModel, lift_margin
 from evomotion.studies.quadruped_plan.plan import plan_document
 from evomotion.studies.quadruped_plan.planner import QuadrupedPlanConfig, make_problem, solve
@@ -117,7 +117,7 @@ def test_plans_from_make_problem_pass_the_checker() -> None:
 
 
 def test_heuristic_room_term_matches_foot_room() -> None:
-    from evomotion.studies.quadruped_plan.evaluation import foot_room, heuristic_constants
+    from evomotion.studies.quadruped_plan.heuristic import foot_room, heuristic_constants
 
     chord, _, gain = heuristic_constants(M)
     p = WalkProblem(M, M.nominal_state(0, 0, 1.5 * math.pi), GOAL, "B")
@@ -127,3 +127,20 @@ def test_heuristic_room_term_matches_foot_room() -> None:
         want = math.ceil(d / chord - 1e-9) + max(
             0, math.ceil((4 * d - foot_room(M, s, -1)) / max(chord, gain) - 1e-9))
         assert h(s) == want
+
+
+def test_sampled_rotation_gain_is_below_a_leg_move_and_keeps_astar_optimal() -> None:
+    from evomotion.studies.quadruped_plan.heuristic import (
+        heuristic_constants,
+        sampled_rotation_gain,
+    )
+
+    chord, _, analytic = heuristic_constants(M)
+    sampled = sampled_rotation_gain(M)
+    assert 0 < sampled < chord < analytic
+    base = QuadrupedPlanConfig(start_phi=0.0, goal_x=0.0, goal_y=-7.0, rule_set="A",
+                               method="astar", max_expansions=60_000, max_seconds=30)
+    proved = solve(base)
+    tighter = solve(replace(base, heuristic_gain="sampled"))
+    assert proved.found and tighter.found and tighter.cost == proved.cost
+    assert tighter.expansions <= proved.expansions

@@ -66,7 +66,9 @@ def run_config(cfg: QuadrupedPlanConfig, start: str) -> Row:
         except PlanViolationError as e:
             check = f"FAIL: {e}"
     fn = cfg.function if cfg.method == "best-first" else None
-    return Row(cfg.method if cfg.method != "weighted-astar" else f"wA* w={cfg.weight:g}",
+    name = "A*" if cfg.method == "astar" else f"wA* w={cfg.weight:g}"
+    name = cfg.method if fn else f"{name} {cfg.heuristic_gain[:4]}"
+    return Row(name,
                fn, cfg.rule_set, start, constants(cfg) if fn else None, res.stop_reason,
                res.expansions, len(res.states), legs, travel, secs, check,
                SEED_FIGURES.get((fn, cfg.rule_set, start)) if fn else None)
@@ -85,24 +87,27 @@ def seed_table(base: QuadrupedPlanConfig | None = None, astar_rows: bool = False
                               method="best-first")
                 rows.append(run_config(cfg, start))
     if astar_rows:
-        for method in ("astar", "weighted-astar"):
+        variants = (("astar", "analytic", 1.0), ("astar", "sampled", 1.0),
+                    ("weighted-astar", "sampled", 2.0), ("weighted-astar", "analytic", 3.0))
+        for method, gain, weight in variants:
             for rule_set in ("A", "B"):
                 for start, phi in STARTS.items():
                     cfg = replace(base, rule_set=rule_set, start_phi=phi, method=method,
+                                  heuristic_gain=gain, weight=weight,
                                   max_seconds=astar_seconds)
                     rows.append(run_config(cfg, start))
     return rows
 
 
 def format_table(rows: list[Row]) -> str:
-    head = (f"{'method':<12}{'fn':>3}{'set':>4}{'start':>6}  {'k1,k2,k3':<13}{'expanded':>9}"
+    head = (f"{'method':<16}{'fn':>3}{'set':>4}{'start':>6}  {'k1,k2,k3':<13}{'expanded':>9}"
             f"{'states':>7}{'legs':>5}{'legs/unit':>10}{'seed':>13}{'time s':>8}  result")
     lines = [head, "-" * len(head)]
     for r in rows:
         k = ",".join(f"{v:g}" for v in r.k) if r.k else "-"
         seed = f"{r.seed[0]}/{r.seed[1]}" if r.seed else "-"
         result = r.check if r.stop_reason == "found" else r.stop_reason
-        lines.append(f"{r.method:<12}{r.function or '-':>3}{r.rule_set:>4}{r.start:>6}  "
+        lines.append(f"{r.method:<16}{r.function or '-':>3}{r.rule_set:>4}{r.start:>6}  "
                      f"{k:<13}{r.expansions:>9}{r.states if r.states else '-':>7}"
                      f"{r.leg_moves if r.states else '-':>5}"
                      f"{r.legs_per_unit if r.states else math.nan:>10.2f}{seed:>13}"

@@ -2,7 +2,8 @@
 
 Methods: ``best-first`` (the seed's algorithm with its function 1, 2 or 3), ``astar``
 (A* on plan length with the admissible heuristic of ``evaluation``) and
-``weighted-astar`` (f = g + weight h).
+``weighted-astar`` (f = g + weight h); ``heuristic_gain`` picks the heuristic's rotation
+bound (``heuristic``).
 """
 
 from __future__ import annotations
@@ -14,9 +15,9 @@ from evomotion.core.search import SearchResult, astar, best_first
 from evomotion.errors import InputError
 from evomotion.studies.quadruped_plan.evaluation import (
     SEED_CONSTANTS,
-    plan_length_heuristic,
     seed_evaluation,
 )
+from evomotion.studies.quadruped_plan.heuristic import GAINS, plan_length_heuristic
 from evomotion.studies.quadruped_plan.model import QuadrupedModel
 from evomotion.studies.quadruped_plan.rules import ExclusionZone, WalkProblem
 
@@ -45,6 +46,7 @@ class QuadrupedPlanConfig:
     k2: float = -1.0
     k3: float = -1.0
     weight: float = 3.0
+    heuristic_gain: str = "analytic"
     max_expansions: int = 200_000
     max_seconds: float = 60.0
     sense: int = -1
@@ -74,6 +76,9 @@ def validate(cfg: QuadrupedPlanConfig) -> None:
         raise InputError("problem.max_expansions and problem.max_seconds must be >= 0")
     if cfg.weight < 1:
         raise InputError(f"problem.weight: expected >= 1, got {cfg.weight}")
+    if cfg.heuristic_gain not in GAINS:
+        raise InputError(f"problem.heuristic_gain: expected one of {', '.join(GAINS)}, "
+                         f"got {cfg.heuristic_gain!r}")
     if cfg.goal_tolerance <= 0:
         raise InputError("problem.goal_tolerance: expected > 0")
 
@@ -130,6 +135,6 @@ def solve(cfg: QuadrupedPlanConfig, problem: WalkProblem | None = None,
         ev = seed_evaluation(cfg.function, constants(cfg), (cfg.goal_x, cfg.goal_y), cfg.sense)
         return best_first(problem, ev, cfg.max_expansions, secs)
     h = plan_length_heuristic(problem.model, (cfg.goal_x, cfg.goal_y), cfg.goal_tolerance,
-                              cfg.sense)
+                              cfg.sense, cfg.heuristic_gain)
     weight = 1.0 if cfg.method == "astar" else cfg.weight
     return astar(problem, h, weight, cfg.max_expansions, secs)
