@@ -64,7 +64,7 @@ class SearchResult:
     stop_reason: str
     states: list[Any] = field(default_factory=list)
     rules: list[Any] = field(default_factory=list)  # rules[0] is None (the start state)
-    cost: float = float("nan")  # sum of step costs along the plan (g of the goal)
+    cost: float = float("nan")  # sum of the step costs along the plan
     expansions: int = 0
     generated: int = 0
     reopened: int = 0
@@ -103,8 +103,8 @@ def best_first(problem: SearchProblem, evaluate: Evaluate, max_expansions: int =
     s0 = problem.start()
     k0 = key_of(s0)
     f0 = evaluate(None, None, None, s0, None, 0.0)
-    # node record: [f, g, state, parent_key, rule, closed]
-    nodes: dict[Hashable, list] = {k0: [f0, 0.0, s0, None, None, False]}
+    # node record: [f, g, state, parent_key, rule, closed, step_cost]
+    nodes: dict[Hashable, list] = {k0: [f0, 0.0, s0, None, None, False, 0.0]}
     heap: list[tuple[float, int, int, Hashable]] = [(f0, 0 if is_goal(s0) else 1, 0, k0)]
     push, pop = heapq.heappush, heapq.heappop
     counter = expansions = generated = reopened = 0
@@ -133,12 +133,11 @@ def best_first(problem: SearchProblem, evaluate: Evaluate, max_expansions: int =
             kc = key_of(child)
             old = nodes.get(kc)
             if old is None:
-                nodes[kc] = [fc, g + step_cost, child, k, rule, False]
+                nodes[kc] = [fc, g + step_cost, child, k, rule, False, step_cost]
             elif fc < old[0] - min_improvement and not _is_ancestor(nodes, kc, k):
                 if old[5]:
                     reopened += 1
-                old[0], old[1], old[2], old[3], old[4], old[5] = fc, g + step_cost, child, k, \
-                    rule, False
+                old[:] = fc, g + step_cost, child, k, rule, False, step_cost
             else:
                 continue
             counter += 1
@@ -162,6 +161,7 @@ def _is_ancestor(nodes: dict[Hashable, list], candidate: Hashable, k: Hashable) 
 
 def _trace(nodes: dict[Hashable, list], goal_key: Hashable, result: SearchResult) -> None:
     states, rules = [], []
+    cost = 0.0
     k = goal_key
     seen = set()
     while k is not None:
@@ -171,9 +171,12 @@ def _trace(nodes: dict[Hashable, list], goal_key: Hashable, result: SearchResult
         rec = nodes[k]
         states.append(rec[2])
         rules.append(rec[4])
+        cost += rec[6]
         k = rec[3]
     result.states, result.rules = states[::-1], rules[::-1]
-    result.cost = nodes[goal_key][1]
+    # the traced path's own cost (a stored g can be stale below a re-parented node when f
+    # does not depend on g, as with the seed's evaluation (1))
+    result.cost = cost
 
 
 def astar(problem: SearchProblem, heuristic: Callable[[Any], float], weight: float = 1.0,

@@ -136,3 +136,15 @@ def test_experiment_row_next_to_seed_figures() -> None:
     assert row.seed == SEED_FIGURES[(1, "A", "a")] == (284, 45)
     text = format_table([row])
     assert "284/45" in text and " ok" in text
+
+
+def test_checker_requires_maximal_rule3_translation(doc: dict) -> None:
+    j = next(i for i, s in enumerate(doc["states"]) if s["rule"] == 3)
+    b0, b1 = doc["states"][j - 1]["body"], doc["states"][j]["body"]
+
+    def shorten(d: dict) -> None:
+        d["states"][j]["body"] = [b0[0] + 0.5 * (b1[0] - b0[0]), b0[1] + 0.5 * (b1[1] - b0[1]),
+                                  b0[2]]
+
+    with pytest.raises(PlanViolationError, match=f"state {j} .*stops short"):
+        check_plan(_tampered(doc, shorten))

@@ -16,6 +16,7 @@ from scipy.spatial import ConvexHull
 
 TOL = 1e-6  # [units] / [rad]
 PATH_SAMPLES = 64
+MAX_SLACK = 1e-3  # rules 1 and 3 must go as far as allowed: 1e-3 further must be infeasible
 RULE_COUNT = {"A": 11, "B": 27}
 
 
@@ -147,6 +148,9 @@ def _check_body_move(g: _Geometry, b0: np.ndarray, f0: np.ndarray, b1: np.ndarra
         if abs(turn) < TOL or turn * before < 0 or abs(turn) > abs(before) + TOL:
             raise PlanViolationError(f"{where}: the rotation does not reduce the heading error")
         path = [np.array([b0[0], b0[1], b0[2] + t * turn]) for t in ts]
+        if abs(turn) < abs(before) - MAX_SLACK and g.outside(g.body_feet(
+                np.array([b0[0], b0[1], b0[2] + turn + np.sign(turn) * MAX_SLACK]), f0)) is None:
+            raise PlanViolationError(f"{where}: rule 1 stops short of the workspace limit")
     else:
         d = b1[:2] - b0[:2]
         axis = np.array([-math.sin(b0[2]), math.cos(b0[2])])
@@ -160,6 +164,10 @@ def _check_body_move(g: _Geometry, b0: np.ndarray, f0: np.ndarray, b1: np.ndarra
         if rule == 3 and abs(along) > abs(float((goal - b0[:2]) @ axis)) + TOL:
             raise PlanViolationError(f"{where}: rule 3 overshoots the goal along the axis")
         path = [np.array([b0[0] + t * d[0], b0[1] + t * d[1], b0[2]]) for t in ts]
+        further = np.array([*(b1[:2] + np.sign(along) * MAX_SLACK * axis), b0[2]])
+        if rule == 3 and abs(along) < abs(float((goal - b0[:2]) @ axis)) - MAX_SLACK and \
+                g.outside(g.body_feet(further, f0)) is None:
+            raise PlanViolationError(f"{where}: rule 3 stops short of the workspace limit")
     for b in path:
         leg = g.outside(g.body_feet(b, f0))
         if leg is not None:
