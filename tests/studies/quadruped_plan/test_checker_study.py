@@ -148,3 +148,10 @@ def test_checker_requires_maximal_rule3_translation(doc: dict) -> None:
 
     with pytest.raises(PlanViolationError, match=f"state {j} .*stops short"):
         check_plan(_tampered(doc, shorten))
+
+
+def test_set_a_cannot_walk_forward_open_empties(tmp_path: Path) -> None:
+    # rule set A places no foot ahead of its hip: walking towards body +Y gets stuck
+    cfg = QuadrupedPlanConfig(sense=1, rule_set="A", function=1, start_phi=math.pi / 4)
+    assert run_plan(cfg, tmp_path) == 1
+    assert "OPEN is empty" in (tmp_path / "log.txt").read_text()
