@@ -3,13 +3,14 @@
 Rule set A (11 rules):
   1      rotate the body about its centre towards the goal heading, as far as the
          workspaces allow (stability is unchanged: the centre does not move);
-  2      translate along the body Y axis by dY = b/3 towards the goal;
-  3      translate along the body Y axis by the largest possible dY towards the goal
+  2      translate along the body Y axis by dY = b/3 in the walking sense;
+  3      translate along the body Y axis in the walking sense by the largest possible dY
          (at most up to the goal's projection on the axis);
-  4-7    leg i = rule-4 to its maximum length and maximum (rear) angle;
-  8-11   leg i = rule-8 to mid length and nominal angle.
-Rule set B (27 rules) adds, for leg i: 12-15 maximum length, 16-19 minimum length,
-20-23 maximum working angle, 24-27 minimum working angle (the other polar coordinate kept).
+  4-7    set leg i = rule - 4 to its maximum length and maximum (rear) angle;
+  8-11   set leg i = rule - 8 to mid length and nominal angle.
+Rule set B (27 rules) adds, for leg i = (rule - 4) mod 4: 12-15 maximum length, 16-19
+minimum length, 20-23 maximum working angle, 24-27 minimum working angle (the other polar
+coordinate kept). The walking sense (``sense``) is body -Y by default; see the docs.
 
 A leg may move only when the other three feet hold the body with a stability margin of at
 least ``model.min_margin``. A rule that leaves the state unchanged is not applicable.
