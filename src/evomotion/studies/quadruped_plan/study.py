@@ -96,7 +96,7 @@ cli = typer.Typer(add_completion=False, no_args_is_help=True,
 
 @cli.command("study")
 def study_cmd(
-    astar: Annotated[bool, typer.Option(help="Add A* and weighted-A* rows")] = True,
+    astar: Annotated[bool, typer.Option(help="Add A* and weighted-A* rows")] = False,
     astar_seconds: Annotated[float, typer.Option(help="Time budget per A* row [s]")] = 5.0,
     max_expansions: Annotated[int, typer.Option(help="Expansion budget per row")] = 200_000,
 ) -> None:
