@@ -89,7 +89,8 @@ def evolve(problem: GridPathProblem, alg: Any, seed: int, generations: int,
     if problem.cfg.repair:
         pop, pcost = opt.population(state)
         polys = np.concatenate([pts[None], problem.decode(pop)])
-        pts, _ = repair_population(problem.map.blocked, polys, np.r_[bc, pcost])
+        pts, _ = repair_population(problem.map.blocked, polys, np.r_[bc, pcost],
+                                   problem.cfg.repair_paths, problem.cfg.repair_radius)
     rule = "open" if problem.cfg.repair else problem.rule
     valid = bool(polyline_segments_valid(problem.map.blocked, pts[None], rule).all())
     length = float(np.hypot(*np.diff(pts, axis=0).T).sum())

@@ -25,8 +25,8 @@ SEED_MAPS = {"seed10a": (100, 50, 1.2), "seed10b": (100, 50, 1.2), "seed15": (22
              "seed20": (400, 100, 1.05)}
 SEED_ROWS = ("cga-L5-line", "cga-C9-line", "cga-L9-line", "cga-C13-line", "cga-Margolus-line",
              "cga-L5-sync", "cga-L5-fixed", "cga-L5-new", "cga-L5-uniform", "ga")
-BEYOND_ROWS = ("seed-encoding", "continuous", "continuous-2x", "continuous+repair",
-               "continuous-2x+repair")
+BEYOND_ROWS = ("seed-encoding", "continuous", "continuous-2x", "continuous+repair-r2",
+               "continuous+repair-r3", "continuous+repair-r5")
 HEADER = ("| map | configuration | success | success (centres) | mean length | best length "
           "| mean conv. gen | s/run |\n|---|---|---|---|---|---|---|---|")
 _POLICY = {"line": "line_sweep", "sync": "synchronous", "fixed": "fixed_random_sweep",
@@ -89,7 +89,9 @@ def beyond_config(row: str, map_spec: str) -> GridPathConfig:
     if row == "seed-encoding":
         return base
     n = 2 * GridPathProblem(base).enc.n_parts if "2x" in row else 0
-    return dataclasses.replace(base, mode="continuous", n_parts=n, repair="repair" in row)
+    radius = float(row.split("repair-r")[1]) if "repair-r" in row else 2.0
+    return dataclasses.replace(base, mode="continuous", n_parts=n, repair="repair" in row,
+                               repair_radius=radius)
 
 
 def beyond_table(seeds: int, n_maps: int, rows: list[str], pop: int, generations: int,

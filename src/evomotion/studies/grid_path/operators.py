@@ -58,6 +58,16 @@ def free_pieces(enc: PerpendicularEncoding, blocked: np.ndarray) -> tuple[np.nda
     return lo, hi, count
 
 
+def _stages(total: int) -> list[int]:
+    """Batch sizes 2, 4, 8, ... adding up to ``total`` re-draws."""
+    out, k = [], 2
+    while total > 0:
+        out.append(min(k, total))
+        total -= out[-1]
+        k *= 2
+    return out
+
+
 @dataclass
 class PathOperators:
     """Seed initialisation and mutation for one map, encoding and validity rule."""
@@ -66,7 +76,7 @@ class PathOperators:
     blocked: np.ndarray
     rule: str
     retries: int = 20
-    restarts: int = 20
+    restarts: int = 5
 
     def __post_init__(self) -> None:
         self.lo, self.hi, self.count = free_pieces(self.enc, self.blocked)
@@ -81,6 +91,35 @@ class PathOperators:
     def _point(self, genes: np.ndarray, y: np.ndarray) -> np.ndarray:
         return self.enc.snap(self.enc.foot_points()[genes] + y[:, None] * self.enc.normal)
 
+    def _first_valid(self, genes: np.ndarray, left: np.ndarray, right: np.ndarray | None,
+                     rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+        """Up to ``retries`` free positions on perpendicular ``genes[k]``; the first whose
+        segments from ``left[k]`` (and to ``right[k]``) are valid, and whether one was.
+
+        All re-draws are made at once; taking the first valid one is the same as drawing
+        until one is valid (on failure the last draw is returned with ``ok = False``).
+        """
+        n = genes.size
+        y_out = np.zeros(n)
+        found = np.zeros(n, dtype=bool)
+        todo = np.arange(n)
+        for R in _stages(self.retries):  # small batches first: most succeed at once
+            if todo.size == 0:
+                break
+            gr = np.repeat(genes[todo], R)
+            y = self.draw(gr, rng)
+            p = self._point(gr, y)
+            ok = segments_valid(self.blocked, np.repeat(left[todo], R, 0), p, self.rule)
+            if right is not None:
+                ok &= segments_valid(self.blocked, p, np.repeat(right[todo], R, 0), self.rule)
+            ok = ok.reshape(todo.size, R)
+            hit = ok.any(1)
+            pick = np.where(hit, np.argmax(ok, axis=1), R - 1)
+            y_out[todo] = y.reshape(todo.size, R)[np.arange(todo.size), pick]
+            found[todo[hit]] = True
+            todo = todo[~hit]
+        return y_out, found
+
     def initial_population(self, n: int, rng: np.random.Generator) -> np.ndarray:
         """``n`` chromosomes built point by point as in the seed (see module doc)."""
         d = self.enc.dim
@@ -90,21 +129,10 @@ class PathOperators:
             prev = np.broadcast_to(self.enc.start, (todo.size, 2)).copy()
             bad = np.zeros(todo.size, dtype=bool)
             for g in range(d):
-                gg = np.full(todo.size, g)
-                y = self.draw(gg, rng)
-                pend = np.arange(todo.size)
-                for _ in range(self.retries):
-                    ok = segments_valid(self.blocked, prev[pend], self._point(gg[pend], y[pend]),
-                                        self.rule)
-                    pend = pend[~ok]
-                    if pend.size == 0:
-                        break
-                    y[pend] = self.draw(gg[pend], rng)
-                else:
-                    bad[pend] |= ~segments_valid(self.blocked, prev[pend],
-                                                 self._point(gg[pend], y[pend]), self.rule)
+                y, ok = self._first_valid(np.full(todo.size, g), prev, None, rng)
+                bad |= ~ok
                 x[todo, g] = y
-                prev = self._point(gg, y)
+                prev = self._point(np.full(todo.size, g), y)
             goal = np.broadcast_to(self.enc.goal, (todo.size, 2))
             todo = todo[bad | ~segments_valid(self.blocked, prev, goal, self.rule)]
             if todo.size == 0:
@@ -122,17 +150,6 @@ class PathOperators:
             return x
         poly = self.enc.decode(x[rows])
         k = np.arange(rows.size)
-        left, right = poly[k, genes], poly[k, genes + 2]
-        # all re-draws at once: the first valid one of each row is the sequential outcome
-        R = self.retries
-        gr = np.repeat(genes, R)
-        y = self.draw(gr, rng)
-        p = self._point(gr, y)
-        ends = np.concatenate([np.repeat(left, R, 0), p])
-        other = np.concatenate([p, np.repeat(right, R, 0)])
-        ok = segments_valid(self.blocked, ends, other, self.rule).reshape(2, -1).all(0)
-        ok = ok.reshape(rows.size, R)
-        hit = ok.any(1)
-        first = np.argmax(ok, axis=1)
-        x[rows[hit], genes[hit]] = y.reshape(rows.size, R)[hit, first[hit]]
+        y, ok = self._first_valid(genes, poly[k, genes], poly[k, genes + 2], rng)
+        x[rows[ok], genes[ok]] = y[ok]
         return x

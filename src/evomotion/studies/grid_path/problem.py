@@ -45,7 +45,9 @@ class GridPathConfig:
     rule: str = ""  # "" = closed for discrete, open for continuous
     penalty: float = 0.0  # per invalid segment; 0 = width + height
     retries: int = 20  # validity re-draws in initialisation and mutation
-    repair: bool = False  # polish the final best path (see repair.py)
+    repair: bool = False  # make the final best paths taut in their corridor (see repair.py)
+    repair_radius: float = 2.0  # corridor half-width, cells
+    repair_paths: int = 30  # how many of the best distinct final paths are repaired
 
 
 def _cell(text: str, what: str) -> tuple[int, int] | None:

@@ -35,8 +35,8 @@ def point_segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.nd
 def taut_path(blocked: np.ndarray, waypoints: np.ndarray, radius: float = 2.0) -> np.ndarray:
     """The shortest open-rule path in the corridor of ``waypoints[k, 2]`` (S first, G last).
 
-    An input with an invalid segment is returned unchanged if no valid path is found in the
-    corridor.
+    Invalid input segments are simply not edges of the search, so an invalid input becomes
+    valid when its corridor holds a valid route; otherwise it is returned unchanged.
     """
     pts = np.asarray(waypoints, dtype=float)
     corners = obstacle_corners(blocked)
@@ -52,22 +52,30 @@ def taut_path(blocked: np.ndarray, waypoints: np.ndarray, radius: float = 2.0) -
 
 
 def repair_population(blocked: np.ndarray, polylines: np.ndarray, cost: np.ndarray,
-                      k: int = 5, radius: float = 2.0) -> tuple[np.ndarray, float]:
-    """Repair the ``k`` best distinct valid polylines; the shortest result and its length."""
+                      k: int = 10, radius: float = 2.0, iterations: int = 4,
+                      ) -> tuple[np.ndarray, float]:
+    """Repair the ``k`` best distinct polylines (invalid ones too: the corridor search
+    routes around their invalid segments); the shortest valid result and its length, or
+    the best input unchanged when none becomes valid. Each repair is repeated (up to
+    ``iterations`` times) in the corridor of its own result until it stops changing."""
     order = np.argsort(cost, kind="stable")
     seen: list[np.ndarray] = []
     best, best_len = None, np.inf
     for i in order.tolist():
         p = polylines[i]
-        if not polyline_segments_valid(blocked, p[None], "open").all():
-            continue
         if any(np.allclose(p, q) for q in seen):
             continue
         seen.append(p)
-        t = taut_path(blocked, p, radius)
-        length = float(np.hypot(*np.diff(t, axis=0).T).sum())
-        if length < best_len:
-            best, best_len = t, length
+        t = p
+        for _ in range(iterations):  # the corridor follows the tightened path
+            t_new = taut_path(blocked, t, radius)
+            if len(t_new) == len(t) and np.allclose(t_new, t):
+                break
+            t = t_new
+        if polyline_segments_valid(blocked, t[None], "open").all():
+            length = float(np.hypot(*np.diff(t, axis=0).T).sum())
+            if length < best_len:
+                best, best_len = t, length
         if len(seen) >= k:
             break
     if best is None:
