@@ -12,7 +12,7 @@ import pytest
 
 pytest.importorskip("distributed")
 import dask  # noqa: E402
-from distributed import LocalCluster  # noqa: E402
+from distributed import Client, LocalCluster  # noqa: E402
 
 from evomotion.run.config import resolve_config  # noqa: E402
 from evomotion.run.dask_evaluator import DaskEvaluator, worker_environ  # noqa: E402
@@ -97,7 +97,7 @@ def test_grid_path_run_identical_to_serial(address, tmp_path):
 
 def test_worker_killed_mid_generation_run_completes_identically(address, tmp_path,
                                                                 monkeypatch):
-    overrides = ["run.generations=5", "problem.sleep_s=0.15", "problem.raise_above=9"]
+    overrides = ["run.generations=4", "problem.sleep_s=0.1", "problem.raise_above=9"]
     run_study(TOY, resolve_config(TOY, None, overrides), tmp_path / "serial", quiet=True)
     calls = {"n": 0}
     original = DaskEvaluator.__call__
@@ -105,15 +105,18 @@ def test_worker_killed_mid_generation_run_completes_identically(address, tmp_pat
     def call(self, genomes):
         calls["n"] += 1
         if calls["n"] == 3:  # SIGKILL one worker while generation 2's chunks run
-            pid = next(iter(self.client.run(os.getpid).values()))
-            threading.Timer(0.2, os.kill, (pid, signal.SIGKILL)).start()
+            calls["pid"] = pid = next(iter(self.client.run(os.getpid).values()))
+            threading.Timer(0.1, os.kill, (pid, signal.SIGKILL)).start()
         return original(self, genomes)
 
     monkeypatch.setattr(DaskEvaluator, "__call__", call)
     cfg = resolve_config(TOY, None, [*overrides, "run.evaluator='dask'",
                                      f"run.address={address!r}", "run.chunks_per_worker=3"])
     res = run_study(TOY, cfg, tmp_path / "dask", quiet=True)
-    assert res.stop_reason == "generations" and calls["n"] == 6
+    assert res.stop_reason == "generations" and calls["n"] == 5
+    with Client(address) as client:  # the nanny replaced the killed worker process
+        pids = set(client.run(os.getpid).values())
+    assert len(pids) == 2 and calls["pid"] not in pids
     assert_same_run(tmp_path / "serial", tmp_path / "dask")
 
 

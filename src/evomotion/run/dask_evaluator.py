@@ -9,8 +9,10 @@ and results are assembled in submission order: bit-identical to ``serial``.
 
 Faults are the scheduler's: a worker process that dies is restarted by its nanny and the
 chunk it held is re-run elsewhere; a chunk that kills ``distributed.scheduler.allowed-failures``
-workers (default 3) fails with ``KilledWorker``, and its individuals get the worst fitness
-with a message in ``Evaluation.errors`` while the run goes on. When the scheduler goes away,
+workers (default 3) fails with ``KilledWorker``; it is then re-run alone (a worker may hold
+an innocent chunk queued behind the culprit, which the scheduler blames too), and if it
+kills its workers again its individuals get the worst fitness with a message in
+``Evaluation.errors`` while the run goes on. When the scheduler goes away,
 or has had no worker for ``start_timeout_s``, a :class:`ClusterError` is raised and the runner
 checkpoints the last completed generation (``evomotion resume DIR --evaluator serial``).
 
@@ -96,18 +98,35 @@ class DaskEvaluator:
         self.threads = workers or sum(self.client.nthreads().values())
 
     def __call__(self, genomes: np.ndarray) -> Evaluation:
-        from distributed import KilledWorker, wait
-
         genomes = np.ascontiguousarray(genomes, dtype=float)
         chunks = split_chunks(len(genomes), self.threads * self.chunks_per_worker)
         self._generation += 1
         tag = f"evomotion-{self._token[:8]}-{self._generation}"
-        try:
-            m = len(chunks)  # one message to the scheduler for the whole generation
+        parts = self._run([genomes[s] for s in chunks], [f"{tag}-{k}" for k in
+                                                         range(len(chunks))])
+        for k, s in enumerate(chunks):
+            if parts[k] is None:
+                # A worker died with this chunk on it, allowed-failures times; the chunks
+                # queued behind the culprit on that worker are blamed too, so each one is
+                # re-run alone: only a chunk that kills its worker by itself is marked.
+                parts[k] = self._run([genomes[s]], [f"{tag}-{k}-alone"])[0]
+            if parts[k] is None:
+                ev = failed_evaluation(s.stop - s.start, *self._spec())
+                ev.errors.append(f"dask chunk rows {s.start}-{s.stop - 1} killed its workers "
+                                 f"(KilledWorker); marked worst")
+                log.warning(ev.errors[-1])
+                parts[k] = ev
+        return Evaluation.concat(parts)
+
+    def _run(self, batches: list[np.ndarray], keys: list[str]) -> list[Evaluation | None]:
+        """Evaluate ``batches`` as tasks, in order; ``None`` where the task hit KilledWorker."""
+        from distributed import KilledWorker, wait
+
+        m = len(batches)
+        try:  # one message to the scheduler for all the chunks
             futures = self.client.map(evaluate_chunk, [self._token] * m,
                                       [self._make_problem] * m, [self._problem_cfg] * m,
-                                      [genomes[s] for s in chunks], pure=False,
-                                      key=[f"{tag}-{k}" for k in range(m)])
+                                      batches, pure=False, key=keys)
             no_worker_since = None
             while True:
                 try:
@@ -120,20 +139,16 @@ class DaskEvaluator:
         except Exception as e:  # noqa: BLE001 - comm errors of a lost scheduler
             raise ClusterError(f"lost the Dask scheduler {self._where()}: "
                                f"{type(e).__name__}: {e}") from e
-        parts = []
-        for s, fut in zip(chunks, futures, strict=True):
+        out: list[Evaluation | None] = []
+        for fut in futures:
             try:
-                parts.append(fut.result())
-            except KilledWorker as e:
-                ev = failed_evaluation(s.stop - s.start, *self._spec())
-                ev.errors.append(f"dask chunk rows {s.start}-{s.stop - 1} killed its workers "
-                                 f"({e}); marked worst")
-                log.warning(ev.errors[-1])
-                parts.append(ev)
+                out.append(fut.result())
+            except KilledWorker:
+                out.append(None)
             except Exception as e:  # noqa: BLE001 - problem errors are caught in the task
                 raise ClusterError(f"Dask evaluation failed {self._where()}: "
                                    f"{type(e).__name__}: {e}") from e
-        return Evaluation.concat(parts)
+        return out
 
     def _check_cluster(self, no_worker_since: float | None) -> float | None:
         """Raise when the scheduler is gone or has had no worker for ``start_timeout_s``."""
