@@ -33,6 +33,17 @@ def test_segments_valid_matches_bruteforce_reference(data, rule):
     assert got.tolist() == want
 
 
+def test_large_mixed_batch_grouped_by_length():
+    rng = np.random.default_rng(5)
+    blocked = rng.random((8, 8)) < 0.3
+    p0 = rng.integers(0, 17, (120, 2)) / 2.0
+    p1 = np.where(rng.random((120, 1)) < 0.7, p0 + rng.integers(-2, 3, (120, 2)) / 2.0,
+                  rng.integers(0, 17, (120, 2)) / 2.0)  # mostly short, some long
+    got = segments_valid(blocked, p0, p1, "open")
+    want = [valid_reference(blocked, a, b, "open") for a, b in zip(p0, p1, strict=True)]
+    assert got.tolist() == want
+
+
 def test_corner_and_edge_cases():
     b = np.zeros((3, 3), bool)
     b[0, 1] = True  # cell x=1, y=0

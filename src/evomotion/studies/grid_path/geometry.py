@@ -60,7 +60,11 @@ def _cuts(a0: np.ndarray, a1: np.ndarray) -> np.ndarray:
 
 def segments_valid(blocked: np.ndarray, p0: np.ndarray, p1: np.ndarray,
                    rule: str = "open") -> np.ndarray:
-    """``valid[N]`` for segments ``p0[N, 2] -> p1[N, 2]`` (cell units, origin bottom-left)."""
+    """``valid[N]`` for segments ``p0[N, 2] -> p1[N, 2]`` (cell units, origin bottom-left).
+
+    Segments are grouped by how many grid lines they cross (powers of two), so that a few
+    long segments do not pad the arrays of many short ones.
+    """
     if rule not in RULES:
         raise ValueError(f"unknown validity rule {rule!r}; available: {', '.join(RULES)}")
     p0 = np.asarray(p0, dtype=float).reshape(-1, 2)
@@ -68,6 +72,19 @@ def segments_valid(blocked: np.ndarray, p0: np.ndarray, p1: np.ndarray,
     n = p0.shape[0]
     if n == 0:
         return np.ones(0, dtype=bool)
+    span = np.abs(p1 - p0).sum(axis=1)
+    if n < 64 or span.max() <= 8:
+        return _valid(blocked, p0, p1, rule)
+    group = np.ceil(np.log2(span + 2)).astype(np.int64)
+    out = np.empty(n, dtype=bool)
+    for gval in np.unique(group):
+        idx = np.flatnonzero(group == gval)
+        out[idx] = _valid(blocked, p0[idx], p1[idx], rule)
+    return out
+
+
+def _valid(blocked: np.ndarray, p0: np.ndarray, p1: np.ndarray, rule: str) -> np.ndarray:
+    n = p0.shape[0]
     t = np.concatenate([np.zeros((n, 1)), np.ones((n, 1)), _cuts(p0[:, 0], p1[:, 0]),
                         _cuts(p0[:, 1], p1[:, 1])], axis=1)
     t.sort(axis=1)
