@@ -75,9 +75,11 @@ def plan(seeds: int) -> list[tuple[str, int]]:
 
 
 def run_experiment(out: Path, quick: bool = False, seeds: int = 10, generations: int = 100,
-                   pop: int = 100, workers: int = 0, echo=print) -> list[dict]:
-    """Run the plan, write ``results.csv``, ``curves/*.csv``, ``summary.md``, ``curves.png``."""
-    problem_cfg = HumanoidStepConfig(intervals=20, bounds_scale=0.25, threads=1)
+                   pop: int = 100, workers: int = 0, bounds_scale: float = 0.25,
+                   intervals: int = 20, echo=print) -> list[dict]:
+    """Run the plan, write ``results.csv``, ``curves/*.csv``, ``summary.md``, ``curves.png``.
+    ``bounds_scale = 1`` uses the seed's whole Table 1 (see docs/humanoid-step.md)."""
+    problem_cfg = HumanoidStepConfig(intervals=intervals, bounds_scale=bounds_scale, threads=1)
     if quick:
         seeds, generations, pop = 1, 2, 8
         problem_cfg = dataclasses.replace(problem_cfg, intervals=4, motion_s=0.4, hold_s=0.2)

@@ -30,12 +30,14 @@ def study_cmd(out: Path = typer.Option(Path("runs/humanoid-step-study"), "--out"
               seeds: int = typer.Option(10, help="seeds for blx_alpha and arithmetic"),
               generations: int = typer.Option(100, help="generations per run"),
               pop: int = typer.Option(100, help="population size"),
-              workers: int = typer.Option(0, help="parallel runs (0 = all cores)")) -> None:
+              workers: int = typer.Option(0, help="parallel runs (0 = all cores)"),
+              bounds_scale: float = typer.Option(0.25, help="1 = the seed's whole Table 1"),
+              intervals: int = typer.Option(20, help="K time intervals (seed: 20)")) -> None:
     """The seed's experiment: five crossovers, BLX-alpha vs arithmetic on several seeds."""
     from evomotion.studies.humanoid_step.experiment import run_experiment
 
     run_experiment(out, quick=quick, seeds=seeds, generations=generations, pop=pop,
-                   workers=workers)
+                   workers=workers, bounds_scale=bounds_scale, intervals=intervals)
 
 
 STUDY = Study(
