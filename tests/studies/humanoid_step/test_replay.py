@@ -40,3 +40,20 @@ def test_replay_command_human_summary(capsys):
     replay_command(FIXTURES / "TurnRight40.motion", json_out=False, video=None)
     out = capsys.readouterr().out
     assert "TurnRight40.motion" in out and "stayed up" in out
+
+
+def test_motion_targets_interpolate_and_skip_unset_values():
+    import numpy as np
+
+    from evomotion.sim import nao
+    from evomotion.studies.humanoid_step.motion import Motion
+    from evomotion.studies.humanoid_step.replay import motion_targets
+
+    m = Motion(("HeadYaw", "LWristYaw"), [0, 100, 200],
+               np.array([[0.0, 1.0], [np.nan, 1.0], [0.4, 1.0]]))
+    first, ctrl = motion_targets(m, 0.01, 30)
+    j = nao.JOINTS.index("HeadYaw")
+    assert first[j] == 0.0
+    np.testing.assert_allclose(ctrl[[0, 5, 10, 15, 20, 29], j], [0, 0.1, 0.2, 0.3, 0.4, 0.4])
+    others = [i for i in range(22) if i != j]
+    np.testing.assert_array_equal(ctrl[:, others], np.tile(nao.pose_vector()[others], (30, 1)))
