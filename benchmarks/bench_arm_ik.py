@@ -126,17 +126,22 @@ ABLATIONS: dict[str, dict] = {
     "no restarts": {"restart_after": 0},
     "obstacle-aware distance": {"distance": "obstacle"},
     "survival with replacement (seed)": {"survival": "tournament"},
-    "seed-like (all four seed choices)": {"matching": "greedy", "circular_blend": False,
-                                          "mutation_min_deg": 5.0, "mutation_max_deg": 5.0,
-                                          "restart_after": 0, "survival": "tournament"},
 }
+SEED_LIKE = {"matching": "greedy", "circular_blend": False, "mutation_min_deg": 5.0,
+             "mutation_max_deg": 5.0, "restart_after": 0, "survival": "tournament"}
+ABLATIONS["seed-like (all five seed choices)"] = SEED_LIKE
+ABLATIONS["seed-like + optimal matching"] = {**SEED_LIKE, "matching": "optimal"}
+ABLATIONS["seed-like + restarts"] = {**SEED_LIKE, "restart_after": 60}
+ABLATIONS["seed-like + pairwise survival"] = {**SEED_LIKE, "survival": "pairwise"}
 
 
-def ablation(seeds: int, wall: float, scenarios: list[str]) -> None:
+def ablation(seeds: int, wall: float, scenarios: list[str], only: list[str] | None) -> None:
     """Success / median CPU time with one change at a time against the defaults."""
     print("| variant | scenario | solved | median CPU s | median generations |")
     print("|---|---|---|---|---|")
     for label, kw in ABLATIONS.items():
+        if only and not any(o in label for o in only):
+            continue
         for name in scenarios:
             cfg = ArmIKConfig(scenario=name, pictures=False, wall_seconds=wall, **kw)
             cpu_t, gens, ok = [], [], 0
@@ -157,13 +162,14 @@ def main() -> None:
     ap.add_argument("--wall", type=float, default=30.0, help="budget per run (s)")
     ap.add_argument("--scenario", nargs="+",
                     default=[n for n in bundled_names() if n != "unreachable"])
+    ap.add_argument("--variant", nargs="+", help="ablation variants whose label contains these")
     args = ap.parse_args()
     if args.part in ("speed", "all"):
         speed()
     if args.part in ("success", "all"):
         success(args.seeds, args.matching, args.wall, args.scenario)
     if args.part == "ablation":
-        ablation(args.seeds, args.wall, args.scenario)
+        ablation(args.seeds, args.wall, args.scenario, args.variant)
 
 
 if __name__ == "__main__":
