@@ -73,6 +73,20 @@ def test_restart_increases_population_and_reports_reason():
     assert opt.stop(opt.init(np.random.default_rng(0))) is None
 
 
+def test_population_after_a_restart_is_the_evaluated_one():
+    opt = CMAES(GenomeSpec.box(3, -5, 5), CMAESConfig(restarts="ipop"))
+    rng = np.random.default_rng(4)
+    s = opt.init(rng)
+    while s.restarts == 0:
+        x, s = opt.ask(s, rng)
+        s = opt.tell(s, x, sphere(x), rng)
+    pop, cost = opt.population(s)
+    assert np.array_equal(pop, x) and np.allclose(cost, sphere(x))
+    assert s.lam == 2 * opt.lam0
+    x2, _ = opt.ask(s, rng)
+    assert x2.shape[0] == s.lam
+
+
 def test_bipop_uses_small_and_large_regimes():
     _, s = run(lambda x: 10 * x.shape[1] + np.sum(x**2 - 10 * np.cos(2 * np.pi * x), axis=1),
                3, CMAESConfig(restarts="bipop", max_restarts=6), max_evals=60000, target=-1)

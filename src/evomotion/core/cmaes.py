@@ -183,8 +183,7 @@ class CMAES(Optimizer):
         eye = np.eye(n)
         return dict(mean=mean, sigma=float(sigma), C=eye.copy(), B=eye.copy(), D=np.ones(n),
                     p_sigma=np.zeros(n), p_c=np.zeros(n), lam=int(lam),
-                    pop=np.zeros((lam, n)), cost=np.full(lam, np.inf),
-                    modified=np.zeros(lam, bool), best_hist=np.zeros(0), median_hist=np.zeros(0),
+                    best_hist=np.zeros(0), median_hist=np.zeros(0),
                     generation=0, eigen_generation=0, restart_best=math.inf, since_improvement=0,
                     restart_jumps=0)
 
@@ -193,8 +192,11 @@ class CMAES(Optimizer):
         if self.cfg.chaos:
             fixed = self.cfg.chaos_mu / (1 + self.cfg.chaos_mu)
             tent0 = np.where(np.abs(tent0 - fixed) < 1e-9, tent0 + 1e-3, tent0)
-        return CMAESState(**self._fresh(None, rng, self.lam0, self.cfg.sigma0),
-                          best_x=self.to_genome(np.full(self.n, 0.5)), best_cost=math.inf,
+        lam, n = self.lam0, self.n
+        return CMAESState(**self._fresh(None, rng, lam, self.cfg.sigma0),
+                          pop=np.zeros((lam, n)), cost=np.full(lam, np.inf),
+                          modified=np.zeros(lam, bool),
+                          best_x=self.to_genome(np.full(n, 0.5)), best_cost=math.inf,
                           tent_x=tent0)
 
     # -- ask -------------------------------------------------------------------------
@@ -243,6 +245,8 @@ class CMAES(Optimizer):
 
     def fresh_run(self, state: CMAESState, rng: np.random.Generator, lam: int,
                   sigma: float) -> dict:
+        """Fields of a restarted distribution; the last population stays for statistics
+        until the next ``ask``."""
         return self._fresh(state, rng, lam, sigma)
 
 
