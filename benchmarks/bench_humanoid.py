@@ -52,8 +52,9 @@ def main() -> None:
             first_step = gen
     wall = time.perf_counter() - t0
     sim = problem.sim
-    loop_sps = sim.steps_simulated / wall
-    inside_sps = sim.steps_simulated / sim.rollout_seconds
+    steps = sim.steps_simulated
+    loop_sps = steps / wall
+    inside_sps = steps / sim.rollout_seconds
     # one plain rollout (no early stop) of the final population, same model and threads
     pop, _ = opt.population(state)
     ctrl = problem.controls(pop)
@@ -65,7 +66,7 @@ def main() -> None:
           f"generations={a.generations} K={a.intervals} nstep/individual={problem.nstep}")
     print(f"wall time of the run: {wall:.1f} s  (best fitness {best:.3f}, "
           f"first step at generation {first_step})")
-    print(f"physics steps simulated: {sim.steps_simulated:,} "
+    print(f"physics steps simulated: {steps:,} "
           f"(of {(a.generations + 1) * a.pop * problem.nstep:,} without early stop)")
     print(f"GA-loop physics steps/s: {loop_sps:,.0f}")
     print(f"raw mujoco.rollout steps/s, same workload: {inside_sps:,.0f}  "
