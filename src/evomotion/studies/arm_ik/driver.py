@@ -52,8 +52,8 @@ def run_schedule(cfg: ArmIKConfig, seed: int, out_dir: Path | str, quiet: bool =
     if not (out / "config.toml").exists():
         data = {"study": "arm-ik", "run": {"seed": seed}, "problem": dataclasses.asdict(cfg)}
         atomic_write_text(out / "config.toml", tomli_w.dumps(data))
-    log = open(out / "log.txt", "w", encoding="utf-8")  # noqa: SIM115 (closed below)
-    with open(out / "stats.csv", "w", newline="", encoding="utf-8") as fh:
+    with open(out / "log.txt", "w", encoding="utf-8") as log, \
+            open(out / "stats.csv", "w", newline="", encoding="utf-8") as fh:
         writer = csv.DictWriter(fh, fieldnames=STATS_COLUMNS)
         writer.writeheader()
         last_phase = [""]
@@ -65,6 +65,8 @@ def run_schedule(cfg: ArmIKConfig, seed: int, out_dir: Path | str, quiet: bool =
                 log.write(f"generation {row['generation']}: {row['phase']} phase\n")
 
         res = evolve(cfg, seed, on_generation=on_generation)
+        msg = _summary(res)
+        log.write(msg + "\n")
     rec = best_record(res, seed)
     write_json(out / "best.json", rec)
     if cfg.pictures:
@@ -75,19 +77,20 @@ def run_schedule(cfg: ArmIKConfig, seed: int, out_dir: Path | str, quiet: bool =
                 f"{rec['intersections']} intersections, solved {rec['solved']}"
         save_board(res.problem, _best_in_population(res), feasible, out / "board.png", title)
         save_gif(res.problem, res.history, out / "best.gif", cfg.gif_frames)
-    if res.solved:
-        msg = (f"solved {res.problem.scn.name} in {res.time_to_solution_s:.3f} s "
-               f"({res.generations} generations, {res.restarts} restarts): "
-               f"error {rec['error']:.4g}")
-    else:
-        msg = (f"no solution found: best error {rec['error']:.6g} (max tip error "
-               f"{rec['max_tip_error']:.4g}, tolerance {res.problem.tol:.4g}, "
-               f"{rec['intersections']} intersections) after {res.generations} generations")
-    log.write(msg + "\n")
-    log.close()
     if not res.solved or not quiet:
         print(msg)
     return 0 if res.solved else EXIT_UNSOLVED
+
+
+def _summary(res: RunResult) -> str:
+    a = res.best_assessment
+    err = float(a.tip_error[0].sum())
+    if res.solved:
+        return (f"solved {res.problem.scn.name} in {res.time_to_solution_s:.3f} s "
+                f"({res.generations} generations, {res.restarts} restarts): error {err:.4g}")
+    return (f"no solution found: best error {err:.6g} (max tip error "
+            f"{a.tip_error[0].max():.4g}, tolerance {res.problem.tol:.4g}, "
+            f"{int(a.intersections[0])} intersections) after {res.generations} generations")
 
 
 def _best_in_population(res: RunResult) -> np.ndarray:
