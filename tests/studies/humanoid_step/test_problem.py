@@ -58,3 +58,12 @@ def test_controls_hold_other_servos_and_pin_ends(problem):
         problem.base[other], (2, problem.nstep, other.size)))
     np.testing.assert_allclose(ctrl[:, 0], np.broadcast_to(problem.base, (2, 22)))
     np.testing.assert_allclose(ctrl[:, -1], np.broadcast_to(problem.base, (2, 22)))
+
+
+@pytest.mark.parametrize("field,value", [("intervals", 1), ("motion_s", 0.0),
+                                         ("bounds_scale", 1.5), ("threads", -1)])
+def test_bad_settings_are_one_line_input_errors(field, value):
+    from evomotion.errors import InputError
+
+    with pytest.raises(InputError, match=f"problem.{field}"):
+        HumanoidStepProblem(HumanoidStepConfig(**{field: value}))

@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from evomotion.core.problem import Evaluation, GenomeSpec
+from evomotion.errors import InputError
 from evomotion.sim import nao
 from evomotion.sim.rollout import BatchSimulator, fall_step, torso_track
 from evomotion.studies.humanoid_step.encoding import ServoEncoding
@@ -79,6 +80,20 @@ def leg_initial_pose() -> np.ndarray:
     return np.array([full[nao.JOINTS.index(n)] for n in nao.LEG_SERVOS])
 
 
+def validate(cfg: HumanoidStepConfig) -> None:
+    """One-line :class:`InputError` for impossible settings."""
+    checks = [(cfg.intervals >= 2, "problem.intervals must be >= 2"),
+              (cfg.motion_s > 0, "problem.motion_s must be > 0"),
+              (cfg.hold_s >= 0, "problem.hold_s must be >= 0"),
+              (0 < cfg.bounds_scale <= 1, "problem.bounds_scale must be in (0, 1]"),
+              (cfg.segment_s > 0, "problem.segment_s must be > 0"),
+              (cfg.threads >= 0, "problem.threads must be >= 0 (0 = all cores)"),
+              (cfg.forward_cap_m > 0, "problem.forward_cap_m must be > 0")]
+    for ok, message in checks:
+        if not ok:
+            raise InputError(message)
+
+
 class HumanoidStepProblem:
     """Batch evaluation of forward-step trajectories (fitness maximised)."""
 
@@ -87,6 +102,7 @@ class HumanoidStepProblem:
 
     def __init__(self, cfg: HumanoidStepConfig | None = None) -> None:
         self.cfg = cfg = cfg or HumanoidStepConfig()
+        validate(cfg)
         self.model = nao.load_model()
         self.dt = float(self.model.opt.timestep)
         lo, hi = servo_bounds(self.model, cfg.bounds_scale)
