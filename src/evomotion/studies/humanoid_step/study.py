@@ -25,7 +25,8 @@ def replay_cmd(path: Path = typer.Argument(..., exists=True, dir_okay=False),
 
 
 @cli.command("study")
-def study_cmd(out: Path = typer.Option(Path("runs/humanoid-step-study"), "--out"),
+def study_cmd(out: Path | None = typer.Option(None, "--out",
+                                             help="folder (default runs/humanoid-step-study-*)"),
               quick: bool = typer.Option(False, "--quick", help="tiny budget (tests, smoke)"),
               seeds: int = typer.Option(10, help="seeds for blx_alpha and arithmetic"),
               generations: int = typer.Option(100, help="generations per run"),
@@ -34,8 +35,11 @@ def study_cmd(out: Path = typer.Option(Path("runs/humanoid-step-study"), "--out"
               bounds_scale: float = typer.Option(0.25, help="1 = the seed's whole Table 1"),
               intervals: int = typer.Option(20, help="K time intervals (seed: 20)")) -> None:
     """The seed's experiment: five crossovers, BLX-alpha vs arithmetic on several seeds."""
+    from evomotion.run.folder import make_run_dir
     from evomotion.studies.humanoid_step.experiment import run_experiment
 
+    out = make_run_dir("humanoid-step-study", out)
+    typer.echo(f"writing {out}")
     run_experiment(out, quick=quick, seeds=seeds, generations=generations, pop=pop,
                    workers=workers, bounds_scale=bounds_scale, intervals=intervals)
 
