@@ -80,6 +80,11 @@ def test_functions_generation_and_worker_env(cluster):
         ev.close()
 
 
+def test_more_workers_than_cluster_cpus_is_a_clear_error(cluster):
+    with pytest.raises(ClusterError, match="has 2 CPUs; cannot start 3"):
+        RayEvaluator(TOY.make_problem, TOY.problem_config(), workers=3)
+
+
 def test_humanoid_step_generation_identical_to_serial(cluster):
     study = _study_or_skip("humanoid-step")
     cfg = resolve_config(study, None, []).problem

@@ -120,9 +120,12 @@ class RayEvaluator:
                          log_to_driver=False, runtime_env={"env_vars": WORKER_ENV})
             except ConnectionError as e:
                 raise ClusterError(f"cannot reach the Ray cluster at {address}: {e}") from e
-        n = workers or int(ray.cluster_resources().get("CPU", 0))
-        if n < 1:
-            raise ClusterError("the Ray cluster has no CPUs for evaluation workers")
+        cpus = int(ray.cluster_resources().get("CPU", 0))
+        n = workers or cpus
+        if n < 1 or n > cpus:
+            self.close()
+            raise ClusterError(f"the Ray cluster {self._where()} has {cpus} CPUs; cannot start "
+                               f"{n} one-CPU evaluation workers")
         self._actor_cls = ray.remote(num_cpus=1, max_restarts=0)(ProblemActor)
         self.actors = [self._new_actor() for _ in range(n)]
         self._starting: dict[Any, tuple[int, float]] = {}
