@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from evomotion.studies.arm_ik.heuristics import build_wrist_map
 from evomotion.studies.arm_ik.kinematics import Layout, forward
@@ -87,3 +89,44 @@ def test_wrist_map_marks_closed_obstacle_unreachable_and_candidates():
     assert wm.wrist_distance(np.array([[-1.0, -1.0]]))[0] > 1.0
     none = build_wrist_map(load_scenario("unreachable"), cell=0.2)
     assert not none.candidate.any() and np.all(np.isfinite(none.wrist_distance(c[0])))
+
+
+BOXED = """10
+10
+5 5
+1
+5 6
+1
+1 0 360
+1
+1 0 360
+1
+5
+3 3
+7 3
+7 7
+3 7
+3 3
+"""
+
+
+def test_reachable_cells_stay_inside_a_closed_box():
+    wm = build_wrist_map(parse_scenario_text(BOXED), cell=0.25)
+    c = wm.centres()
+    inside = (c[..., 0] > 3) & (c[..., 0] < 7) & (c[..., 1] > 3) & (c[..., 1] < 7)
+    np.testing.assert_array_equal(wm.reachable, inside)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.floats(0, 360), min_size=6, max_size=6))
+def test_fk_bone_lengths_and_reach(angles):
+    scn = load_scenario("seed_example")
+    lay = Layout.of(scn)
+    p = forward(scn, lay, np.array([angles]))
+    bones = np.linalg.norm(np.diff(p.arm_joints[0], axis=0), axis=1)
+    np.testing.assert_allclose(bones, scn.arm.length)
+    lo, hi = scn.arm.reach()
+    assert lo - 1e-9 <= np.linalg.norm(p.wrist[0] - scn.start) <= hi + 1e-9
+    for j, f in enumerate(scn.fingers):
+        d = np.linalg.norm(p.tips[0, j] - p.wrist[0])
+        assert f.reach()[0] - 1e-9 <= d <= f.reach()[1] + 1e-9

@@ -50,3 +50,11 @@ def test_keys_decode_to_permutations():
         k = np.empty(3)
         k[list(p)] = [0.1, 0.5, 0.9]
         assert keys_match(k[None])[0].tolist() == list(p)
+
+
+def test_greedy_handles_infinite_distances():
+    D = np.full((2, 3, 3), np.inf)
+    D[1, 0, 2] = 1.0
+    a = greedy_match(D)
+    assert all(sorted(r) == [0, 1, 2] for r in a.tolist()) and a[1, 0] == 2
+    assert sorted(optimal_match(D)[0].tolist()) == [0, 1, 2]

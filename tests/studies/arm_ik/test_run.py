@@ -84,3 +84,13 @@ def test_cli_study_table():
                                  "--matching", "optimal"])
     assert r.exit_code == 0, r.output
     assert "| seed_example | optimal | 1/1 (100%) |" in r.output
+
+
+def test_unreachable_respects_wall_seconds(tmp_path):
+    import time
+
+    cfg = ArmIKConfig(scenario="unreachable", pictures=False, whole_generations=10**9,
+                      wall_seconds=0.5)
+    t = time.perf_counter()
+    assert run_schedule(cfg, 1, tmp_path) == EXIT_UNSOLVED
+    assert time.perf_counter() - t < 10

@@ -32,16 +32,14 @@ def straight_distances(tips: np.ndarray, targets: np.ndarray) -> np.ndarray:
 def greedy_match(D: np.ndarray) -> np.ndarray:
     """Seed's greedy matching: ``F`` rounds of taking the globally closest free pair."""
     n, F, T = D.shape
-    work = D.astype(float, copy=True)
+    work = np.where(np.isfinite(D), D, 1e300)  # free pairs stay finite, taken ones become inf
     assign = np.zeros((n, F), dtype=int)
     rows = np.arange(n)
     for _ in range(F):
-        flat = np.argmin(np.where(np.isnan(work), np.inf, work).reshape(n, -1), axis=1)
-        f, t = np.divmod(flat, T)
+        f, t = np.divmod(np.argmin(work.reshape(n, -1), axis=1), T)
         assign[rows, f] = t
         work[rows, f, :] = np.inf
         work[rows, :, t] = np.inf
-        work[rows, f, t] = np.nan  # taken: never chosen again even when everything is inf
     return assign
 
 
