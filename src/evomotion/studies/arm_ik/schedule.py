@@ -22,7 +22,7 @@ STATS_COLUMNS = (
     "generation", "phase", "evaluations", "time_s", "best_objective", "best_intersections",
     "best_feasible_objective", "mean_objective", "var_objective", "mean_intersections",
     "var_intersections", "originality", "feasible_fraction", "best_limb_distance",
-    "best_limb_intersections", "best_limb_max_tip_error", "solved",
+    "best_limb_intersections", "best_limb_max_tip_error", "solved", "restarts",
 )
 
 
@@ -65,7 +65,7 @@ class _Run:
         self.c0 = time.process_time()
         self.solved_cpu: float | None = None
         self.rng = np.random.default_rng(seed)
-        self.gen = self.evals = 0
+        self.gen = self.evals = self.restarts = 0
         self.solved_at: float | None = None
         self.stats: list[dict] = []
         self.fresh_population()
@@ -113,6 +113,7 @@ class _Run:
         self.note_solution()
         row = _stats_row(self.gen, mode, self.evals, time.perf_counter() - self.t0, self.pop,
                          self.A, self.best_a)
+        row["restarts"] = self.restarts
         self.stats.append(row)
         return row
 
@@ -130,6 +131,7 @@ def evolve(cfg: ArmIKConfig, seed: int, problem: ArmIKProblem | None = None,
     restarts, whole_left = -1, cfg.whole_generations
     while not run.done and (restarts < 0 or whole_left > 0):
         restarts += 1
+        run.restarts = restarts
         if restarts:
             run.fresh_population()
         for mode, n_gen in (("arm", cfg.arm_generations), ("fingers", cfg.finger_generations)):
