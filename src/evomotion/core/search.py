@@ -69,6 +69,9 @@ class SearchResult:
     generated: int = 0
     reopened: int = 0
     seconds: float = 0.0
+    # least f on OPEN when the search stopped without a plan (inf if OPEN is empty); for A*
+    # with an admissible h a proved lower bound on the least plan cost
+    frontier_f: float = float("inf")
 
     @property
     def found(self) -> bool:
@@ -134,7 +137,7 @@ def best_first(problem: SearchProblem, evaluate: Evaluate, max_expansions: int =
             old = nodes.get(kc)
             if old is None:
                 nodes[kc] = [fc, g + step_cost, child, k, rule, False, step_cost]
-            elif fc < old[0] - min_improvement and not _is_ancestor(nodes, kc, k):
+            elif fc < old[0] - min_improvement and not is_ancestor(nodes, kc, k):
                 if old[5]:
                     reopened += 1
                 old[:] = fc, g + step_cost, child, k, rule, False, step_cost
@@ -144,12 +147,20 @@ def best_first(problem: SearchProblem, evaluate: Evaluate, max_expansions: int =
             push(heap, (fc, 0 if is_goal(child) else 1, counter, kc))
     result = SearchResult(reason, expansions=expansions, generated=generated, reopened=reopened)
     if goal_key is not None:
-        _trace(nodes, goal_key, result)
+        trace_plan(nodes, goal_key, result)
+    else:
+        result.frontier_f = frontier_min(nodes, heap)
     result.seconds = time.perf_counter() - t0
     return result
 
 
-def _is_ancestor(nodes: dict[Hashable, list], candidate: Hashable, k: Hashable) -> bool:
+def frontier_min(nodes: dict[Hashable, list], heap: list[tuple]) -> float:
+    """The least f of the live (not stale) OPEN entries; inf when there are none."""
+    live = [e[0] for e in heap if not nodes[e[-1]][5] and nodes[e[-1]][0] == e[0]]
+    return min(live, default=float("inf"))
+
+
+def is_ancestor(nodes: dict[Hashable, list], candidate: Hashable, k: Hashable) -> bool:
     """Whether ``candidate`` is ``k`` or one of its ancestors (re-parenting there would close a
     cycle: with a duplicate grid, a descendant can map to its ancestor's key)."""
     while k is not None:
@@ -159,7 +170,9 @@ def _is_ancestor(nodes: dict[Hashable, list], candidate: Hashable, k: Hashable) 
     return False
 
 
-def _trace(nodes: dict[Hashable, list], goal_key: Hashable, result: SearchResult) -> None:
+def trace_plan(nodes: dict[Hashable, list], goal_key: Hashable, result: SearchResult) -> None:
+    """Fill ``result.states``/``rules``/``cost`` from the node records (``[f, g, state,
+    parent_key, rule, closed, step_cost]``) by following parents back from ``goal_key``."""
     states, rules = [], []
     cost = 0.0
     k = goal_key
@@ -187,6 +200,12 @@ def astar(problem: SearchProblem, heuristic: Callable[[Any], float], weight: flo
     to return a least-cost plan; re-opening of CLOSED states keeps this true when it is
     admissible but not consistent.
     """
+    return best_first(problem, astar_evaluation(heuristic, weight), max_expansions,
+                      max_seconds)
+
+
+def astar_evaluation(heuristic: Callable[[Any], float], weight: float = 1.0) -> Evaluate:
+    """The evaluation ``f = g + weight * h`` of (weighted) A* for :func:`best_first`."""
     if weight < 1.0:
         raise ValueError(f"weighted A* needs weight >= 1, got {weight}")
 
@@ -194,4 +213,4 @@ def astar(problem: SearchProblem, heuristic: Callable[[Any], float], weight: flo
         g = 0.0 if pg is None else pg + step_cost
         return g + weight * heuristic(child)
 
-    return best_first(problem, evaluate, max_expansions, max_seconds)
+    return evaluate

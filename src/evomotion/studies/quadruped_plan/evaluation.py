@@ -51,7 +51,12 @@ def seed_evaluation(function: int, k: tuple[float, float, float], goal: tuple[fl
         return k1 * hypot(gx - s[0], gy - s[1]) + k2 * abs(he(s, goal, sense))
 
     if function == 1:  # a leg move leaves vzd and dev (hence f) unchanged
-        return lambda pf, pg, ps, child, rule, cost: pf if rule and rule >= 4 else direct(child)
+        def absolute(pf: Any, pg: Any, ps: Any, child: tuple[float, ...], rule: Any,
+                     cost: float) -> float:
+            return pf if rule and rule >= 4 else direct(child)
+
+        absolute.leg_delta = 0.0  # type: ignore[attr-defined]  # see walk_search
+        return absolute
 
     def cumulative(pf: Any, pg: Any, ps: Any, child: tuple[float, ...], rule: Any,
                    cost: float) -> float:
@@ -61,4 +66,5 @@ def seed_evaluation(function: int, k: tuple[float, float, float], goal: tuple[fl
             return pf + k3
         return pf + direct(child) - direct(ps)
 
+    cumulative.leg_delta = k3  # type: ignore[attr-defined]  # f(child) - f(parent), leg rules
     return cumulative

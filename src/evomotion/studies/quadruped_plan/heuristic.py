@@ -138,4 +138,19 @@ def plan_length_heuristic(model: QuadrupedModel, goal: tuple[float, float],
         need = (4 * d - room) / per_move
         return trans + max(0, ceil(need - 1e-9))
 
+    def after_leg(s: tuple[float, ...], leg: int, fy: float) -> float:
+        """h of ``s`` with foot ``leg`` moved to body y ``fy`` (same arithmetic as h)."""
+        d = hypot(gx - s[0], gy - s[1]) - goal_tolerance
+        if d <= 0:
+            return 0.0
+        trans = ceil(d / chord - 1e-9)
+        if sense == 0:
+            return trans + 4 * max(0, ceil(d / stance - 1e-9) - 1)
+        y = [s[4], s[6], s[8], s[10]]
+        y[leg] = fy
+        room = room0 + sense * (y[0] + y[1] + y[2] + y[3])
+        need = (4 * d - room) / per_move
+        return trans + max(0, ceil(need - 1e-9))
+
+    h.after_leg = after_leg  # type: ignore[attr-defined]  # used by walk_search
     return h

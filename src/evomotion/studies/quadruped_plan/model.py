@@ -49,8 +49,8 @@ class QuadrupedModel:
         # constants of the hot geometry (translation and rotation limits), per leg
         tn = math.tan(self.sector_half_width)
         trans, rot = [], []
-        for (hx, hy), side in zip(self.hips, self.sides, strict=True):
-            trans.append((hx, hy, side))
+        for i, ((hx, hy), side) in enumerate(zip(self.hips, self.sides, strict=True)):
+            trans.append((3 + 2 * i, hx, hy, side))
             h = math.hypot(hx, hy)
             wedge = []
             for nx, ny in ((side * tn, -1.0), (side * tn, 1.0)):
@@ -172,16 +172,20 @@ def translation_limit(model: QuadrupedModel, state: tuple[float, ...], sign: flo
     cot = 1.0 / math.tan(model.sector_half_width)
     lmax2, lmin, sqrt = model.l_max ** 2, model.l_min, math.sqrt
     best = math.inf
-    for i, (hx, hy, side) in enumerate(model._trans):
-        ux = side * (state[3 + 2 * i] - hx)
-        ry = sign * (state[4 + 2 * i] - hy)
-        t = ry + ux * cot
+    for j, hx, hy, side in model._trans:
+        ux = side * (state[j] - hx)
+        ry = sign * (state[j + 1] - hy)
+        t = ry + ux * cot  # the wedge edge
         r = lmax2 - ux * ux
-        t = min(t, ry + sqrt(r)) if r > 0 else min(t, ry)
+        u = ry + sqrt(r) if r > 0 else ry  # the outer circle
+        if u < t:
+            t = u
         # the inner circle blocks the way down only from above it (a foot on the circle's
         # vertical tangent, ux = l_min, slides past it)
         if ux < lmin - EPS and ry > 0:
-            t = min(t, ry - sqrt(lmin * lmin - ux * ux))
+            u = ry - sqrt(lmin * lmin - ux * ux)
+            if u < t:
+                t = u
         if t < best:
             best = t
     return best if best > 0.0 else 0.0

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from evomotion.core.search import SearchResult, astar, best_first
+from evomotion.core.search import SearchResult
 from evomotion.errors import InputError
 from evomotion.studies.quadruped_plan.evaluation import (
     SEED_CONSTANTS,
@@ -20,6 +20,7 @@ from evomotion.studies.quadruped_plan.evaluation import (
 from evomotion.studies.quadruped_plan.heuristic import GAINS, plan_length_heuristic
 from evomotion.studies.quadruped_plan.model import QuadrupedModel
 from evomotion.studies.quadruped_plan.rules import ExclusionZone, WalkProblem
+from evomotion.studies.quadruped_plan.walk_search import walk_astar, walk_best_first
 
 METHODS = ("best-first", "astar", "weighted-astar")
 
@@ -133,8 +134,8 @@ def solve(cfg: QuadrupedPlanConfig, problem: WalkProblem | None = None,
     secs = cfg.max_seconds if max_seconds is None else max_seconds
     if cfg.method == "best-first":
         ev = seed_evaluation(cfg.function, constants(cfg), (cfg.goal_x, cfg.goal_y), cfg.sense)
-        return best_first(problem, ev, cfg.max_expansions, secs)
+        return walk_best_first(problem, ev, cfg.max_expansions, secs)
     h = plan_length_heuristic(problem.model, (cfg.goal_x, cfg.goal_y), cfg.goal_tolerance,
                               cfg.sense, cfg.heuristic_gain)
     weight = 1.0 if cfg.method == "astar" else cfg.weight
-    return astar(problem, h, weight, cfg.max_expansions, secs)
+    return walk_astar(problem, h, weight, cfg.max_expansions, secs)

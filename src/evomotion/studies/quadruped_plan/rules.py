@@ -35,6 +35,14 @@ RULE_SETS = {"A": 11, "B": 27}
 MIN_MOVE = 1e-4  # a body move shorter than this [units or rad] is not applicable
 POS_GRID = 0.01  # duplicate-detection grid for positions [units]
 ANGLE_GRID = 0.001  # duplicate-detection grid for the body angle [rad]
+# The key packs the 11 grid indices into one int, field i = index i + 2**(KEY_BITS - 1)
+# (injective while every |index| < 2**(KEY_BITS - 1), i.e. |coordinate| < 5e9 units): it
+# hashes and compares faster than a tuple, and a leg move changes it by one addition.
+KEY_BITS = 40
+KEY_WEIGHT = tuple(1 << (KEY_BITS * i) for i in range(11))
+KEY_OFFSET = sum(w << (KEY_BITS - 1) for w in KEY_WEIGHT)
+TWO_PI = 2.0 * math.pi
+OPTIONS_CACHE = 200_000  # memoised foot positions per leg (the cache is cleared when full)
 
 
 def is_leg_rule(rule: int) -> bool:
@@ -102,24 +110,23 @@ class WalkProblem:
                           for i in range(4)]
         self._unit_min = [(math.cos(model.min_angle(i)), math.sin(model.min_angle(i)))
                           for i in range(4)]
-        self._fixed = []  # (rule, leg, fx, fy) of rules 4-11, body-frame feet
+        self._fixed = []  # (leg, rule, fx, fy) of rules 4-11 (index rule - 4), body frame
         for rule0, length, angle in ((4, model.l_max, model.max_angle),
                                      (8, mid, model.nominal_angle)):
             for leg in range(4):
-                self._fixed.append((rule0 + leg, leg, *model.foot_at(leg, length, angle(leg))))
+                self._fixed.append((leg, rule0 + leg, *model.foot_at(leg, length, angle(leg))))
         self._stable = model.min_margin - STABILITY_TOL
-        q = 1.0 / POS_GRID
-        self._fixed_q = [(r, leg, fx, fy, round(fx * q), round(fy * q))
-                         for r, leg, fx, fy in self._fixed]
+        self.parts = (0, 1, 2) if self.n_rules == 27 else (0, 1)
+        self._options: list[dict] = [{}, {}, {}, {}]  # per leg: foot position -> moves
 
     @staticmethod
     def _with_key(v: tuple[float, ...]) -> tuple:
         """The state tuple: the 11 floats followed by the duplicate key (see :meth:`key`)."""
         q = 1.0 / POS_GRID
-        return (*v[:11], (round(v[0] * q), round(v[1] * q),
-                          round((v[2] % (2 * math.pi)) / ANGLE_GRID),
-                          round(v[3] * q), round(v[4] * q), round(v[5] * q), round(v[6] * q),
-                          round(v[7] * q), round(v[8] * q), round(v[9] * q), round(v[10] * q)))
+        key = round((v[2] % TWO_PI) / ANGLE_GRID) * KEY_WEIGHT[2] + KEY_OFFSET
+        for i in (0, 1, 3, 4, 5, 6, 7, 8, 9, 10):
+            key += round(v[i] * q) * KEY_WEIGHT[i]
+        return (*v[:11], key)
 
     def start(self) -> tuple:
         return self._start
@@ -129,11 +136,11 @@ class WalkProblem:
 
     def key(self, s: tuple) -> Hashable:
         """Duplicates: body x, y and feet (body frame) on a POS_GRID grid, phi (mod 2 pi) on an
-        ANGLE_GRID grid."""
+        ANGLE_GRID grid; the 11 grid indices packed into one int (``KEY_BITS`` each)."""
         return s[11]
 
     def successors(self, s: tuple) -> list[tuple[int, tuple, float]]:
-        out = self._body_moves(s)
+        out = self.body_moves(s)
         self._leg_moves(s, out)
         return out
 
@@ -146,7 +153,7 @@ class WalkProblem:
         return self._with_key((nx, ny, s[2], s[3], s[4] - dist, s[5], s[6] - dist, s[7],
                                s[8] - dist, s[9], s[10] - dist))
 
-    def _body_moves(self, s: tuple) -> list[tuple[int, tuple, float]]:
+    def body_moves(self, s: tuple) -> list[tuple[int, tuple, float]]:
         out = []
         model = self.model
         delta = heading_error(s, self.goal, self.sense)
@@ -177,46 +184,75 @@ class WalkProblem:
 
     # -- leg moves --------------------------------------------------------------------------
     def _leg_moves(self, s: tuple, out: list) -> None:
+        append = out.append
+        for rule, leg, fx, fy, key in self.leg_targets(s):
+            j = 3 + 2 * leg
+            append((rule, (*s[:j], fx, fy, *s[j + 2:11], key), 1.0))
+
+    def leg_targets(self, s: tuple) -> list[tuple[int, int, float, float, int]]:
+        """The applicable leg rules of ``s`` as ``(rule, leg, fx, fy, child_key)`` (new
+        body-frame foot, key of the child state), in rule order (4-7, 8-11, then 12-27 leg
+        by leg); the child is ``s`` with foot ``leg`` at (fx, fy), built only when needed."""
+        key = s[11]
+        opts = self.leg_options(s)
+        return [(rule, leg, fx, fy, key + dk) for part in self.parts for leg, opt in opts
+                for rule, fx, fy, dk in opt[part]]
+
+    def leg_options(self, s: tuple) -> list[tuple[int, tuple[tuple, tuple, tuple]]]:
+        """``(leg, moves)`` of the legs that may be lifted (stability), ``moves`` as in
+        :meth:`_leg_options` less those into the exclusion zone."""
         lift = _liftable(s, self._stable)
-        if not (lift[0] or lift[1] or lift[2] or lift[3]):
-            return
+        opts = self._leg_options
+        out = [(leg, opts(leg, s[j], s[j + 1]))
+               for leg, j in ((0, 3), (1, 5), (2, 7), (3, 9)) if lift[leg]]
+        zone = self.zone
+        if zone is not None and out:  # drop the moves that put a foot into the zone
+            c, sn = math.cos(s[2]), math.sin(s[2])
+            x, y, inside = s[0], s[1], zone.contains
+            out = [(leg, tuple(tuple(m for m in part
+                                     if not inside(x + c * m[1] - sn * m[2],
+                                                   y + sn * m[1] + c * m[2]))
+                               for part in moves)) for leg, moves in out]
+        return out
+
+    def _leg_options(self, leg: int, px: float, py: float) -> tuple[tuple, tuple, tuple]:
+        """The moves of one foot at body-frame (px, py), as ``(rule, fx, fy, key change)``:
+        rule 4+leg, rule 8+leg, rules 12-27 of the leg (only those that move the foot).
+        They depend on the foot alone, so they are memoised per foot position."""
+        cache = self._options[leg]
+        got = cache.get((px, py))
+        if got is not None:
+            return got
         q = 1.0 / POS_GRID
-        targets = [t for t in self._fixed_q if lift[t[1]]]
+        j = 3 + 2 * leg
+        wx, wy = KEY_WEIGHT[j], KEY_WEIGHT[j + 1]
+        own = round(px * q) * wx + round(py * q) * wy
+        hx, hy = self._hips[leg]
+        candidates = [[self._fixed[leg][1:]], [self._fixed[4 + leg][1:]], []]
         if self.n_rules == 27:
             lmax, lmin = self.model.l_max, self.model.l_min
-            for leg in range(4):
-                if not lift[leg]:
-                    continue
-                hx, hy = self._hips[leg]
-                rx, ry = s[3 + 2 * leg] - hx, s[4 + 2 * leg] - hy
-                length = math.hypot(rx, ry)
-                ux, uy = rx / length, ry / length
-                (mx, my), (nx, ny) = self._unit_max[leg], self._unit_min[leg]
-                for rule, fx, fy in ((12 + leg, hx + lmax * ux, hy + lmax * uy),
-                                     (16 + leg, hx + lmin * ux, hy + lmin * uy),
-                                     (20 + leg, hx + length * mx, hy + length * my),
-                                     (24 + leg, hx + length * nx, hy + length * ny)):
-                    targets.append((rule, leg, fx, fy, round(fx * q), round(fy * q)))
-        zone = self.zone
-        if zone is not None:
-            c, sn = math.cos(s[2]), math.sin(s[2])
-        key = s[11]
-        append = out.append
-        for rule, leg, fx, fy, qx, qy in targets:
-            j = 3 + 2 * leg
-            dx, dy = fx - s[j], fy - s[j + 1]
-            if -1e-7 < dx < 1e-7 and -1e-7 < dy < 1e-7:
-                continue  # the rule would not move the leg
-            if zone is not None and zone.contains(s[0] + c * fx - sn * fy,
-                                                  s[1] + sn * fx + c * fy):
-                continue
-            append((rule, (*s[:j], fx, fy, *s[j + 2:11],
-                           (*key[:j], qx, qy, *key[j + 2:])), 1.0))
+            rx, ry = px - hx, py - hy
+            length = math.hypot(rx, ry)
+            ux, uy = rx / length, ry / length
+            (mx, my), (nx, ny) = self._unit_max[leg], self._unit_min[leg]
+            candidates[2] = [(12 + leg, hx + lmax * ux, hy + lmax * uy),
+                             (16 + leg, hx + lmin * ux, hy + lmin * uy),
+                             (20 + leg, hx + length * mx, hy + length * my),
+                             (24 + leg, hx + length * nx, hy + length * ny)]
+        got = tuple(tuple((rule, fx, fy, round(fx * q) * wx + round(fy * q) * wy - own)
+                          for rule, fx, fy in part
+                          if not (-1e-7 < fx - px < 1e-7 and -1e-7 < fy - py < 1e-7))
+                    for part in candidates)
+        if len(cache) >= OPTIONS_CACHE:
+            cache.clear()
+        cache[(px, py)] = got
+        return got
 
 
 def _liftable(s: tuple, stable: float) -> list[bool]:
     """For each leg: is the body centre (origin) at least ``stable`` inside the triangle of
-    the three other feet?"""
+    the three other feet? (Signed edge distances: cross products of the foot vectors over
+    the edge lengths; the triangle's orientation flips the sign.)"""
     ax, ay, bx, by, cx, cy, dx, dy = s[3:11]
     hyp = math.hypot
     # signed edge terms (cross products of the foot vectors) and edge lengths
@@ -237,4 +273,8 @@ def _tri(e1: float, e2: float, e3: float, l1: float, l2: float, l3: float) -> fl
     if orient == 0 or l1 == 0 or l2 == 0 or l3 == 0:
         return -math.inf
     d1, d2, d3 = e1 / l1, e2 / l2, e3 / l3
-    return min(d1, d2, d3) if orient > 0 else -max(d1, d2, d3)
+    if orient > 0:
+        m = d1 if d1 < d2 else d2
+        return m if m < d3 else d3
+    m = d1 if d1 > d2 else d2
+    return -(m if m > d3 else d3)

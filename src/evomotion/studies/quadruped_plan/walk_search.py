@@ -1,0 +1,149 @@
+"""The seed's best-first search (steps 1-7) specialised to the walking problem, for speed.
+
+Source: Ondroušek & Březina (seed 003), the ordered best-first search with OPEN/CLOSED and
+re-parenting as implemented generically in :func:`evomotion.core.search.best_first`. This
+module runs the same algorithm, step for step and in the same order (same successors, same
+evaluation values, same tie-breaking counter), so it expands the same states and returns
+the same plans; ``tests/studies/quadruped_plan/test_walk_search.py`` checks this against the
+generic search. What it saves is the per-successor work on duplicates: about 9 in 10
+successors of set B are leg moves onto an already known state. A leg move's duplicate key is
+the parent's packed key plus one integer (``WalkProblem.leg_targets``) and its value is
+``f(parent) + delta`` (``leg_delta`` of the seed's functions) or a cheap heuristic update
+(``evaluate.leg``), so the child state tuple is built only when it enters OPEN.
+
+An evaluation may carry ``leg_delta`` (a float: f(child) = f(parent) + leg_delta for leg
+rules) or ``leg(pf, pg, ps, leg, fx, fy, step_cost)``; with neither, leg children are built
+and evaluated like body children.
+"""
+
+from __future__ import annotations
+
+import heapq
+import time
+from typing import Any
+
+from evomotion.core.search import (
+    EXPANSION_BUDGET,
+    FOUND,
+    OPEN_EMPTY,
+    TIME_BUDGET,
+    Evaluate,
+    SearchResult,
+    astar_evaluation,
+    frontier_min,
+    is_ancestor,
+    trace_plan,
+)
+from evomotion.studies.quadruped_plan.rules import WalkProblem
+
+
+def walk_best_first(problem: WalkProblem, evaluate: Evaluate, max_expansions: int = 1_000_000,
+                    max_seconds: float = float("inf"), min_improvement: float = 1e-9
+                    ) -> SearchResult:
+    """:func:`evomotion.core.search.best_first` on a :class:`WalkProblem` (same results)."""
+    t0 = time.perf_counter()
+    is_goal, body_moves = problem.is_goal, problem.body_moves
+    leg_delta = getattr(evaluate, "leg_delta", None)
+    leg_eval = getattr(evaluate, "leg", None)
+    leg_options, parts = problem.leg_options, problem.parts
+    s0 = problem.start()
+    k0 = s0[11]
+    f0 = evaluate(None, None, None, s0, None, 0.0)
+    # node record: [f, g, state, parent_key, rule, closed, step_cost] (as in core.search)
+    nodes: dict[int, list] = {k0: [f0, 0.0, s0, None, None, False, 0.0]}
+    get = nodes.get
+    heap: list[tuple[float, int, int, int]] = [(f0, 0 if is_goal(s0) else 1, 0, k0)]
+    push, pop = heapq.heappush, heapq.heappop
+    counter = expansions = generated = reopened = 0
+    reason = OPEN_EMPTY
+    goal_key = None
+    while heap:
+        if expansions >= max_expansions:
+            reason = EXPANSION_BUDGET
+            break
+        if (expansions & 255) == 0 and time.perf_counter() - t0 > max_seconds:
+            reason = TIME_BUDGET
+            break
+        f, _, _, k = pop(heap)
+        rec = nodes[k]
+        if rec[5] or rec[0] != f:  # stale heap entry
+            continue
+        rec[5] = True
+        expansions += 1
+        state, g = rec[2], rec[1]
+        if is_goal(state):
+            reason, goal_key = FOUND, k
+            break
+        for rule, child, step_cost in body_moves(state):
+            generated += 1
+            fc = evaluate(f, g, state, child, rule, step_cost)
+            kc = child[11]
+            old = get(kc)
+            if old is None:
+                nodes[kc] = [fc, g + step_cost, child, k, rule, False, step_cost]
+            elif fc < old[0] - min_improvement and not is_ancestor(nodes, kc, k):
+                if old[5]:
+                    reopened += 1
+                old[:] = fc, g + step_cost, child, k, rule, False, step_cost
+            else:
+                continue
+            counter += 1
+            push(heap, (fc, 0 if is_goal(child) else 1, counter, kc))
+        # leg moves keep the body: never a goal here (the parent was not one); cost 1. The
+        # same children, in the same order, as problem.leg_targets(state), unrolled.
+        opts = leg_options(state)
+        if not opts:
+            continue
+        key, gc = state[11], g + 1.0
+        fl = None if leg_delta is None else f + leg_delta  # f of every leg child
+        for part in parts:
+            for leg, moves in opts:
+                generated += len(moves[part])
+                for rule, fx, fy, dk in moves[part]:
+                    kc = key + dk
+                    if fl is not None:
+                        fc = fl
+                    elif leg_eval is not None:
+                        fc = leg_eval(f, g, state, leg, fx, fy, 1.0)
+                    else:
+                        fc = evaluate(f, g, state, _child(state, leg, fx, fy, kc), rule, 1.0)
+                    old = get(kc)
+                    if old is None:
+                        nodes[kc] = [fc, gc, _child(state, leg, fx, fy, kc), k, rule, False, 1.0]
+                    elif fc < old[0] - min_improvement and not is_ancestor(nodes, kc, k):
+                        if old[5]:
+                            reopened += 1
+                        old[:] = fc, gc, _child(state, leg, fx, fy, kc), k, rule, False, 1.0
+                    else:
+                        continue
+                    counter += 1
+                    push(heap, (fc, 1, counter, kc))
+    result = SearchResult(reason, expansions=expansions, generated=generated, reopened=reopened)
+    if goal_key is not None:
+        trace_plan(nodes, goal_key, result)
+    else:
+        result.frontier_f = frontier_min(nodes, heap)
+    result.seconds = time.perf_counter() - t0
+    return result
+
+
+def _child(s: tuple, leg: int, fx: float, fy: float, key: int) -> tuple:
+    j = 3 + 2 * leg
+    return (*s[:j], fx, fy, *s[j + 2:11], key)
+
+
+def walk_astar(problem: WalkProblem, heuristic: Any, weight: float = 1.0,
+               max_expansions: int = 1_000_000, max_seconds: float = float("inf")
+               ) -> SearchResult:
+    """:func:`evomotion.core.search.astar` on a :class:`WalkProblem` (same results). A
+    ``heuristic.after_leg(s, leg, fy)`` (h of ``s`` with foot ``leg`` at body y ``fy``) lets
+    leg children be evaluated without building them."""
+    evaluate = astar_evaluation(heuristic, weight)
+    after_leg = getattr(heuristic, "after_leg", None)
+    if after_leg is not None:
+        def leg(pf: float, pg: float, ps: tuple, leg: int, fx: float, fy: float,
+                step_cost: float) -> float:
+            return pg + step_cost + weight * after_leg(ps, leg, fy)
+
+        evaluate.leg = leg  # type: ignore[attr-defined]
+    return walk_best_first(problem, evaluate, max_expansions, max_seconds)
