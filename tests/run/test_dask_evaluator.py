@@ -9,6 +9,8 @@ import threading
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 pytest.importorskip("distributed")
 import dask  # noqa: E402
@@ -49,6 +51,25 @@ def _study_or_skip(name: str):
     if name not in STUDIES:
         pytest.skip(f"study {name!r} is not registered yet")
     return get_study(name)
+
+
+def test_any_batch_and_chunking_matches_serial(address):
+    """Order, NaN flags and isolated exceptions survive any split into chunks."""
+    ev = DaskEvaluator(TOY.make_problem, TOY.problem_config(), address=address)
+
+    @settings(max_examples=12, deadline=None)
+    @given(n=st.integers(1, 40), chunks_per_worker=st.integers(1, 7),
+           seed=st.integers(0, 2**16))
+    def check(n, chunks_per_worker, seed):
+        genomes = np.random.default_rng(seed).uniform(-5, 5, (n, TOY.problem_config().dim))
+        ev.chunks_per_worker = chunks_per_worker
+        expected = serial_evaluation(TOY, TOY.problem_config(), genomes)
+        assert_same_evaluation(ev(genomes), expected)
+
+    try:
+        check()
+    finally:
+        ev.close()
 
 
 def test_toy_run_identical_to_serial(address, tmp_path):

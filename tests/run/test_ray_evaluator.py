@@ -13,6 +13,8 @@ import threading
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 ray = pytest.importorskip("ray")
 from ray.cluster_utils import Cluster  # noqa: E402
@@ -55,6 +57,25 @@ def _study_or_skip(name: str):
     if name not in STUDIES:
         pytest.skip(f"study {name!r} is not registered yet")
     return get_study(name)
+
+
+def test_any_batch_and_chunking_matches_serial(cluster):
+    """Order, NaN flags and isolated exceptions survive any split into chunks."""
+    ev = RayEvaluator(TOY.make_problem, TOY.problem_config(), workers=2)
+
+    @settings(max_examples=12, deadline=None)
+    @given(n=st.integers(1, 40), chunks_per_worker=st.integers(1, 7),
+           seed=st.integers(0, 2**16))
+    def check(n, chunks_per_worker, seed):
+        genomes = np.random.default_rng(seed).uniform(-5, 5, (n, TOY.problem_config().dim))
+        ev.chunks_per_worker = chunks_per_worker
+        expected = serial_evaluation(TOY, TOY.problem_config(), genomes)
+        assert_same_evaluation(ev(genomes), expected)
+
+    try:
+        check()
+    finally:
+        ev.close()
 
 
 def test_toy_run_identical_to_serial(cluster, tmp_path):
