@@ -98,19 +98,23 @@ class KickProblem:
     def evaluate(self, genomes: np.ndarray, ball_xy: np.ndarray | None = None) -> Evaluation:
         g = np.atleast_2d(np.asarray(genomes, dtype=float))
         exec_t = execution_time_s(g)
-        nstep = int(np.ceil((SETTLE_S + exec_t.max() + self.cfg.roll_after_s) / self.dt))
+        # each individual is measured at its own end step, so that its result does not
+        # depend on the other members of the batch (which only set how long the batch runs)
+        end = np.ceil((SETTLE_S + exec_t + self.cfg.roll_after_s) / self.dt).astype(int)
+        nstep = int(end.max())
         times = self.dt * np.arange(1, nstep + 1)
         ctrl = joint_targets(g, times)
         ball0 = self.ball_xy() if ball_xy is None else np.asarray(ball_xy, dtype=float)
         state0 = scene.initial_scene_state(self.model, ball0)
         states, sensors = self.sim.run_with_sensors(state0, ctrl)
-        qb = states[:, -1, 1 + self.iq:1 + self.iq + 2]
+        last = states[np.arange(len(g)), end - 1]
         nq = self.model.nq
-        vb = states[:, -1, 1 + nq + self.iv:1 + nq + self.iv + 2]
+        qb = last[:, 1 + self.iq:1 + self.iq + 2]
+        vb = last[:, 1 + nq + self.iv:1 + nq + self.iv + 2]
         final = qb + vb * np.linalg.norm(vb, axis=1, keepdims=True) / (2 * self.decel)
         travel = final - ball0
         fell = fall_step(torso_track(states), self.cfg.fall_height_m,
-                         self.cfg.fall_tilt_rad) < nstep
+                         self.cfg.fall_tilt_rad) < end
         margin = support_margin_batch(sensors, self.sl)
         in_kick = (times[None, :] >= SETTLE_S) & (times[None, :] <= SETTLE_S + exec_t[:, None])
         bad = (margin < self.cfg.zmp_margin_m) & in_kick
