@@ -175,7 +175,7 @@ class CMAES(Optimizer):
     def to_unit(self, x: np.ndarray) -> np.ndarray:
         return (x - self.genome.lower) / self.span
 
-    def _fresh(self, state: CMAESState | None, rng: np.random.Generator, lam: int,
+    def _fresh(self, rng: np.random.Generator, lam: int,
                sigma: float) -> dict:
         n = self.n
         mean = rng.uniform(0, 1, n) if self.cfg.x0 == "uniform" else np.full(n, 0.5)
@@ -193,7 +193,7 @@ class CMAES(Optimizer):
             fixed = self.cfg.chaos_mu / (1 + self.cfg.chaos_mu)
             tent0 = np.where(np.abs(tent0 - fixed) < 1e-9, tent0 + 1e-3, tent0)
         lam, n = self.lam0, self.n
-        return CMAESState(**self._fresh(None, rng, lam, self.cfg.sigma0),
+        return CMAESState(**self._fresh(rng, lam, self.cfg.sigma0),
                           pop=np.zeros((lam, n)), cost=np.full(lam, np.inf),
                           modified=np.zeros(lam, bool),
                           best_x=self.to_genome(np.full(n, 0.5)), best_cost=math.inf,
@@ -243,11 +243,10 @@ class CMAES(Optimizer):
         c = tent_to_box(x, self.cfg.chaos_mu, np.zeros(self.n), np.ones(self.n))
         return x, self.cfg.chaos_strength * (c - state.mean)
 
-    def fresh_run(self, state: CMAESState, rng: np.random.Generator, lam: int,
-                  sigma: float) -> dict:
+    def fresh_run(self, rng: np.random.Generator, lam: int, sigma: float) -> dict:
         """Fields of a restarted distribution; the last population stays for statistics
         until the next ``ask``."""
-        return self._fresh(state, rng, lam, sigma)
+        return self._fresh(rng, lam, sigma)
 
 
 def make_cmaes(genome: GenomeSpec, cfg: CMAESConfig) -> CMAES:

@@ -168,7 +168,7 @@ def _restart(opt: CMAES, s: CMAESState, reason: str, rng: np.random.Generator) -
     else:
         large += 1
         lam = int(round(opt.lam0 * cfg.inc_popsize**large))
-    fresh = opt.fresh_run(s, rng, lam, sigma)
+    fresh = opt.fresh_run(rng, lam, sigma)
     return replace(s, **fresh, restarts=s.restarts + 1, stop_reason=reason, stop_log=log,
                    regime=regime, large_restarts=large, evals_large=evals_large,
                    evals_small=evals_small, restart_evals0=s.evaluations)

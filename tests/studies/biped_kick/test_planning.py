@@ -78,3 +78,16 @@ def test_kick_plan_png(tmp_path):
     res = plot_kick_plan(np.array([0.0, -1.0, np.pi / 2]), BALL, GOAL, out)
     assert out.stat().st_size > 10_000
     assert res["bezier_time_s"] < res["baseline_time_s"]
+
+
+def test_plan_command_writes_png(tmp_path):
+    from typer.testing import CliRunner
+
+    from evomotion.studies.biped_kick.study import cli
+
+    out = tmp_path / "plan.png"
+    res = CliRunner().invoke(cli, ["plan", "--out", str(out), "--radius", "0.25"])
+    assert res.exit_code == 0 and "bezier_time_s=" in res.output
+    assert out.exists()
+    bad = CliRunner().invoke(cli, ["plan", "--out", str(out), "--radius", "-1"])
+    assert bad.exit_code != 0
