@@ -136,3 +136,22 @@ def test_astar_optimal_and_weighted_bounded(data: tuple, w: float) -> None:
     rw = astar(g, lambda s: 0.5 * (0.0 if s == n - 1 else min(c for _, _, c in edge_list)),
                weight=w)
     assert rw.found and rw.cost <= w * best + 1e-9
+
+
+@settings(max_examples=60, deadline=None)
+@given(graphs, st.floats(1.0, 4.0), st.integers(0, 6))
+def test_astar_lower_bound_never_exceeds_least_cost(data: tuple, w: float, budget: int) -> None:
+    n, edge_list = data
+    edges: dict[int, list[tuple[int, float]]] = {}
+    for u, v, c in edge_list:
+        edges.setdefault(u, []).append((v, c))
+    g = Graph(edges, 0, {n - 1})
+    best = dijkstra(g)
+    cheapest = min(c for _, _, c in edge_list)
+    r = astar(g, lambda s: 0.0 if s == n - 1 else cheapest, weight=w, max_expansions=budget)
+    if r.found:
+        assert r.lower_bound == r.cost / w and r.lower_bound <= best + 1e-9
+    elif r.stop_reason == EXPANSION_BUDGET:
+        assert r.lower_bound <= best + 1e-9 and "least cost >=" in r.message
+    else:
+        assert math.isnan(r.lower_bound) and math.isinf(best)

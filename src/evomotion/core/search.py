@@ -72,6 +72,9 @@ class SearchResult:
     # least f on OPEN when the search stopped without a plan (inf if OPEN is empty); for A*
     # with an admissible h a proved lower bound on the least plan cost
     frontier_f: float = float("inf")
+    # A* / weighted A* only: a proved lower bound on the least plan cost C* of the searched
+    # graph, (cost if found else frontier_f) / weight (see :func:`astar`); nan otherwise
+    lower_bound: float = float("nan")
 
     @property
     def found(self) -> bool:
@@ -80,15 +83,18 @@ class SearchResult:
     @property
     def message(self) -> str:
         """One line saying how the search ended."""
+        bound = "" if self.lower_bound != self.lower_bound else \
+            f", least cost >= {self.lower_bound:.4g}"
         if self.found:
-            return (f"plan found: {len(self.states)} states, cost {self.cost:g}, "
+            return (f"plan found: {len(self.states)} states, cost {self.cost:g}{bound}, "
                     f"{self.expansions} expansions in {self.seconds:.2f} s")
         why = {
             OPEN_EMPTY: "OPEN is empty: the goal is unreachable with these rules",
             EXPANSION_BUDGET: "the expansion budget is spent",
             TIME_BUDGET: "the time budget is spent",
         }[self.stop_reason]
-        return f"no plan: {why} ({self.expansions} expansions in {self.seconds:.2f} s)"
+        return (f"no plan: {why} ({self.expansions} expansions in {self.seconds:.2f} s"
+                f"{bound})")
 
 
 def best_first(problem: SearchProblem, evaluate: Evaluate, max_expansions: int = 1_000_000,
@@ -199,9 +205,23 @@ def astar(problem: SearchProblem, heuristic: Callable[[Any], float], weight: flo
     ``heuristic(state)`` must be admissible (never above the least remaining cost) for A*
     to return a least-cost plan; re-opening of CLOSED states keeps this true when it is
     admissible but not consistent.
+
+    ``lower_bound`` of the result: a cost that no plan can beat. While OPEN holds a node
+    n of a least-cost plan with its least g (re-opening keeps one there), C* >= g(n) + h(n)
+    >= (g(n) + weight h(n)) / weight >= min f on OPEN / weight; a found plan was that
+    minimum (h = 0 at the goal), so C* >= cost / weight, i.e. cost <= weight C*.
     """
-    return best_first(problem, astar_evaluation(heuristic, weight), max_expansions,
-                      max_seconds)
+    return with_lower_bound(best_first(problem, astar_evaluation(heuristic, weight),
+                                       max_expansions, max_seconds), weight)
+
+
+def with_lower_bound(result: SearchResult, weight: float) -> SearchResult:
+    """Set ``result.lower_bound`` of an A* search with ``weight`` (see :func:`astar`)."""
+    if result.found:
+        result.lower_bound = result.cost / weight
+    elif result.stop_reason != OPEN_EMPTY:
+        result.lower_bound = result.frontier_f / weight
+    return result
 
 
 def astar_evaluation(heuristic: Callable[[Any], float], weight: float = 1.0) -> Evaluate:

@@ -144,3 +144,15 @@ def test_sampled_rotation_gain_is_below_a_leg_move_and_keeps_astar_optimal() -> 
     tighter = solve(replace(base, heuristic_gain="sampled"))
     assert proved.found and tighter.found and tighter.cost == proved.cost
     assert tighter.expansions <= proved.expansions
+
+
+def test_astar_lower_bound_on_the_full_task_is_below_best_first() -> None:
+    # plain A* does not finish the seed's task (docs); its proved bound on the least plan
+    # length must still not exceed the length of any plan found by best-first
+    base = QuadrupedPlanConfig(rule_set="A", start_phi=1.5 * math.pi, max_expansions=4000)
+    opt = solve(replace(base, method="astar", heuristic_gain="sampled"))
+    assert not opt.found and opt.stop_reason == "expansion-budget"
+    assert opt.lower_bound >= 24  # above h(start) = 23: the search raised the bound
+    for function in (1, 2, 3):
+        bf = solve(replace(base, function=function, max_expansions=50_000))
+        assert bf.found and opt.lower_bound <= bf.cost

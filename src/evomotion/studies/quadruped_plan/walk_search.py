@@ -33,6 +33,7 @@ from evomotion.core.search import (
     frontier_min,
     is_ancestor,
     trace_plan,
+    with_lower_bound,
 )
 from evomotion.studies.quadruped_plan.rules import WalkProblem
 
@@ -135,7 +136,8 @@ def _child(s: tuple, leg: int, fx: float, fy: float, key: int) -> tuple:
 def walk_astar(problem: WalkProblem, heuristic: Any, weight: float = 1.0,
                max_expansions: int = 1_000_000, max_seconds: float = float("inf")
                ) -> SearchResult:
-    """:func:`evomotion.core.search.astar` on a :class:`WalkProblem` (same results). A
+    """:func:`evomotion.core.search.astar` on a :class:`WalkProblem` (same results, including
+    ``lower_bound``). A
     ``heuristic.after_leg(s, leg, fy)`` (h of ``s`` with foot ``leg`` at body y ``fy``) lets
     leg children be evaluated without building them."""
     evaluate = astar_evaluation(heuristic, weight)
@@ -146,4 +148,5 @@ def walk_astar(problem: WalkProblem, heuristic: Any, weight: float = 1.0,
             return pg + step_cost + weight * after_leg(ps, leg, fy)
 
         evaluate.leg = leg  # type: ignore[attr-defined]
-    return walk_best_first(problem, evaluate, max_expansions, max_seconds)
+    return with_lower_bound(walk_best_first(problem, evaluate, max_expansions, max_seconds),
+                            weight)
