@@ -8,7 +8,7 @@ from typing import Annotated
 
 import typer
 
-from evomotion.errors import InputError
+from evomotion.errors import ClusterError, InputError
 from evomotion.studies import STUDIES, all_studies, get_study
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
@@ -145,12 +145,13 @@ def main(argv: list[str] | None = None) -> None:
     try:
         _mount_study_app(argv)
         app(args=argv[1:], prog_name="evomotion")
-    except (InputError, KeyError) as e:
-        msg = str(e)
-        if isinstance(e, KeyError) and not hasattr(e, "__str__"):
-            msg = repr(e)
-        typer.echo(f"error: {msg}", err=True)
+    except InputError as e:
+        typer.echo(f"error: {e}", err=True)
         sys.exit(2)
+    except ClusterError as e:
+        typer.echo(f"error: {e}; the last completed generation is checkpointed: continue with "
+                   "'evomotion resume RUN_DIR --evaluator serial' (or process)", err=True)
+        sys.exit(4)
 
 
 if __name__ == "__main__":

@@ -18,3 +18,11 @@ class FileFormatError(InputError):
         self.path = str(path)
         self.line = line
         self.expected = expected
+
+
+class ClusterError(RuntimeError):
+    """The cluster cannot evaluate any more (lost, or its workers cannot run the problem).
+
+    The runner checkpoints the last completed generation; ``evomotion resume DIR
+    --evaluator serial`` (or ``process``) continues from there.
+    """

@@ -16,10 +16,10 @@ pytest.importorskip("distributed")
 import dask  # noqa: E402
 from distributed import Client, LocalCluster  # noqa: E402
 
+from evomotion.errors import ClusterError  # noqa: E402
 from evomotion.run.config import resolve_config  # noqa: E402
 from evomotion.run.dask_evaluator import DaskEvaluator, worker_environ  # noqa: E402
 from evomotion.run.evaluators import make_evaluator  # noqa: E402
-from evomotion.run.ray_evaluator import ClusterError  # noqa: E402
 from evomotion.run.runner import run_study  # noqa: E402
 from evomotion.studies import STUDIES, get_study  # noqa: E402
 

@@ -19,9 +19,10 @@ from hypothesis import strategies as st
 ray = pytest.importorskip("ray")
 from ray.cluster_utils import Cluster  # noqa: E402
 
+from evomotion.errors import ClusterError  # noqa: E402
 from evomotion.run.config import resolve_config  # noqa: E402
 from evomotion.run.evaluators import make_evaluator  # noqa: E402
-from evomotion.run.ray_evaluator import ClusterError, RayEvaluator  # noqa: E402
+from evomotion.run.ray_evaluator import RayEvaluator  # noqa: E402
 from evomotion.run.runner import run_study  # noqa: E402
 from evomotion.studies import STUDIES, get_study  # noqa: E402
 
@@ -174,7 +175,7 @@ def test_chunk_that_keeps_killing_workers_is_marked_worst(cluster):
 
 
 def test_losing_the_cluster_checkpoints_and_serial_resume_is_identical(cluster, tmp_path,
-                                                                      monkeypatch):
+                                                                      monkeypatch, capsys):
     """Runs last: removes the only worker node mid-run, then adds a fresh one back."""
     from evomotion.cli import main
 
@@ -197,11 +198,14 @@ def test_losing_the_cluster_checkpoints_and_serial_resume_is_identical(cluster, 
     monkeypatch.setattr(RayEvaluator, "__call__", call)
     out = tmp_path / "lost"
     try:
-        with pytest.raises(ClusterError, match="lost the Ray cluster"):
+        with pytest.raises(SystemExit) as lost:
             main(["evomotion", "run", "functions", "-q", "--out", str(out),
                   "--evaluator", "ray", "--workers", "2", *sets])
     finally:
         cluster.add_node(num_cpus=2)
+    assert lost.value.code == 4
+    err = [ln for ln in capsys.readouterr().err.splitlines() if ln.startswith("error:")]
+    assert len(err) == 1 and "lost the Ray cluster" in err[0] and "evomotion resume" in err[0]
     log = (out / "log.txt").read_text()
     assert "run failed at generation 2" in log and "resume" in log
     assert (out / "checkpoints" / "latest.json").exists()

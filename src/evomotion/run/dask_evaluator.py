@@ -34,9 +34,8 @@ from typing import Any
 import numpy as np
 
 from evomotion.core.problem import Evaluation, Problem, failed_evaluation
-from evomotion.errors import InputError
-from evomotion.run.evaluators import evaluate_safely, split_chunks
-from evomotion.run.ray_evaluator import WORKER_ENV, ClusterError, worker_config
+from evomotion.errors import ClusterError, InputError
+from evomotion.run.evaluators import WORKER_ENV, evaluate_safely, split_chunks, worker_config
 
 log = logging.getLogger("evomotion.run.dask")
 

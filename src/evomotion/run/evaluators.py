@@ -10,6 +10,7 @@ lazily.
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
 import multiprocessing
 import os
@@ -21,6 +22,18 @@ import numpy as np
 
 from evomotion.core.problem import Evaluation, Problem, failed_evaluation, sanitize
 from evomotion.core.registry import lookup
+
+WORKER_ENV = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
+
+
+def worker_config(problem_cfg: Any) -> Any:
+    """The problem config a one-core worker builds from: a ``threads`` field left at 0 (all
+    cores, e.g. ``mujoco.rollout`` threads) becomes 1, since the workers already fill every
+    core, one per core; an explicit thread count is kept."""
+    if (dataclasses.is_dataclass(problem_cfg) and hasattr(problem_cfg, "threads")
+            and problem_cfg.threads == 0):
+        return dataclasses.replace(problem_cfg, threads=1)
+    return problem_cfg
 
 
 def evaluate_safely(problem: Problem, genomes: np.ndarray) -> Evaluation:
@@ -70,7 +83,7 @@ _WORKER_PROBLEM: Problem | None = None
 
 def _init_worker(make_problem: Callable[[Any], Problem], problem_cfg: Any) -> None:
     global _WORKER_PROBLEM
-    os.environ.setdefault("OMP_NUM_THREADS", "1")
+    os.environ.update(WORKER_ENV)
     _WORKER_PROBLEM = make_problem(problem_cfg)
 
 
@@ -91,7 +104,7 @@ class ProcessEvaluator:
         # spawn, not fork: MuJoCo and BLAS thread pools do not survive a fork safely
         ctx = multiprocessing.get_context("spawn")
         self._pool = ProcessPoolExecutor(self.workers, mp_context=ctx, initializer=_init_worker,
-                                         initargs=(make_problem, problem_cfg))
+                                         initargs=(make_problem, worker_config(problem_cfg)))
 
     def __call__(self, genomes: np.ndarray) -> Evaluation:
         chunks = split_chunks(len(genomes), self.workers * self.chunks_per_worker)

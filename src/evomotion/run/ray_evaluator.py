@@ -21,7 +21,6 @@ evaluator is built. See ``docs/cluster.md`` for a multi-machine recipe.
 from __future__ import annotations
 
 import contextlib
-import dataclasses
 import logging
 import os
 import time
@@ -32,31 +31,15 @@ from typing import Any
 import numpy as np
 
 from evomotion.core.problem import Evaluation, Problem, failed_evaluation
-from evomotion.errors import InputError
-from evomotion.run.evaluators import evaluate_safely, split_chunks
+from evomotion.errors import ClusterError, InputError
+from evomotion.run.evaluators import (
+    WORKER_ENV,
+    evaluate_safely,
+    split_chunks,
+    worker_config,
+)
 
 log = logging.getLogger("evomotion.run.ray")
-
-WORKER_ENV = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
-
-
-def worker_config(problem_cfg: Any) -> Any:
-    """The problem config a one-core worker builds from: a ``threads`` field left at 0 (all
-    cores, e.g. ``mujoco.rollout`` threads) becomes 1, since the workers already fill every
-    core, one per core; an explicit thread count is kept."""
-    if (dataclasses.is_dataclass(problem_cfg) and hasattr(problem_cfg, "threads")
-            and getattr(problem_cfg, "threads") == 0):
-        return dataclasses.replace(problem_cfg, threads=1)
-    return problem_cfg
-
-
-class ClusterError(RuntimeError):
-    """The cluster cannot evaluate any more (lost, or its workers cannot run the problem).
-
-    The runner checkpoints the last completed generation; ``evomotion resume DIR
-    --evaluator serial`` (or ``process``) continues from there.
-    """
-
 
 class ProblemActor:
     """The body of one Ray actor: builds the problem once, then evaluates chunks."""
