@@ -5,7 +5,7 @@ body centre, each by at most T = 2 l_max sin(half width), the longest chord of a
 along the body Y axis: at least ceil(d / T) translations remain.
 
 Leg moves, by a potential argument. With the walking sense s (feet move by -s t in body Y
-when the body translates by t), the *room* of foot i is T/2 - s * y_i, y_i its body-frame
+when the body walks s t), the *room* of foot i is T/2 + s * y_i, y_i its body-frame
 offset from the hip along Y (|y_i| <= T/2 inside the sector). A translation by t lowers
 every room by exactly t, so it lowers the summed room Phi by 4t; a leg move raises Phi by
 at most T; a rotation by delta changes the feet by R(-delta), raising Phi by at most
