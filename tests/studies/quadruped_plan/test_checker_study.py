@@ -5,6 +5,7 @@ from __future__ import annotations
 import copy
 import json
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -155,3 +156,11 @@ def test_set_a_cannot_walk_forward_open_empties(tmp_path: Path) -> None:
     cfg = QuadrupedPlanConfig(sense=1, rule_set="A", function=1, start_phi=math.pi / 4)
     assert run_plan(cfg, tmp_path) == 1
     assert "OPEN is empty" in (tmp_path / "log.txt").read_text()
+
+
+def test_weighted_astar_run_reports_its_bound(tmp_path: Path) -> None:
+    cfg = replace(SHORT, method="weighted-astar", weight=2.0, max_expansions=60_000)
+    assert run_plan(cfg, tmp_path) == 0
+    search = read_plan(tmp_path / "plan.json")["search"]
+    assert search["lower_bound"] == search["cost"] / 2.0
+    assert f"least cost >= {search['cost'] / 2.0:.4g}" in (tmp_path / "log.txt").read_text()

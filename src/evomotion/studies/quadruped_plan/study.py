@@ -62,6 +62,8 @@ def run_plan(problem_cfg: QuadrupedPlanConfig, out_dir: str | Path, quiet: bool 
                   "weight": cfg.weight, "stop_reason": res.stop_reason,
                   "expansions": res.expansions, "generated": res.generated,
                   "reopened": res.reopened, "seconds": res.seconds, "cost": res.cost}
+        if cfg.method != "best-first":  # proved: least plan length >= lower_bound
+            search["lower_bound"] = res.lower_bound
         doc = plan_document(problem.model, res.states, res.rules, problem.goal,
                             cfg.goal_tolerance, cfg.sense, cfg.rule_set, problem.zone, search)
         write_plan(out / "plan.json", doc)
