@@ -78,3 +78,16 @@ def test_encoding_optimum_is_reachable_and_bounded():
     assert best == pytest.approx(np.hypot(*np.diff(pts, axis=0).T).sum())
     genes = p.enc.to_genes(pts[1:-1]).reshape(1, -1)  # cell centres lie in their cells
     assert p.evaluate(genes).fitness[0] == pytest.approx(best)
+
+
+@pytest.mark.parametrize("spec", ["seed20", "random:14:0.3:2"])
+def test_segment_tables_match_geometry(spec):
+    p = GridPathProblem(GridPathConfig(map=spec, m=1.05))
+    assert p.tables is not None
+    rng = np.random.default_rng(3)
+    x = np.concatenate([p.operators.initial_population(50, rng), p.genome.sample(rng, 150)])
+    pts = p.decode(x)
+    valid, length = p.tables.polylines(pts)
+    assert np.array_equal(valid, polyline_segments_valid(p.map.blocked, pts, "closed"))
+    assert np.allclose(length, np.hypot(*np.diff(pts, axis=1).transpose(2, 0, 1)))
+    assert not valid.all()  # the random genomes do cross obstacles

@@ -31,6 +31,7 @@ HEADER = ("| map | configuration | success | success (centres) | mean length | b
           "| mean conv. gen | s/run |\n|---|---|---|---|---|---|---|---|")
 _POLICY = {"line": "line_sweep", "sync": "synchronous", "fixed": "fixed_random_sweep",
            "new": "new_random_sweep", "uniform": "uniform_choice"}
+POLICY_SHORT = tuple(_POLICY)
 
 
 def algorithm_for(row: str, pop: int, pc: float, pm: float) -> CGAConfig | GAConfig:

@@ -21,6 +21,7 @@ import numpy as np
 
 from evomotion.studies.grid_path.encoding import PerpendicularEncoding
 from evomotion.studies.grid_path.geometry import segments_valid
+from evomotion.studies.grid_path.tables import SegmentTables
 
 
 def free_pieces(enc: PerpendicularEncoding, blocked: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -77,9 +78,18 @@ class PathOperators:
     rule: str
     retries: int = 20
     restarts: int = 5
+    tables: SegmentTables | None = None  # discrete mode: exact validity by lookup
 
     def __post_init__(self) -> None:
         self.lo, self.hi, self.count = free_pieces(self.enc, self.blocked)
+
+    def _seg_ok(self, layer: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Validity of segments ``a[k] -> b[k]`` from ``layer[k]`` to the next layer."""
+        if self.tables is not None:
+            ia, ib = self.tables.index(layer, a), self.tables.index(layer + 1, b)
+            if (ia >= 0).all() and (ib >= 0).all():
+                return self.tables.pairs(layer, ia, ib)[0]
+        return segments_valid(self.blocked, a, b, self.rule)
 
     def draw(self, genes: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         """A random free position y' on each perpendicular ``genes[k]`` (a free cell chosen
@@ -109,9 +119,9 @@ class PathOperators:
             gr = np.repeat(genes[todo], R)
             y = self.draw(gr, rng)
             p = self._point(gr, y)
-            ok = segments_valid(self.blocked, np.repeat(left[todo], R, 0), p, self.rule)
+            ok = self._seg_ok(gr, np.repeat(left[todo], R, 0), p)
             if right is not None:
-                ok &= segments_valid(self.blocked, p, np.repeat(right[todo], R, 0), self.rule)
+                ok &= self._seg_ok(gr + 1, p, np.repeat(right[todo], R, 0))
             ok = ok.reshape(todo.size, R)
             hit = ok.any(1)
             pick = np.where(hit, np.argmax(ok, axis=1), R - 1)
@@ -134,7 +144,7 @@ class PathOperators:
                 x[todo, g] = y
                 prev = self._point(np.full(todo.size, g), y)
             goal = np.broadcast_to(self.enc.goal, (todo.size, 2))
-            todo = todo[bad | ~segments_valid(self.blocked, prev, goal, self.rule)]
+            todo = todo[bad | ~self._seg_ok(np.full(todo.size, d), prev, goal)]
             if todo.size == 0:
                 break
         return x

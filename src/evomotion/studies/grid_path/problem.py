@@ -28,6 +28,7 @@ from evomotion.studies.grid_path.encoding import PerpendicularEncoding, parts_fr
 from evomotion.studies.grid_path.geometry import RULES, polyline_segments_valid
 from evomotion.studies.grid_path.maps import GridMap, random_map, read_map
 from evomotion.studies.grid_path.operators import PathOperators
+from evomotion.studies.grid_path.tables import SegmentTables
 
 BUNDLED = ("seed10a", "seed10b", "seed15", "seed20")
 
@@ -101,16 +102,28 @@ class GridPathProblem:
         self.genome: GenomeSpec = self.enc.genome()
 
     @cached_property
+    def tables(self) -> SegmentTables | None:
+        """Lookup tables of all segments (discrete mode on maps where they stay small)."""
+        if self.cfg.mode != "discrete" or not SegmentTables.feasible(self.enc, self.map.blocked):
+            return None
+        return SegmentTables(self.enc, self.map.blocked, self.rule)
+
+    @cached_property
     def operators(self) -> PathOperators:
-        return PathOperators(self.enc, self.map.blocked, self.rule, retries=self.cfg.retries)
+        return PathOperators(self.enc, self.map.blocked, self.rule, retries=self.cfg.retries,
+                             tables=self.tables)
 
     def decode(self, genomes: np.ndarray) -> np.ndarray:
         return self.enc.decode(genomes)
 
     def evaluate(self, genomes: np.ndarray) -> Evaluation:
         pts = self.enc.decode(genomes)
-        seg = np.hypot(*np.moveaxis(np.diff(pts, axis=1), -1, 0))
-        ok = polyline_segments_valid(self.map.blocked, pts, self.rule)
+        looked_up = self.tables.polylines(pts) if self.tables is not None else None
+        if looked_up is not None:
+            ok, seg = looked_up
+        else:
+            seg = np.hypot(*np.moveaxis(np.diff(pts, axis=1), -1, 0))
+            ok = polyline_segments_valid(self.map.blocked, pts, self.rule)
         length = seg.sum(axis=1)
         n_invalid = (~ok).sum(axis=1)
         return Evaluation(length + self.penalty * n_invalid,

@@ -88,6 +88,7 @@ def study(
     generations: Annotated[int, typer.Option(help="0: the seed's per map")] = 0,
     n_maps: Annotated[int, typer.Option(help="beyond: random maps")] = 10,
     pop: Annotated[int, typer.Option(help="beyond: population")] = 100,
+    update: Annotated[str, typer.Option(help="beyond: line, sync, fixed, new, uniform")] = "line",
 ) -> None:
     """Print the experiment table (markdown): success within 1% of the optimum, lengths,
     mean generation of convergence and seconds per run."""
@@ -103,8 +104,10 @@ def study(
         table = ex.seed_table(seeds, maps or list(ex.SEED_MAPS), rows or list(ex.SEED_ROWS),
                               pc, pm, generations)
     elif experiment == "beyond":
+        if update not in ex.POLICY_SHORT:
+            raise InputError(f"--update: expected one of {', '.join(ex.POLICY_SHORT)}")
         table = ex.beyond_table(seeds, n_maps, rows or list(ex.BEYOND_ROWS), pop,
-                                generations or 50, pc, pm)
+                                generations or 50, pc, pm, update)
     else:
         raise InputError(f"--experiment: expected 'seed' or 'beyond', got {experiment!r}")
     for row in table:
