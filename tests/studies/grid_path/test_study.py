@@ -91,6 +91,8 @@ def test_cli_make_map_and_study(tmp_path):
     (["run", "grid-path", "--set", "problem.start=8,1"], "start cell (8, 1) is blocked"),
     (["run", "grid-path", "--set", "algorithm.neighbourhood=hex"], "unknown neighbourhood"),
     (["grid-path", "study", "--map", "x"], "unknown 'x'"),
+    (["grid-path", "study", "--experiment", "beyond", "--update", "zig"], "--update: expected"),
+    (["grid-path", "study", "--experiment", "other"], "expected 'seed' or 'beyond'"),
 ])
 def test_bad_input_is_one_line_error(tmp_path, args, msg):
     r = cli(*args, cwd=tmp_path)
