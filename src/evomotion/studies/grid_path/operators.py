@@ -85,10 +85,13 @@ class PathOperators:
 
     def _seg_ok(self, layer: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Validity of segments ``a[k] -> b[k]`` from ``layer[k]`` to the next layer."""
-        if self.tables is not None:
-            ia, ib = self.tables.index(layer, a), self.tables.index(layer + 1, b)
-            if (ia >= 0).all() and (ib >= 0).all():
-                return self.tables.pairs(layer, ia, ib)[0]
+        t = self.tables
+        if t is not None and min(a.min(), b.min()) >= 0 and max(a[:, 0].max(), b[:, 0].max()) < t.w:
+            h = t.lookup.shape[1] // t.w
+            if max(a[:, 1].max(), b[:, 1].max()) < h:
+                ia, ib = t.index(layer, a), t.index(layer + 1, b)
+                if (ia >= 0).all() and (ib >= 0).all():
+                    return t.pairs(layer, ia, ib)[0]
         return segments_valid(self.blocked, a, b, self.rule)
 
     def draw(self, genes: np.ndarray, rng: np.random.Generator) -> np.ndarray:

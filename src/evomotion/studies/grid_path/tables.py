@@ -52,6 +52,7 @@ class SegmentTables:
             layers.append(cells)
             self.lookup[g + 1, cells] = np.arange(cells.size)
         layers.append(np.array([-1]))
+        self.lookup[0] = self.lookup[-1] = 0  # S and G: the only point of their layer
         self.sizes = np.array([len(c) for c in layers])
         pts = [enc.start[None]] + [np.stack([c % w, c // w], 1) + 0.5 for c in layers[1:-1]] \
             + [enc.goal[None]]
@@ -70,11 +71,9 @@ class SegmentTables:
 
     def index(self, layer: np.ndarray, xy: np.ndarray) -> np.ndarray:
         """Position of each point's cell in its layer (0 for S and G; -1 if not listed)."""
-        cell = np.floor(xy[..., 1]).astype(np.int64) * self.w + np.floor(xy[..., 0]).astype(
-            np.int64)
-        out = self.lookup[layer, np.clip(cell, 0, self.lookup.shape[1] - 1)]
-        ends = (layer == 0) | (layer == self.lookup.shape[0] - 1)
-        return np.where(ends, 0, out)
+        # points of the encoding lie inside the map (x, y >= 0), so truncation is floor
+        cell = xy[..., 1].astype(np.int64) * self.w + xy[..., 0].astype(np.int64)
+        return self.lookup[layer, cell]
 
     def pairs(self, layer: np.ndarray, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, ...]:
         """``(valid, length)`` of segments from index ``a`` in ``layer`` to ``b`` in the next."""
@@ -84,6 +83,9 @@ class SegmentTables:
     def polylines(self, pts: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
         """``(valid[P, S], length[P, S])`` of discrete polylines ``pts[P, n+1, 2]``, or
         ``None`` when a point's cell is not in its layer (then use the geometry)."""
+        h = self.lookup.shape[1] // self.w
+        if pts.min() < 0 or pts[..., 0].max() >= self.w or pts[..., 1].max() >= h:
+            return None  # off-map points (genes outside their bounds): use the geometry
         n_layers = pts.shape[1]
         layer = np.broadcast_to(np.arange(n_layers), pts.shape[:2])
         idx = self.index(layer, pts)
