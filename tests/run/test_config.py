@@ -53,3 +53,10 @@ def test_unknown_section(tmp_path):
     f.write_text("[runn]\nseed = 1\n")
     with pytest.raises(InputError, match="unknown section 'runn'"):
         resolve_config(S, f)
+
+
+def test_switching_algorithm_drops_the_study_tuning_of_the_other_one():
+    cfg = resolve_config(S, None, ["algorithm.name=cmaes"])
+    assert cfg.algorithm.name == "cmaes"
+    cfg = resolve_config(S, None, ["algorithm.name=ga"])
+    assert cfg.algorithm.replacement == "plus"  # same algorithm: study tuning kept

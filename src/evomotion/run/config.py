@@ -169,14 +169,19 @@ def build_section(cls: type, values: dict[str, Any], section: str) -> Any:
 def resolve_config(study: Any, file: Path | None = None,
                    overrides: list[str] | tuple[str, ...] = ()) -> Config:
     """Resolve the full config of ``study`` (a :class:`~evomotion.studies.base.Study`)."""
-    raw: dict[str, Any] = {"run": {}, "algorithm": {}, "problem": {}}
-    raw = _merge(raw, {k: dict(v) for k, v in study.defaults.items()})
+    user: dict[str, Any] = {}
     if file is not None:
-        data = load_toml(file)
-        data.pop("study", None)
-        raw = _merge(raw, data)
+        user = load_toml(file)
+        user.pop("study", None)
     for item in overrides:
-        raw = apply_override(raw, item)
+        user = apply_override(user, item)
+    defaults = {k: dict(v) for k, v in study.defaults.items()}
+    default_alg = defaults.get("algorithm", {}).get("name", "ga")
+    user_alg = user.get("algorithm", {}) if isinstance(user.get("algorithm"), dict) else {}
+    if user_alg.get("name", default_alg) != default_alg:
+        defaults.pop("algorithm", None)  # the study's tuning is for its own algorithm
+    raw: dict[str, Any] = {"run": {}, "algorithm": {}, "problem": {}}
+    raw = _merge(_merge(raw, defaults), user)
     return config_from_dict(study, raw)
 
 
