@@ -6,7 +6,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 extras=""
 [ "${1:-}" = "test" ] && extras="[test]"
-python3 -m pip install --quiet --disable-pip-version-check -e ".${extras}"
+python3 -m pip install --quiet --disable-pip-version-check --root-user-action=ignore -e ".${extras}"
 # Offscreen rendering on the CPU needs Debian's libosmesa6 (videos are skipped without it).
 if ! ldconfig -p 2>/dev/null | grep -q libOSMesa; then
   if [ "$(id -u)" = "0" ] && command -v apt-get >/dev/null; then
