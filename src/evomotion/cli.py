@@ -50,7 +50,10 @@ def run_cmd(
     if s.run is not None:
         atomic_write_text(out_dir / "config.toml", config_to_toml(cfg))
         raise typer.Exit(s.run(cfg, out_dir, cfg.run.evaluator, quiet))
-    res = run_study(s, cfg, out_dir, quiet=quiet)
+    _finish(run_study(s, cfg, out_dir, quiet=quiet), quiet)
+
+
+def _finish(res, quiet: bool) -> None:
     if not quiet:
         typer.echo(f"{res.stop_reason}: best fitness {res.best_fitness:.6g} after "
                    f"{res.generation} generations -> {res.out_dir}", err=True)
@@ -92,11 +95,7 @@ def resume_cmd(
     cfg = config_from_dict(s, raw)
     if sets:
         atomic_write_text(run_dir / "config.toml", config_to_toml(cfg))
-    res = run_study(s, cfg, run_dir, quiet=quiet, resume=True)
-    if not quiet:
-        typer.echo(f"{res.stop_reason}: best fitness {res.best_fitness:.6g} after "
-                   f"{res.generation} generations -> {res.out_dir}", err=True)
-    raise typer.Exit(res.exit_code)
+    _finish(run_study(s, cfg, run_dir, quiet=quiet, resume=True), quiet)
 
 
 @app.command("plot")

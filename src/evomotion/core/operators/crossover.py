@@ -15,16 +15,14 @@ beta-blend from seed 001 (section 3.2: ``(a1+a2+beta(a1-a2))/2``, ``(a1+a2+beta(
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 
+from evomotion.core.registry import register
+
 CROSSOVERS: dict = {}
-
-
-def _reg(name: str):
-    def deco(fn):
-        CROSSOVERS[name] = fn
-        return fn
-    return deco
+_reg = partial(register, CROSSOVERS)
 
 
 def _pair(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -13,16 +13,14 @@ by a uniform amount in ``[-delta, delta]``).
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 
+from evomotion.core.registry import register
+
 MUTATIONS: dict = {}
-
-
-def _reg(name: str):
-    def deco(fn):
-        MUTATIONS[name] = fn
-        return fn
-    return deco
+_reg = partial(register, MUTATIONS)
 
 
 def clip_to_bounds(x: np.ndarray, lower: np.ndarray, upper: np.ndarray,

@@ -9,16 +9,14 @@ Sources: elitist generational replacement (De Jong 1975); (mu+lambda) selection
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 
+from evomotion.core.registry import register
+
 REPLACEMENTS: dict = {}
-
-
-def _reg(name: str):
-    def deco(fn):
-        REPLACEMENTS[name] = fn
-        return fn
-    return deco
+_reg = partial(register, REPLACEMENTS)
 
 
 @_reg("generational")

@@ -8,16 +8,14 @@ tournament selection (Goldberg & Deb 1991); linear ranking (Baker 1985).
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 
+from evomotion.core.registry import register
+
 SELECTIONS: dict = {}
-
-
-def _reg(name: str):
-    def deco(fn):
-        SELECTIONS[name] = fn
-        return fn
-    return deco
+_reg = partial(register, SELECTIONS)
 
 
 def _finite_cost(cost: np.ndarray) -> np.ndarray:
