@@ -97,3 +97,36 @@ def test_cli_make_map_and_study(tmp_path):
 def test_bad_input_is_one_line_error(tmp_path, args, msg):
     r = cli(*args, cwd=tmp_path)
     assert r.returncode == 2 and msg in r.stderr and "Traceback" not in r.stderr
+
+
+def _run_folder(tmp, evaluator: str):
+    study = get_study("grid-path")
+    cfg = resolve_config(study, overrides=["run.generations=5", "algorithm.pop_size=36",
+                                           "algorithm.crossover_rate=0.9",
+                                           "algorithm.mutation_rate=0.3", "run.seed=4",
+                                           f"run.evaluator='{evaluator}'", "run.workers=2",
+                                           "run.chunks_per_worker=2"])
+    assert study.run(cfg, tmp, cfg.run.evaluator, quiet=True) == 0
+    stats = [line.split(",") for line in (tmp / "stats.csv").read_text().splitlines()]
+    wall = stats[0].index("wall_s")
+    return (tmp / "best.json").read_text(), [r[:wall] + r[wall + 1:] for r in stats]
+
+
+def test_process_evaluator_is_bit_identical_to_serial(tmp_path):
+    serial = _run_folder(tmp_path / "serial", "serial")
+    process = _run_folder(tmp_path / "process", "process")
+    assert process == serial
+
+
+def test_evolve_evaluates_every_batch_through_the_evaluator():
+    p = GridPathProblem(GridPathConfig(map="seed10a"))
+    sizes: list[int] = []
+
+    def spy(x):
+        sizes.append(len(x))
+        return p.evaluate(x)
+
+    r = evolve(p, algorithm_for("cga-L5-line", 36, 0.9, 0.3), 1, 3, evaluate=spy)
+    assert sum(sizes) == r.evaluations and sizes[0] == 36 and len(sizes) > 4
+    assert evolve(p, algorithm_for("cga-L5-line", 36, 0.9, 0.3), 1, 3).genome.tolist() \
+        == r.genome.tolist()

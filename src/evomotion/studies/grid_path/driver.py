@@ -6,6 +6,13 @@ mutation of :mod:`.operators`, and an asynchronous cGA sweep spans several ``ask
 waves. :func:`evolve` therefore drives the ask/tell loop itself: one statistics row per
 generation (one full sweep), the cGA built with ``mutate=operators.mutate``, the GA with its
 registry mutation switched off and the same path mutation applied to its children.
+
+Fitness batches (each ``ask``) go through ``evaluate`` (by default the problem in this process;
+:func:`.study.run` passes an evaluator from :func:`evomotion.run.evaluators.make_evaluator`).
+The validity checks inside the initialisation, the validity-keeping mutation and the final
+repair are not fitness evaluations (they test single segments, by table lookup or geometry,
+while re-drawing points) and stay in this process. The fitness of a path depends on that
+path only, so results are bit-identical whichever evaluator splits the batches.
 """
 
 from __future__ import annotations
@@ -20,6 +27,7 @@ import numpy as np
 
 from evomotion.core.cellular_ga import CellularGA, CGAConfig
 from evomotion.core.ga import GA, GAConfig
+from evomotion.core.problem import Evaluation
 from evomotion.run.stats import diversity, population_stats
 from evomotion.studies.grid_path.geometry import polyline_segments_valid
 from evomotion.studies.grid_path.problem import GridPathProblem
@@ -53,8 +61,11 @@ def make_optimizer(problem: GridPathProblem, alg: Any) -> tuple[Any, bool]:
 
 
 def evolve(problem: GridPathProblem, alg: Any, seed: int, generations: int,
-           on_generation: Callable[[dict[str, float]], None] | None = None) -> PathResult:
-    """Run ``generations`` generations from the seed's valid initial paths."""
+           on_generation: Callable[[dict[str, float]], None] | None = None,
+           evaluate: Callable[[np.ndarray], Evaluation] | None = None) -> PathResult:
+    """Run ``generations`` generations from the seed's valid initial paths; ``evaluate``
+    maps a genome batch to its :class:`Evaluation` (default: ``problem.evaluate``)."""
+    evaluate = evaluate or problem.evaluate
     rng = np.random.default_rng(seed)
     opt, outer_mutation = make_optimizer(problem, alg)
     ops = problem.operators
@@ -66,7 +77,7 @@ def evolve(problem: GridPathProblem, alg: Any, seed: int, generations: int,
         x, state = opt.ask(state, rng)
         if outer_mutation and gen >= 0:
             x = ops.mutate(x, rng, alg.mutation_rate)
-        cost = problem.evaluate(x).fitness
+        cost = np.asarray(evaluate(x).fitness, dtype=float)
         state = opt.tell(state, x, cost, rng)
         evals += len(x)
         if isinstance(opt, CellularGA) and not opt.end_of_generation(state):

@@ -61,7 +61,7 @@ class Row:
                 f"{self.best_length:.4f} | {self.mean_conv:.1f} | {self.seconds:.2f} |")
 
 
-def _row(map_name: str, config: str, problem: GridPathProblem, alg, gens: int, seeds: int,
+def map_row(map_name: str, config: str, problem: GridPathProblem, alg, gens: int, seeds: int,
          optima: dict[str, Solution], model: str) -> Row:
     res = [evolve(problem, alg, s, gens) for s in range(seeds)]
     lengths = np.array([r.length if r.valid else np.inf for r in res])
@@ -81,7 +81,7 @@ def seed_table(seeds: int, maps: list[str], rows: list[str], pc: float, pm: floa
         problem = GridPathProblem(GridPathConfig(map=name, m=m))
         optima = all_optima(problem.map)
         for row in rows:
-            yield _row(name, row, problem, algorithm_for(row, pop, pc, pm),
+            yield map_row(name, row, problem, algorithm_for(row, pop, pc, pm),
                        generations or gens, seeds, optima, "octile")
 
 
@@ -105,7 +105,7 @@ def beyond_table(seeds: int, n_maps: int, rows: list[str], pop: int, generations
             problem = GridPathProblem(beyond_config(row, spec))
             optima = all_optima(problem.map)
             alg = algorithm_for(f"cga-L5-{update}", pop, pc, pm)
-            acc.append(_row(spec, row, problem, alg, generations, seeds, optima, "free"))
+            acc.append(map_row(spec, row, problem, alg, generations, seeds, optima, "free"))
         yield Row(f"random 20x20 x{n_maps}", row, float(np.mean([r.success for r in acc])),
                   float(np.mean([r.success_centres for r in acc])),
                   float(np.mean([r.mean_length for r in acc])),

@@ -3,7 +3,9 @@
 ``evomotion run grid-path --out DIR`` writes ``config.toml``, ``stats.csv`` (one row per
 generation), ``best.json`` (keys ``waypoints``, ``length``, ``valid``, ``optima``,
 ``gap_percent``), ``log.txt``, ``plots/fitness.png`` (best/mean per generation) and
-``path.png``.
+``path.png``. ``--evaluator process|ray|dask`` sends every fitness batch to that evaluator
+(results are bit-identical to ``serial``). Runs are short and write no checkpoint: the engine's
+``evomotion resume`` refuses studies with their own run driver, so a grid-path run is re-run.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ import typer
 
 from evomotion.errors import InputError
 from evomotion.run.config import config_to_toml
+from evomotion.run.evaluators import make_evaluator
 from evomotion.run.folder import atomic_write_text, write_json
 from evomotion.run.plots import plot_fitness
 from evomotion.run.stats import StatsWriter
@@ -39,8 +42,17 @@ def run(config: Any, out_dir: Path, evaluator: str = "serial", quiet: bool = Fal
         atomic_write_text(out / "config.toml", config_to_toml(config))
     problem = GridPathProblem(config.problem)
     stats = StatsWriter(out / "stats.csv")
-    res = evolve(problem, config.algorithm, int(config.run.seed), int(config.run.generations),
-                 on_generation=stats.write)
+    rc = config.run
+    evaluate = None  # serial: the problem built above
+    if evaluator != "serial":
+        evaluate = make_evaluator(evaluator, make_problem, config.problem, rc.workers,
+                                  rc.chunks_per_worker, rc.address)
+    try:
+        res = evolve(problem, config.algorithm, int(rc.seed), int(rc.generations),
+                     on_generation=stats.write, evaluate=evaluate)
+    finally:
+        if evaluate is not None:
+            evaluate.close()
     optima = all_optima(problem.map)
     rec = best_record(res, optima)
     write_json(out / "best.json", rec)
