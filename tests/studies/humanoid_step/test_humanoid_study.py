@@ -1,4 +1,5 @@
 import json
+from pathlib import Path
 
 import numpy as np
 from typer.testing import CliRunner
@@ -11,6 +12,8 @@ from evomotion.studies.humanoid_step.artifacts import genome_motion
 from evomotion.studies.humanoid_step.motion import format_motion, read_motion
 from evomotion.studies.humanoid_step.replay import replay
 from evomotion.studies.humanoid_step.study import cli
+
+FIXTURES = Path(__file__).resolve().parents[4] / "shared" / "fixtures" / "webots-motions"
 
 
 def test_defaults_follow_the_seed():
@@ -47,7 +50,7 @@ def test_tiny_run_writes_artifacts(tmp_path):
 
 def test_cli_replay_json():
     result = CliRunner().invoke(
-        cli, ["replay", "/work/shared/fixtures/webots-motions/TurnLeft40.motion", "--json"])
+        cli, ["replay", str(FIXTURES / "TurnLeft40.motion"), "--json"])
     assert result.exit_code == 0, result.output
     data = json.loads(result.stdout)
     assert data["heading_change_rad"] > 0.5 and data["fell"] is False
@@ -68,3 +71,18 @@ def test_quick_experiment_writes_table(tmp_path):
     for r in results:
         assert len(r["curve"]) == 3  # generations 0..2
         assert all(row[1] >= row[2] >= row[3] for row in r["curve"])  # max >= mean >= min
+
+
+def test_default_run_steps_forward_without_falling(tmp_path):
+    """The README's main job: defaults only, then replay its best.motion (issue 3)."""
+    import subprocess
+    import sys
+
+    out = tmp_path / "run"
+    r = subprocess.run([sys.executable, "-m", "evomotion.cli", "run", "humanoid-step", "--out",
+                        str(out), "--quiet"], capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    summary = replay(out / "best.motion")
+    assert summary["fell"] is False
+    assert summary["displacement_m"][0] >= 0.05  # a step: at least 5 cm forward
+    assert (out / "plots" / "fitness.png").exists() and (out / "fitness.png").exists()

@@ -15,7 +15,7 @@ from evomotion.studies.humanoid_step.motion import (
     write_motion,
 )
 
-FIXTURES = Path("/work/shared/fixtures/webots-motions")
+FIXTURES = Path(__file__).resolve().parents[4] / "shared" / "fixtures" / "webots-motions"
 LEGS = ("LHipPitch", "LKneePitch", "RHipPitch")
 
 

@@ -5,7 +5,7 @@ import pytest
 
 from evomotion.studies.humanoid_step.replay import replay, replay_command
 
-FIXTURES = Path("/work/shared/fixtures/webots-motions")
+FIXTURES = Path(__file__).resolve().parents[4] / "shared" / "fixtures" / "webots-motions"
 
 
 @pytest.mark.parametrize("name,sign", [("TurnLeft40", 1), ("TurnLeft60", 1), ("TurnRight40", -1)])
