@@ -31,6 +31,7 @@ import numpy as np
 
 from evomotion.core.neighbourhoods import NEIGHBOURHOODS, grid_shape, neighbour_table
 from evomotion.core.operators import CROSSOVERS, MUTATIONS
+from evomotion.core.operators.crossover import one_point
 from evomotion.core.operators.mutation import clip_to_bounds
 from evomotion.core.optimizer import Optimizer
 from evomotion.core.problem import GenomeSpec
@@ -110,6 +111,13 @@ def roulette_rows(cost: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     ``inf`` costs get weight 0 unless the whole row is ``inf``.
     """
     finite = np.isfinite(cost)
+    if finite.all():  # the same weights without the inf handling
+        hi, lo = cost.max(1, keepdims=True), cost.min(1, keepdims=True)
+        spread = hi - lo
+        w = hi - cost + np.where(spread > 0, 1e-3 * spread, 1.0)
+        cdf = np.cumsum(w, axis=1)
+        u = rng.random((cost.shape[0], 1)) * cdf[:, -1:]
+        return np.minimum((cdf <= u).sum(1), cost.shape[1] - 1)
     any_f = finite.any(1, keepdims=True)
     c = np.where(finite, cost, 0.0)
     hi = np.where(any_f, np.where(finite, cost, -np.inf).max(1, keepdims=True), 0.0)
@@ -136,6 +144,10 @@ class CellularGA(Optimizer):
         self._mutate = mutate
         self._tables: dict[int, np.ndarray] = {}
         self._waves: dict[int, np.ndarray] = {}
+        self._plans: dict[int, list[tuple[np.ndarray, np.ndarray]]] = {}  # fixed sweeps
+        self._plan: list[tuple[np.ndarray, np.ndarray]] = []  # (cells, neighbours) per wave
+        self._plan_of: CGAState | None = None  # the state whose schedule ``_plan`` holds
+        self._fast_one_point = self._xo is one_point and not cfg.crossover_params
 
     def table(self, generation: int) -> np.ndarray:
         key = generation % 2 if self.cfg.neighbourhood == "Margolus" else 0
@@ -171,14 +183,33 @@ class CellularGA(Optimizer):
             waves = update_waves(seq, table)
         state.sequence, state.waves = np.asarray(seq), waves
 
+    def _wave_plan(self, state: CGAState) -> list[tuple[np.ndarray, np.ndarray]]:
+        """``(cells, neighbours)`` of every wave of the current schedule, split once per
+        schedule (and kept across generations for the line and fixed random sweeps)."""
+        if self._plan_of is state:
+            return self._plan
+        fixed = self.cfg.update in ("line_sweep", "fixed_random_sweep", "synchronous")
+        key = state.generation % 2 if self.cfg.neighbourhood == "Margolus" else 0
+        if not (fixed and key in self._plans):
+            order = np.argsort(state.waves, kind="stable")  # sequence order within a wave
+            ends = np.cumsum(np.bincount(state.waves))[:-1]
+            table = self.table(state.generation)
+            plan = [(c, table[c, 1:]) for c in np.split(state.sequence[order], ends)]
+            if not fixed:
+                self._plan, self._plan_of = plan, state
+                return plan
+            self._plans[key] = plan
+        self._plan, self._plan_of = self._plans[key], state
+        return self._plan
+
     def _ask(self, state: CGAState, rng: np.random.Generator):
         if not state.evaluated:
             return state.pop.copy(), state
         if state.wave == 0:
             self._schedule(state, rng)
+            self._plan_of = None
         c, g = self.cfg, self.genome
-        cells = state.sequence[state.waves == state.wave]
-        nbr = self.table(state.generation)[cells, 1:]
+        cells, nbr = self._wave_plan(state)[state.wave]
         ncost = state.cost[nbr]
         if c.mate_selection == "roulette":
             j = roulette_rows(ncost, rng)
@@ -190,11 +221,20 @@ class CellularGA(Optimizer):
             j = np.argmin(ncost, axis=1)
         mates = nbr[np.arange(len(cells)), j]
         a, b = state.pop[cells], state.pop[mates]
-        kids = self._xo(a, b, rng, **c.crossover_params)
-        pick = rng.integers(0, 2, len(cells))
-        child = np.where(pick[:, None] == 0, kids[0], kids[1])
-        cross = rng.random(len(cells)) < c.crossover_rate
-        child = np.where(cross[:, None], child, a)
+        if self._fast_one_point and g.dim >= 2:
+            # one_point fused with the pick of a child and the crossover test: the same
+            # draws in the same order; child 0 takes b on the tail, child 1 off the tail
+            cut = rng.integers(1, g.dim, size=(len(cells), 1))
+            pick = rng.integers(0, 2, len(cells))
+            cross = rng.random(len(cells)) < c.crossover_rate
+            take_b = (np.arange(g.dim) >= cut) != (pick == 1)[:, None]
+            child = np.where(take_b & cross[:, None], b, a)
+        else:
+            kids = self._xo(a, b, rng, **c.crossover_params)
+            pick = rng.integers(0, 2, len(cells))
+            child = np.where(pick[:, None] == 0, kids[0], kids[1])
+            cross = rng.random(len(cells)) < c.crossover_rate
+            child = np.where(cross[:, None], child, a)
         if self._mutate is not None:
             child = self._mutate(child, rng, c.mutation_rate)
         else:
@@ -214,7 +254,7 @@ class CellularGA(Optimizer):
             state.pop[cells[better]] = genomes[better]
             state.cost[cells[better]] = cost[better]
             state.wave += 1
-            if state.wave > int(state.waves.max()):
+            if state.wave >= len(self._wave_plan(state)):
                 state.wave, state.generation = 0, state.generation + 1
         i = int(np.argmin(state.cost))
         if state.cost[i] < state.best_cost:

@@ -82,6 +82,32 @@ class PathOperators:
 
     def __post_init__(self) -> None:
         self.lo, self.hi, self.count = free_pieces(self.enc, self.blocked)
+        self.piece_cell = self._piece_cells()
+
+    def _piece_cells(self) -> np.ndarray | None:
+        """Table position ``[g, j]`` of the cell of free stretch ``j`` of perpendicular ``g``,
+        when every point :meth:`draw` can pick in every stretch lies in that one cell, else
+        ``None``. ``floor(foot + y * normal)`` is monotone in ``y`` in floating point, so
+        checking both ends of the drawn range (widened a little) proves it for all draws."""
+        t = self.tables
+        if t is None:
+            return None
+        g = np.repeat(np.arange(self.enc.dim), self.count)
+        j = np.concatenate([np.arange(c) for c in self.count])
+        ends = []
+        for u in (0.0499, 0.9501):
+            y = self.lo[g, j] + (self.hi[g, j] - self.lo[g, j]) * u
+            ends.append(np.floor(self.enc.foot_points()[g] + y[:, None] * self.enc.normal))
+        xy = ends[0]
+        if (ends[0] != ends[1]).any() or xy.min() < 0 or xy[:, 0].max() >= t.w \
+                or xy[:, 1].max() >= t.h:
+            return None
+        idx = t.index(g + 1, xy)
+        if (idx < 0).any():
+            return None
+        out = np.full(self.lo.shape, -1, dtype=np.int64)
+        out[g, j] = idx
+        return out
 
     def _seg_ok(self, layer: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Validity of segments ``a[k] -> b[k]`` from ``layer[k]`` to the next layer."""
@@ -94,12 +120,51 @@ class PathOperators:
                     return t.pairs(layer, ia, ib)[0]
         return segments_valid(self.blocked, a, b, self.rule)
 
+    def _layer_index(self, layer: np.ndarray, xy: np.ndarray) -> np.ndarray | None:
+        """Positions of points ``xy[k]`` in the table layers ``layer[k]``, or ``None`` when a
+        point is off the map or not listed (then :meth:`_seg_ok` decides by geometry)."""
+        t = self.tables
+        if t is None or xy.min() < 0 or xy[:, 0].max() >= t.w or xy[:, 1].max() >= t.h:
+            return None
+        idx = t.index(layer, xy)
+        return idx if (idx >= 0).all() else None
+
     def draw(self, genes: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         """A random free position y' on each perpendicular ``genes[k]`` (a free cell chosen
         uniformly, then a uniform point inside its stretch, strictly inside it)."""
+        return self._draw(genes, rng)[0]
+
+    def _draw(self, genes: np.ndarray, rng: np.random.Generator) -> tuple[np.ndarray, ...]:
+        """:meth:`draw` and the stretch index ``j`` of each draw."""
         j = (rng.random(genes.size) * self.count[genes]).astype(int)
         lo, hi = self.lo[genes, j], self.hi[genes, j]
-        return lo + (hi - lo) * rng.uniform(0.05, 0.95, genes.size)
+        return lo + (hi - lo) * rng.uniform(0.05, 0.95, genes.size), j
+
+    def _first_valid_cells(self, genes: np.ndarray, ia: np.ndarray, ib: np.ndarray,
+                           rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`_first_valid` (with a right end) by table lookups only: ``ia``/``ib`` are the
+        table positions of the end points, the drawn cell comes from :attr:`piece_cell`.
+        The same draws in the same order, so the same result."""
+        t, cell = self.tables, self.piece_cell
+        n = genes.size
+        y_out = np.zeros(n)
+        found = np.zeros(n, dtype=bool)
+        todo = np.arange(n)
+        for R in _stages(self.retries):
+            if todo.size == 0:
+                break
+            gr = np.repeat(genes[todo], R)
+            y, j = self._draw(gr, rng)
+            ip = cell[gr, j]
+            ok = t.valid[t.offset[gr] + np.repeat(ia[todo], R) * t.sizes[gr + 1] + ip]
+            ok &= t.valid[t.offset[gr + 1] + ip * t.sizes[gr + 2] + np.repeat(ib[todo], R)]
+            ok = ok.reshape(todo.size, R)
+            hit = ok.any(1)
+            pick = np.where(hit, np.argmax(ok, axis=1), R - 1)
+            y_out[todo] = y.reshape(todo.size, R)[np.arange(todo.size), pick]
+            found[todo[hit]] = True
+            todo = todo[~hit]
+        return y_out, found
 
     def _point(self, genes: np.ndarray, y: np.ndarray) -> np.ndarray:
         return self.enc.snap(self.enc.foot_points()[genes] + y[:, None] * self.enc.normal)
@@ -116,15 +181,27 @@ class PathOperators:
         y_out = np.zeros(n)
         found = np.zeros(n, dtype=bool)
         todo = np.arange(n)
+        t = self.tables
+        # table positions of the fixed end points, found once (None: use _seg_ok)
+        ia = self._layer_index(genes, left)
+        ib = None if right is None else self._layer_index(genes + 2, right)
         for R in _stages(self.retries):  # small batches first: most succeed at once
             if todo.size == 0:
                 break
             gr = np.repeat(genes[todo], R)
             y = self.draw(gr, rng)
             p = self._point(gr, y)
-            ok = self._seg_ok(gr, np.repeat(left[todo], R, 0), p)
-            if right is not None:
-                ok &= self._seg_ok(gr + 1, p, np.repeat(right[todo], R, 0))
+            ip = None if ia is None or (right is not None and ib is None) \
+                else self._layer_index(gr + 1, p)
+            if ip is not None:
+                ok = t.valid[t.offset[gr] + np.repeat(ia[todo], R) * t.sizes[gr + 1] + ip]
+                if right is not None:
+                    ok &= t.valid[t.offset[gr + 1] + ip * t.sizes[gr + 2]
+                                  + np.repeat(ib[todo], R)]
+            else:
+                ok = self._seg_ok(gr, np.repeat(left[todo], R, 0), p)
+                if right is not None:
+                    ok &= self._seg_ok(gr + 1, p, np.repeat(right[todo], R, 0))
             ok = ok.reshape(todo.size, R)
             hit = ok.any(1)
             pick = np.where(hit, np.argmax(ok, axis=1), R - 1)
@@ -161,8 +238,14 @@ class PathOperators:
         rows, genes = rows[point > 0], point[point > 0] - 1
         if rows.size == 0:
             return x
-        poly = self.enc.decode(x[rows])
         k = np.arange(rows.size)
-        y, ok = self._first_valid(genes, poly[k, genes], poly[k, genes + 2], rng)
+        cells = None if self.piece_cell is None else self.tables.gene_cells(x[rows])
+        if cells is not None:  # discrete mode: lookups only
+            full = np.zeros((rows.size, d + 2), dtype=np.int64)  # S and G: position 0
+            full[:, 1:-1] = cells
+            y, ok = self._first_valid_cells(genes, full[k, genes], full[k, genes + 2], rng)
+        else:
+            poly = self.enc.decode(x[rows])
+            y, ok = self._first_valid(genes, poly[k, genes], poly[k, genes + 2], rng)
         x[rows[ok], genes[ok]] = y[ok]
         return x

@@ -117,11 +117,12 @@ class GridPathProblem:
         return self.enc.decode(genomes)
 
     def evaluate(self, genomes: np.ndarray) -> Evaluation:
-        pts = self.enc.decode(genomes)
-        looked_up = self.tables.polylines(pts) if self.tables is not None else None
+        genomes = np.asarray(genomes, dtype=float).reshape(-1, self.genome.dim)
+        looked_up = self.tables.chromosomes(genomes) if self.tables is not None else None
         if looked_up is not None:
             ok, seg = looked_up
         else:
+            pts = self.enc.decode(genomes)
             seg = np.hypot(*np.moveaxis(np.diff(pts, axis=1), -1, 0))
             ok = polyline_segments_valid(self.map.blocked, pts, self.rule)
         length = seg.sum(axis=1)

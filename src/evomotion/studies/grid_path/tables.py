@@ -62,6 +62,35 @@ class SegmentTables:
         b = np.concatenate([np.tile(pts[i + 1], (self.sizes[i], 1)) for i in range(len(pair))])
         self.valid = segments_valid(blocked, a, b, rule)
         self.length = np.hypot(*(b - a).T)
+        self.h = h
+        self._feet, self._normal = feet, nrm
+        self._inner = self.lookup[1:enc.dim + 1]  # layers of the genes
+        self._gene_rows = np.arange(enc.dim)
+        self._seg_offset = self.offset  # first pair of segment s (layer s -> s + 1)
+        self._seg_next = self.sizes[1:]  # size of the layer a segment ends in
+
+    def gene_cells(self, genes: np.ndarray) -> np.ndarray | None:
+        """Position of each gene's cell in its layer, ``idx[P, d]``, straight from the genes
+        (the cell of ``foot + y * normal``, as :meth:`.PerpendicularEncoding.decode` snaps
+        it), or ``None`` when a cell is off the map or not listed."""
+        xy = np.floor(self._feet[None] + genes[..., None] * self._normal)
+        if xy.min() < 0 or xy[..., 0].max() >= self.w or xy[..., 1].max() >= self.h:
+            return None
+        cell = xy[..., 1].astype(np.int64) * self.w + xy[..., 0].astype(np.int64)
+        idx = self._inner[self._gene_rows, cell]
+        return None if (idx < 0).any() else idx
+
+    def chromosomes(self, genes: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """``(valid[P, S], length[P, S])`` of the decoded polylines of ``genes[P, d]`` (the
+        same values as :meth:`polylines` of the decoded points), or ``None`` (see
+        :meth:`gene_cells`)."""
+        idx = self.gene_cells(genes)
+        if idx is None:
+            return None
+        full = np.zeros((idx.shape[0], idx.shape[1] + 2), dtype=np.int64)  # S and G: 0
+        full[:, 1:-1] = idx
+        flat = self._seg_offset + full[:, :-1] * self._seg_next + full[:, 1:]
+        return self.valid[flat], self.length[flat]
 
     @staticmethod
     def feasible(enc: PerpendicularEncoding, blocked: np.ndarray) -> bool:
