@@ -144,8 +144,8 @@ class CellularGA(Optimizer):
         self._mutate = mutate
         self._tables: dict[int, np.ndarray] = {}
         self._waves: dict[int, np.ndarray] = {}
-        self._plans: dict[int, list[tuple[np.ndarray, np.ndarray]]] = {}  # fixed sweeps
-        self._plan: list[tuple[np.ndarray, np.ndarray]] = []  # (cells, neighbours) per wave
+        self._plans: dict[int, list[tuple[np.ndarray, ...]]] = {}  # fixed sweeps
+        self._plan: list[tuple[np.ndarray, ...]] = []  # (cells, neighbours, rows) per wave
         self._plan_of: CGAState | None = None  # the state whose schedule ``_plan`` holds
         self._fast_one_point = self._xo is one_point and not cfg.crossover_params
 
@@ -183,9 +183,9 @@ class CellularGA(Optimizer):
             waves = update_waves(seq, table)
         state.sequence, state.waves = np.asarray(seq), waves
 
-    def _wave_plan(self, state: CGAState) -> list[tuple[np.ndarray, np.ndarray]]:
-        """``(cells, neighbours)`` of every wave of the current schedule, split once per
-        schedule (and kept across generations for the line and fixed random sweeps)."""
+    def _wave_plan(self, state: CGAState) -> list[tuple[np.ndarray, ...]]:
+        """``(cells, neighbours, arange(len(cells)))`` of every wave of the current schedule,
+        split once per schedule (kept across generations for the line and fixed sweeps)."""
         if self._plan_of is state:
             return self._plan
         fixed = self.cfg.update in ("line_sweep", "fixed_random_sweep", "synchronous")
@@ -194,7 +194,8 @@ class CellularGA(Optimizer):
             order = np.argsort(state.waves, kind="stable")  # sequence order within a wave
             ends = np.cumsum(np.bincount(state.waves))[:-1]
             table = self.table(state.generation)
-            plan = [(c, table[c, 1:]) for c in np.split(state.sequence[order], ends)]
+            plan = [(c, table[c, 1:], np.arange(len(c)))
+                    for c in np.split(state.sequence[order], ends)]
             if not fixed:
                 self._plan, self._plan_of = plan, state
                 return plan
@@ -209,17 +210,16 @@ class CellularGA(Optimizer):
             self._schedule(state, rng)
             self._plan_of = None
         c, g = self.cfg, self.genome
-        cells, nbr = self._wave_plan(state)[state.wave]
+        cells, nbr, rows = self._wave_plan(state)[state.wave]
         ncost = state.cost[nbr]
         if c.mate_selection == "roulette":
             j = roulette_rows(ncost, rng)
         elif c.mate_selection == "tournament":
             a, b = rng.integers(0, nbr.shape[1], (2, len(cells)))
-            rows = np.arange(len(cells))
             j = np.where(ncost[rows, a] <= ncost[rows, b], a, b)
         else:
             j = np.argmin(ncost, axis=1)
-        mates = nbr[np.arange(len(cells)), j]
+        mates = nbr[rows, j]
         a, b = state.pop[cells], state.pop[mates]
         if self._fast_one_point and g.dim >= 2:
             # one_point fused with the pick of a child and the crossover test: the same

@@ -74,10 +74,11 @@ class SegmentTables:
         (the cell of ``foot + y * normal``, as :meth:`.PerpendicularEncoding.decode` snaps
         it), or ``None`` when a cell is off the map or not listed."""
         xy = np.floor(self._feet[None] + genes[..., None] * self._normal)
-        if xy.min() < 0 or xy[..., 0].max() >= self.w or xy[..., 1].max() >= self.h:
+        with np.errstate(invalid="ignore"):  # NaN genes: rejected below like off-map ones
+            ix = xy.astype(np.int64).view(np.uint64)  # off-map (negative) wraps to huge
+        if not ((ix[..., 0] < self.w) & (ix[..., 1] < self.h)).all():
             return None
-        cell = xy[..., 1].astype(np.int64) * self.w + xy[..., 0].astype(np.int64)
-        idx = self._inner[self._gene_rows, cell]
+        idx = self._inner[self._gene_rows, ix[..., 1] * self.w + ix[..., 0]]
         return None if (idx < 0).any() else idx
 
     def chromosomes(self, genes: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
