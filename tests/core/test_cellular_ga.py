@@ -11,12 +11,14 @@ from evomotion.core.cellular_ga import (
     UPDATE_POLICIES,
     CellularGA,
     CGAConfig,
+    CGAState,
     roulette_rows,
     update_waves,
 )
 from evomotion.core.neighbourhoods import NEIGHBOURHOODS, grid_shape, neighbour_table
 from evomotion.core.problem import GenomeSpec
 from evomotion.core.registry import UnknownNameError
+from evomotion.core.state import state_from_arrays, state_to_arrays
 
 SIZES = {"L5": 5, "C9": 9, "L9": 9, "C13": 13, "Margolus": 4}
 
@@ -170,3 +172,50 @@ def test_roulette_rows_weights():
     assert freq[2] == 0.0 and freq[0] > freq[1] > freq[3] > 0
     flat = roulette_rows(np.full((4000, 3), np.inf), rng)
     assert set(flat.tolist()) == {0, 1, 2}
+
+
+def _roulette_reference(cost, rng):
+    """The documented weights, row by row in plain Python (finite costs)."""
+    u = rng.random((cost.shape[0], 1))[:, 0]
+    out = []
+    for row, ui in zip(cost.tolist(), u.tolist(), strict=True):
+        hi, lo = max(row), min(row)
+        w = [hi - c + (1e-3 * (hi - lo) if hi > lo else 1.0) for c in row]
+        cdf = np.cumsum(w)
+        out.append(min(int((cdf <= ui * cdf[-1]).sum()), len(row) - 1))
+    return np.array(out)
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(0, 2**31), st.integers(1, 9))
+def test_roulette_rows_fast_path_matches_reference(seed, k):
+    rng = np.random.default_rng(seed)
+    cost = rng.choice([0.5, 1.0, 2.0, 7.25], (50, k)) + rng.random((50, k)) * (seed % 2)
+    assert np.array_equal(roulette_rows(cost, np.random.default_rng(seed)),
+                          _roulette_reference(cost, np.random.default_rng(seed)))
+
+
+@pytest.mark.parametrize("update", ["line_sweep", "new_random_sweep", "uniform_choice"])
+def test_fused_one_point_and_mid_generation_restore_are_exact(update):
+    cfg = CGAConfig(pop_size=36, update=update, crossover_rate=0.7, mutation_rate=0.3)
+    g = GenomeSpec.box(5, -5.0, 5.0)
+
+    def run(fast: bool, restore_at: int = -1):
+        opt = CellularGA(g, cfg)
+        opt._fast_one_point = fast
+        rng = np.random.default_rng(11)
+        state = opt.init(rng)
+        for t in range(40):
+            if t == restore_at:  # a fresh optimizer from a checkpoint-like copy
+                arrays, meta = state_to_arrays(state)
+                state = state_from_arrays(CGAState, {k: v.copy() for k, v in arrays.items()},
+                                          meta)
+                opt = CellularGA(g, cfg)
+            x, state = opt.ask(state, rng)
+            state = opt.tell(state, x, (x ** 2).sum(1), rng)
+        return state.pop, state.cost, state.wave, state.generation
+
+    ref = run(False)
+    assert ref[3] >= 2  # several generations, mid-generation end
+    for got in (run(True), run(True, restore_at=17)):
+        assert all(np.array_equal(a, b) for a, b in zip(got, ref, strict=True))

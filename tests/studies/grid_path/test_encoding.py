@@ -7,6 +7,7 @@ import pytest
 
 from evomotion.studies.grid_path.encoding import PerpendicularEncoding, parts_from_m
 from evomotion.studies.grid_path.geometry import polyline_segments_valid
+from evomotion.studies.grid_path.operators import PathOperators
 from evomotion.studies.grid_path.problem import GridPathConfig, GridPathProblem
 from evomotion.studies.grid_path.solvers import encoding_optimum
 
@@ -91,3 +92,24 @@ def test_segment_tables_match_geometry(spec):
     assert np.array_equal(valid, polyline_segments_valid(p.map.blocked, pts, "closed"))
     assert np.allclose(length, np.hypot(*np.diff(pts, axis=1).transpose(2, 0, 1)))
     assert not valid.all()  # the random genomes do cross obstacles
+
+
+@pytest.mark.parametrize("spec", ["seed20", "random:14:0.3:2"])
+def test_lookup_fast_paths_equal_the_geometry(spec):
+    """Fitness from gene-level lookups and the lookup-only mutation give exactly what the
+    decoded points and the geometric segment test give."""
+    p = GridPathProblem(GridPathConfig(map=spec, m=1.05))
+    ops = p.operators
+    assert ops.piece_cell is not None
+    geo = PathOperators(p.enc, p.map.blocked, p.rule, retries=p.cfg.retries)
+    rng = np.random.default_rng(5)
+    x = np.concatenate([ops.initial_population(60, rng), p.genome.sample(rng, 60)])
+    ev = p.evaluate(x)
+    pts = p.decode(x)
+    seg = np.hypot(*np.diff(pts, axis=1).transpose(2, 0, 1))
+    bad = (~polyline_segments_valid(p.map.blocked, pts, "closed")).sum(1)
+    assert np.array_equal(ev.fitness, seg.sum(1) + p.penalty * bad)
+    for seed in range(3):
+        fast = ops.mutate(x, np.random.default_rng(seed), 0.7)
+        assert np.array_equal(fast, geo.mutate(x, np.random.default_rng(seed), 0.7))
+        assert (fast != x).any()
