@@ -150,17 +150,19 @@ class PathOperators:
         y_out = np.zeros(n)
         found = np.zeros(n, dtype=bool)
         todo = np.arange(n)
+        into = t.offset[genes] + ia * t.sizes[genes + 1]  # + drawn position: segment in
+        out_base, out_mul = t.offset[genes + 1] + ib, t.sizes[genes + 2]  # segment out
         for R in _stages(self.retries):
             if todo.size == 0:
                 break
-            gr = np.repeat(genes[todo], R)
+            gr = genes[todo].repeat(R)
             y, j = self._draw(gr, rng)
             ip = cell[gr, j]
-            ok = t.valid[t.offset[gr] + np.repeat(ia[todo], R) * t.sizes[gr + 1] + ip]
-            ok &= t.valid[t.offset[gr + 1] + ip * t.sizes[gr + 2] + np.repeat(ib[todo], R)]
+            ok = t.valid[into[todo].repeat(R) + ip]
+            ok &= t.valid[out_base[todo].repeat(R) + ip * out_mul[todo].repeat(R)]
             ok = ok.reshape(todo.size, R)
             hit = ok.any(1)
-            pick = np.where(hit, np.argmax(ok, axis=1), R - 1)
+            pick = np.where(hit, ok.argmax(1), R - 1)
             y_out[todo] = y.reshape(todo.size, R)[np.arange(todo.size), pick]
             found[todo[hit]] = True
             todo = todo[~hit]
@@ -231,10 +233,10 @@ class PathOperators:
 
     def mutate(self, x: np.ndarray, rng: np.random.Generator, rate: float) -> np.ndarray:
         """Seed mutation on each row with probability ``rate`` (see module doc)."""
-        x = np.array(x, dtype=float)
         n, d = x.shape
         rows = np.flatnonzero(rng.random(n) < rate)
         point = rng.integers(0, d + 1, rows.size)  # 0 is the start point: no change
+        x = np.array(x, dtype=float)
         rows, genes = rows[point > 0], point[point > 0] - 1
         if rows.size == 0:
             return x
