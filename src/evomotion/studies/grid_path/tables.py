@@ -63,6 +63,7 @@ class SegmentTables:
         self.valid = segments_valid(blocked, a, b, rule)
         self.length = np.hypot(*(b - a).T)
         self.h = h
+        self._size = np.array([w, h], dtype=float)  # x < w and y < h on the map
         self._feet, self._normal = feet, nrm
         self._inner = self.lookup[1:enc.dim + 1]  # layers of the genes
         self._gene_rows = np.arange(enc.dim)
@@ -74,10 +75,9 @@ class SegmentTables:
         (the cell of ``foot + y * normal``, as :meth:`.PerpendicularEncoding.decode` snaps
         it), or ``None`` when a cell is off the map or not listed."""
         xy = np.floor(self._feet[None] + genes[..., None] * self._normal)
-        with np.errstate(invalid="ignore"):  # NaN genes: rejected below like off-map ones
-            ix = xy.astype(np.int64).view(np.uint64)  # off-map (negative) wraps to huge
-        if not ((ix[..., 0] < self.w) & (ix[..., 1] < self.h)).all():
+        if not ((xy >= 0.0) & (xy < self._size)).all():  # off the map (or NaN)
             return None
+        ix = xy.astype(np.int64)
         idx = self._inner[self._gene_rows, ix[..., 1] * self.w + ix[..., 0]]
         return None if (idx < 0).any() else idx
 
