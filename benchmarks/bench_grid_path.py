@@ -2,7 +2,7 @@
 
 1. Median wall time of one run on the bundled 20x20 map with the seed's settings
    (population 400, 100 generations, m = 1.05), cGA line sweep (the seed) and synchronous.
-2. Generations per second of the same cGA (L5, line sweep, roulette mate, one-point
+2. Generations per second of the same cGA (L5, line sweep and synchronous, roulette mate, one-point
    crossover, the seed's validity-keeping mutation, replace-if-better) at population 400:
    the vectorised implementation against a pure-Python one that updates one cell at a time
    with a pure-Python exact segment test.
@@ -49,10 +49,14 @@ def py_segment_valid(blocked, w, h, x0, y0, x1, y1) -> bool:
 
 
 class PurePythonCGA:
-    """The same line-sweep cGA, one cell at a time, plain Python lists and ``random``."""
+    """The same cGA, one cell at a time, plain Python lists and ``random``: ``synchronous``
+    breeds every cell from the old population and replaces them all at the end, otherwise
+    cells are updated in place in row-major order (the line sweep)."""
 
-    def __init__(self, problem: GridPathProblem, pop: list[list[float]], pc: float, pm: float):
+    def __init__(self, problem: GridPathProblem, pop: list[list[float]], pc: float, pm: float,
+                 synchronous: bool = False):
         self.p = problem
+        self.synchronous = synchronous
         self.enc = problem.enc
         self.blocked = problem.map.blocked.tolist()
         self.w, self.h = problem.map.width, problem.map.height
@@ -87,13 +91,17 @@ class PurePythonCGA:
         return f
 
     def generation(self) -> None:
-        for c in range(len(self.pop)):
+        # the synchronous policy reads the old population and writes a new one
+        pop, cost = self.pop, self.cost
+        if self.synchronous:
+            self.pop, self.cost = list(pop), list(cost)
+        for c in range(len(pop)):
             nb = self.nbr[c][1:]
-            costs = [self.cost[j] for j in nb]
+            costs = [cost[j] for j in nb]
             hi, lo = max(costs), min(costs)
             wts = [hi - v + (1e-3 * (hi - lo) if hi > lo else 1.0) for v in costs]
-            mate = self.pop[random.choices(nb, weights=wts)[0]]
-            child = list(self.pop[c])
+            mate = pop[random.choices(nb, weights=wts)[0]]
+            child = list(pop[c])
             if random.random() < self.pc:
                 cut = random.randrange(1, len(child))
                 child = (child[:cut] + mate[cut:]) if random.random() < 0.5 else \
@@ -111,7 +119,7 @@ class PurePythonCGA:
                             child[g] = y
                             break
             f = self.fitness(child)
-            if f < self.cost[c]:
+            if f < cost[c]:
                 self.pop[c], self.cost[c] = child, f
 
 
@@ -135,20 +143,20 @@ def main() -> None:
               f"{statistics.median(w for w, _ in t):.2f} s wall "
               f"({statistics.median(c for _, c in t):.2f} s CPU) per run over {a.runs} runs")
     gens = 20
-    cfg = CGAConfig(pop_size=400, update="line_sweep", crossover_rate=0.9, mutation_rate=0.2)
-    r, w1, c1 = _timed(lambda: evolve(p, cfg, 0, gens))
-    _, w0, c0 = _timed(lambda: evolve(p, cfg, 0, 0))  # initialisation and the end only
-    vec, vec_cpu = gens / (w1 - w0), gens / (c1 - c0)
-    random.seed(0)
     pop0 = p.operators.initial_population(400, np.random.default_rng(0))
-    py = PurePythonCGA(p, pop0.tolist(), 0.9, 0.2)
-    _, pw, pc = _timed(lambda: [py.generation() for _ in range(a.py_generations)])
-    pyrate, pyrate_cpu = a.py_generations / pw, a.py_generations / pc
-    print(f"cGA line sweep, pop 400: vectorised {vec:.2f} gen/s, pure Python "
-          f"{pyrate:.3f} gen/s -> {vec / pyrate:.1f}x wall; CPU time: {vec_cpu:.2f} vs "
-          f"{pyrate_cpu:.3f} gen/s -> {vec_cpu / pyrate_cpu:.1f}x (best {r.length:.4f} vs "
-          f"{min(py.cost):.4f})")
-
+    for update in ("line_sweep", "synchronous"):
+        cfg = CGAConfig(pop_size=400, update=update, crossover_rate=0.9, mutation_rate=0.2)
+        r, w1, c1 = _timed(lambda cfg=cfg: evolve(p, cfg, 0, gens))
+        _, w0, c0 = _timed(lambda cfg=cfg: evolve(p, cfg, 0, 0))  # initialisation, end only
+        vec, vec_cpu = gens / (w1 - w0), gens / (c1 - c0)
+        random.seed(0)
+        py = PurePythonCGA(p, pop0.tolist(), 0.9, 0.2, synchronous=update == "synchronous")
+        _, pw, pc = _timed(lambda py=py: [py.generation() for _ in range(a.py_generations)])
+        pyrate, pyrate_cpu = a.py_generations / pw, a.py_generations / pc
+        print(f"cGA {update}, pop 400: vectorised {vec:.2f} gen/s, pure Python "
+              f"{pyrate:.3f} gen/s -> {vec / pyrate:.1f}x wall; CPU time: {vec_cpu:.2f} vs "
+              f"{pyrate_cpu:.3f} gen/s -> {vec_cpu / pyrate_cpu:.1f}x (best {r.length:.4f} vs "
+              f"{min(py.cost):.4f})")
 
 if __name__ == "__main__":
     main()
