@@ -24,6 +24,8 @@ def cli(*args, cwd=None):
     (["run", "functions", "--set", "algorithm.crossover=blx"], "unknown crossover 'blx'"),
     (["run", "functions", "--set", "run.bogus=1"], "unknown key 'run.bogus'"),
     (["resume", "/nonexistent/run"], "not a run folder"),
+    (["run", "functions", "--evaluator", "mpi"], "unknown evaluator 'mpi'; available: "),
+    (["run", "grid-path", "--evaluator", "mpi"], "unknown evaluator 'mpi'"),
 ])
 def test_bad_input_is_one_line_error(tmp_path, args, msg):
     r = cli(*args, cwd=tmp_path)

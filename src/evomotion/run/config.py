@@ -50,6 +50,9 @@ class RunSection:
             raise InputError(f"run.chunks_per_worker must be >= 1, got {self.chunks_per_worker}")
         if self.wall_seconds < 0:
             raise InputError(f"run.wall_seconds must be >= 0, got {self.wall_seconds}")
+        from evomotion.run.evaluators import EVALUATORS
+
+        lookup(EVALUATORS, "evaluator", self.evaluator)
 
 
 @dataclass(frozen=True)
