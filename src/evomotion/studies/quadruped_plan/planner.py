@@ -19,7 +19,12 @@ from evomotion.studies.quadruped_plan.evaluation import (
 )
 from evomotion.studies.quadruped_plan.heuristic import GAINS, plan_length_heuristic
 from evomotion.studies.quadruped_plan.model import QuadrupedModel
-from evomotion.studies.quadruped_plan.rules import ExclusionZone, WalkProblem
+from evomotion.studies.quadruped_plan.rules import (
+    ANGLE_GRID,
+    POS_GRID,
+    ExclusionZone,
+    WalkProblem,
+)
 from evomotion.studies.quadruped_plan.walk_search import walk_astar, walk_best_first
 
 METHODS = ("best-first", "astar", "weighted-astar")
@@ -32,6 +37,7 @@ class QuadrupedPlanConfig:
     ``k1``/``k2``/``k3`` < 0 mean the seed's constants for ``function`` and ``rule_set``.
     ``zone_radius`` > 0 adds an exclusion zone (body centre and feet stay out of it).
     ``sense``: walking direction, -1 = body -Y (default, see docs), +1 = +Y, 0 = either.
+    ``pos_grid`` [units] / ``angle_grid`` [rad]: the duplicate-detection grids (docs).
     """
 
     start_x: float = 0.0
@@ -48,6 +54,8 @@ class QuadrupedPlanConfig:
     k3: float = -1.0
     weight: float = 3.0
     heuristic_gain: str = "analytic"
+    pos_grid: float = POS_GRID
+    angle_grid: float = ANGLE_GRID
     max_expansions: int = 200_000
     max_seconds: float = 60.0
     sense: int = -1
@@ -80,6 +88,8 @@ def validate(cfg: QuadrupedPlanConfig) -> None:
     if cfg.heuristic_gain not in GAINS:
         raise InputError(f"problem.heuristic_gain: expected one of {', '.join(GAINS)}, "
                          f"got {cfg.heuristic_gain!r}")
+    if cfg.pos_grid <= 0 or cfg.angle_grid <= 0:
+        raise InputError("problem.pos_grid and problem.angle_grid: expected > 0")
     if cfg.goal_tolerance <= 0:
         raise InputError("problem.goal_tolerance: expected > 0")
 
@@ -113,7 +123,7 @@ def make_problem(cfg: QuadrupedPlanConfig) -> WalkProblem:
         raise InputError("problem.zone_*: the start lies inside the exclusion zone")
     start = model.nominal_state(cfg.start_x, cfg.start_y, cfg.start_phi)
     return WalkProblem(model, start, (cfg.goal_x, cfg.goal_y), cfg.rule_set,
-                       cfg.goal_tolerance, cfg.sense, zone)
+                       cfg.goal_tolerance, cfg.sense, zone, cfg.pos_grid, cfg.angle_grid)
 
 
 def unreachable_reason(cfg: QuadrupedPlanConfig) -> str | None:

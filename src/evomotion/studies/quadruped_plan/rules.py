@@ -33,8 +33,8 @@ from evomotion.studies.quadruped_plan.model import (
 
 RULE_SETS = {"A": 11, "B": 27}
 MIN_MOVE = 1e-4  # a body move shorter than this [units or rad] is not applicable
-POS_GRID = 0.01  # duplicate-detection grid for positions [units]
-ANGLE_GRID = 0.001  # duplicate-detection grid for the body angle [rad]
+POS_GRID = 0.01  # default duplicate-detection grid for positions [units]
+ANGLE_GRID = 0.001  # default duplicate-detection grid for the body angle [rad]
 # The key packs the 11 grid indices into one int, field i = index i + 2**(KEY_BITS - 1)
 # (injective while every |index| < 2**(KEY_BITS - 1), i.e. |coordinate| < 5e9 units): it
 # hashes and compares faster than a tuple, and a leg move changes it by one addition.
@@ -95,7 +95,8 @@ class WalkProblem:
 
     def __init__(self, model: QuadrupedModel, start: tuple[float, ...],
                  goal: tuple[float, float], rule_set: str = "A", goal_tolerance: float = 0.25,
-                 sense: int = -1, zone: ExclusionZone | None = None) -> None:
+                 sense: int = -1, zone: ExclusionZone | None = None,
+                 pos_grid: float = POS_GRID, angle_grid: float = ANGLE_GRID) -> None:
         if rule_set not in RULE_SETS:
             raise ValueError(f"unknown rule set {rule_set!r}; available: A, B")
         self.model, self.goal, self.rule_set = model, goal, rule_set
@@ -103,6 +104,10 @@ class WalkProblem:
         if sense not in (-1, 0, 1):
             raise ValueError(f"walking sense must be -1, 0 or +1, got {sense}")
         self.goal_tolerance, self.sense, self.zone = goal_tolerance, sense, zone
+        if not (pos_grid > 0 and angle_grid > 0):
+            raise ValueError("duplicate grids must be > 0")
+        self.pos_grid, self.angle_grid = pos_grid, angle_grid
+        self._q = 1.0 / pos_grid
         self._start = self._with_key(tuple(float(v) for v in start))
         mid = 0.5 * (model.l_min + model.l_max)
         self._hips = model.hips
@@ -119,11 +124,10 @@ class WalkProblem:
         self.parts = (0, 1, 2) if self.n_rules == 27 else (0, 1)
         self._options: list[dict] = [{}, {}, {}, {}]  # per leg: foot position -> moves
 
-    @staticmethod
-    def _with_key(v: tuple[float, ...]) -> tuple:
+    def _with_key(self, v: tuple[float, ...]) -> tuple:
         """The state tuple: the 11 floats followed by the duplicate key (see :meth:`key`)."""
-        q = 1.0 / POS_GRID
-        key = round((v[2] % TWO_PI) / ANGLE_GRID) * KEY_WEIGHT[2] + KEY_OFFSET
+        q = self._q
+        key = round((v[2] % TWO_PI) / self.angle_grid) * KEY_WEIGHT[2] + KEY_OFFSET
         for i in (0, 1, 3, 4, 5, 6, 7, 8, 9, 10):
             key += round(v[i] * q) * KEY_WEIGHT[i]
         return (*v[:11], key)
@@ -135,8 +139,9 @@ class WalkProblem:
         return math.hypot(self.goal[0] - s[0], self.goal[1] - s[1]) <= self.goal_tolerance
 
     def key(self, s: tuple) -> Hashable:
-        """Duplicates: body x, y and feet (body frame) on a POS_GRID grid, phi (mod 2 pi) on an
-        ANGLE_GRID grid; the 11 grid indices packed into one int (``KEY_BITS`` each)."""
+        """Duplicates: body x, y and feet (body frame) on a ``pos_grid`` grid, phi (mod 2 pi)
+        on an ``angle_grid`` grid (defaults POS_GRID, ANGLE_GRID); the 11 grid indices packed
+        into one int (``KEY_BITS`` each)."""
         return s[11]
 
     def successors(self, s: tuple) -> list[tuple[int, tuple, float]]:
@@ -223,7 +228,7 @@ class WalkProblem:
         got = cache.get((px, py))
         if got is not None:
             return got
-        q = 1.0 / POS_GRID
+        q = self._q
         j = 3 + 2 * leg
         wx, wy = KEY_WEIGHT[j], KEY_WEIGHT[j + 1]
         own = round(px * q) * wx + round(py * q) * wy

@@ -14,6 +14,7 @@ from typing import Annotated, Any
 
 import typer
 
+from evomotion.errors import InputError
 from evomotion.studies.base import Study
 from evomotion.studies.quadruped_plan.checker import PlanViolationError, check_plan
 from evomotion.studies.quadruped_plan.experiment import format_table, seed_table
@@ -26,6 +27,7 @@ from evomotion.studies.quadruped_plan.planner import (
     unreachable_reason,
     validate,
 )
+from evomotion.studies.quadruped_plan.rules import ANGLE_GRID, POS_GRID
 
 NO_PLAN = 1
 
@@ -101,10 +103,17 @@ def study_cmd(
     astar: Annotated[bool, typer.Option(help="Add A* and weighted-A* rows")] = False,
     astar_seconds: Annotated[float, typer.Option(help="Time budget per A* row [s]")] = 5.0,
     max_expansions: Annotated[int, typer.Option(help="Expansion budget per row")] = 200_000,
+    astar_pos_grid: Annotated[float, typer.Option(
+        help="Duplicate grid for positions in the A* rows [units]")] = POS_GRID,
+    astar_angle_grid: Annotated[float, typer.Option(
+        help="Duplicate grid for the body angle in the A* rows [rad]")] = ANGLE_GRID,
 ) -> None:
     """Print the seed's 12-configuration table next to the seed's figures."""
+    if astar_pos_grid <= 0 or astar_angle_grid <= 0:
+        raise InputError("--astar-pos-grid and --astar-angle-grid: expected > 0")
     base = QuadrupedPlanConfig(max_expansions=max_expansions)
-    rows = seed_table(base, astar_rows=astar, astar_seconds=astar_seconds)
+    rows = seed_table(base, astar_rows=astar, astar_seconds=astar_seconds,
+                      astar_grid=(astar_pos_grid, astar_angle_grid))
     typer.echo(format_table(rows))
     if any(r.stop_reason == "found" and r.check != "ok" for r in rows):
         raise typer.Exit(1)
