@@ -195,12 +195,13 @@ def test_roulette_rows_fast_path_matches_reference(seed, k):
                           _roulette_reference(cost, np.random.default_rng(seed)))
 
 
+@pytest.mark.parametrize("fast", [True, False])
 @pytest.mark.parametrize("update", ["line_sweep", "new_random_sweep", "uniform_choice"])
-def test_fused_one_point_and_mid_generation_restore_are_exact(update):
+def test_mid_generation_restore_is_exact(update, fast):
     cfg = CGAConfig(pop_size=36, update=update, crossover_rate=0.7, mutation_rate=0.3)
     g = GenomeSpec.box(5, -5.0, 5.0)
 
-    def run(fast: bool, restore_at: int = -1):
+    def run(restore_at: int = -1):
         opt = CellularGA(g, cfg)
         opt._fast_one_point = fast
         rng = np.random.default_rng(11)
@@ -211,11 +212,81 @@ def test_fused_one_point_and_mid_generation_restore_are_exact(update):
                 state = state_from_arrays(CGAState, {k: v.copy() for k, v in arrays.items()},
                                           meta)
                 opt = CellularGA(g, cfg)
+                opt._fast_one_point = fast
             x, state = opt.ask(state, rng)
             state = opt.tell(state, x, (x ** 2).sum(1), rng)
         return state.pop, state.cost, state.wave, state.generation
 
-    ref = run(False)
+    ref = run()
     assert ref[3] >= 2  # several generations, mid-generation end
-    for got in (run(True), run(True, restore_at=17)):
-        assert all(np.array_equal(a, b) for a, b in zip(got, ref, strict=True))
+    got = run(restore_at=17)
+    assert all(np.array_equal(a, b) for a, b in zip(got, ref, strict=True))
+
+
+def _mate_reference(ncost: list[float], u: float, how: str, u2: float) -> int:
+    """Mate column in plain Python: the documented roulette weights, or a 2-tournament."""
+    k = len(ncost)
+    if how == "tournament":
+        a, b = int(u * k), int(u2 * k)
+        return a if ncost[a] <= ncost[b] else b
+    hi, lo = max(ncost), min(ncost)
+    cdf, acc = [], 0.0
+    for c in ncost:
+        acc += hi - c + (1e-3 * (hi - lo) if hi > lo else 1.0)
+        cdf.append(acc)
+    return min(sum(v <= u * cdf[-1] for v in cdf), k - 1)
+
+
+def _sequential_generation(opt, pop, cost, state, fn, mutate):
+    """One generation updated one cell at a time in sequence order, from ``pop``/``cost``,
+    using the uniforms the vectorised optimizer drew (column = position in wave order)."""
+    cfg, d = opt.cfg, pop.shape[1]
+    pop, cost = [list(r) for r in pop.tolist()], cost.tolist()
+    order = np.argsort(state.waves, kind="stable")
+    col = np.empty_like(order)
+    col[order] = np.arange(len(order))
+    table = opt.table(state.generation).tolist()
+    u = state.draws.tolist()
+    for p, c in enumerate(state.sequence.tolist()):
+        k = int(col[p])
+        nbr = table[c][1:]
+        mate = pop[nbr[_mate_reference([cost[j] for j in nbr], u[0][k], cfg.mate_selection,
+                                       u[1][k])]]
+        child = list(pop[c])
+        if u[4][k] < cfg.crossover_rate:
+            cut = 1 + int(u[2][k] * (d - 1))
+            child = child[:cut] + mate[cut:] if u[3][k] < 0.5 else mate[:cut] + child[cut:]
+        x = mutate(np.array([child]), None, cfg.mutation_rate)
+        f = float(fn(x)[0])
+        if f < cost[c]:
+            pop[c], cost[c] = x[0].tolist(), f
+    return np.array(pop), np.array(cost)
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.sampled_from(UPDATE_POLICIES[1:]), st.sampled_from(NEIGHBOURHOODS),
+       st.sampled_from(["roulette", "tournament"]), st.integers(0, 2**31))
+def test_waves_equal_one_cell_at_a_time_updating(update, name, mate, seed):
+    """The vectorised waves give exactly the sequential (asynchronous) update."""
+    def mutate(x, rng, rate):  # deterministic, so the reference can repeat it per cell
+        return np.clip(0.9 * x + 0.05, -5.0, 5.0)
+
+    def fn(x):
+        return ((x - 0.3) ** 2).sum(1)
+
+    cfg = CGAConfig(pop_size=36, update=update, neighbourhood=name, mate_selection=mate,
+                    crossover_rate=0.8, mutation_rate=0.5)
+    opt = CellularGA(GenomeSpec.box(4, -5.0, 5.0), cfg, mutate=mutate)
+    rng = np.random.default_rng(seed)
+    state = opt.init(rng)
+    x, state = opt.ask(state, rng)
+    state = opt.tell(state, x, fn(x), rng)
+    for _ in range(2):
+        pop0, cost0, first = state.pop.copy(), state.cost.copy(), True
+        while first or not opt.end_of_generation(state):
+            x, state = opt.ask(state, rng)
+            if first:
+                ref = _sequential_generation(opt, pop0, cost0, state, fn, mutate)
+                first = False
+            state = opt.tell(state, x, fn(x), rng)
+        assert np.array_equal(state.pop, ref[0]) and np.array_equal(state.cost, ref[1])

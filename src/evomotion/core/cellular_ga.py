@@ -19,6 +19,14 @@ sequence in its (symmetric) neighbourhood. Cells in one wave never read each oth
 every cell sees all earlier updates it would see sequentially, so a wave-by-wave update is
 the sequential update. One ``ask``/``tell`` pair handles one wave; ``state.generation``
 counts completed sweeps (``synchronous`` has one wave per generation).
+
+Random numbers: at the start of each generation, after the update sequence is drawn, one
+call draws ``draws[5, L]`` uniforms for the ``L`` updates of the sweep, in wave order (the
+order of :meth:`CellularGA._wave_plan`): row 0 the mate pick (roulette, or tournament
+entrant 1), row 1 tournament entrant 2, row 2 the one-point cut, row 3 which child is kept,
+row 4 the crossover test. Update ``k`` of the sweep uses column ``k`` whichever wave it falls
+in, so a one-cell-at-a-time sweep consuming the same columns gives the same result. Only
+the mutation (and a registry crossover other than one-point) draws per wave.
 """
 
 from __future__ import annotations
@@ -91,6 +99,8 @@ class CGAState:
     generation: int = 0
     wave: int = 0
     evaluated: bool = False
+    #: this generation's uniforms, ``[5, len(sequence)]`` in wave order (see module doc)
+    draws: np.ndarray = field(default_factory=lambda: np.empty((5, 0)))
 
 
 def update_waves(sequence: np.ndarray, table: np.ndarray) -> np.ndarray:
@@ -104,20 +114,23 @@ def update_waves(sequence: np.ndarray, table: np.ndarray) -> np.ndarray:
     return waves
 
 
-def roulette_rows(cost: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+def roulette_rows(cost: np.ndarray, rng: np.random.Generator | None,
+                  u: np.ndarray | None = None) -> np.ndarray:
     """Column index per row by fitness-proportional selection on minimised ``cost[n, k]``.
 
     Weights per row are ``worst - cost + 1e-3 * spread`` (uniform when the row is flat);
-    ``inf`` costs get weight 0 unless the whole row is ``inf``.
+    ``inf`` costs get weight 0 unless the whole row is ``inf``. ``u[n, 1]``: uniforms in
+    [0, 1) to use instead of drawing them from ``rng``.
     """
+    if u is None:
+        u = rng.random((cost.shape[0], 1))
     finite = np.isfinite(cost)
     if finite.all():  # the same weights without the inf handling
         hi, lo = cost.max(1, keepdims=True), cost.min(1, keepdims=True)
         spread = hi - lo
         w = hi - cost + np.where(spread > 0, 1e-3 * spread, 1.0)
         cdf = np.cumsum(w, axis=1)
-        u = rng.random((cost.shape[0], 1)) * cdf[:, -1:]
-        return np.minimum((cdf <= u).sum(1), cost.shape[1] - 1)
+        return np.minimum((cdf <= u * cdf[:, -1:]).sum(1), cost.shape[1] - 1)
     any_f = finite.any(1, keepdims=True)
     c = np.where(finite, cost, 0.0)
     hi = np.where(any_f, np.where(finite, cost, -np.inf).max(1, keepdims=True), 0.0)
@@ -126,8 +139,17 @@ def roulette_rows(cost: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     w = np.where(finite, hi - c + np.where(spread > 0, 1e-3 * spread, 1.0), 0.0)
     w[~any_f[:, 0]] = 1.0
     cdf = np.cumsum(w, axis=1)
-    u = rng.random((cost.shape[0], 1)) * cdf[:, -1:]
-    return np.minimum((cdf <= u).sum(1), cost.shape[1] - 1)
+    return np.minimum((cdf <= u * cdf[:, -1:]).sum(1), cost.shape[1] - 1)
+
+
+def one_point_masks(draws: np.ndarray, dim: int, crossover_rate: float) -> np.ndarray:
+    """``take_mate[L, dim]``: where the kept child of the fused one-point crossover takes
+    the mate's gene, from ``draws`` rows 2-4 (cut in 1..dim-1, child, crossover test):
+    child 0 takes the mate's tail, child 1 its head; no crossover keeps the cell."""
+    cut = 1 + (draws[2] * (dim - 1)).astype(np.int64)
+    keep_head = draws[3] >= 0.5  # child 1
+    cross = draws[4] < crossover_rate
+    return ((np.arange(dim) >= cut[:, None]) != keep_head[:, None]) & cross[:, None]
 
 
 class CellularGA(Optimizer):
@@ -148,6 +170,7 @@ class CellularGA(Optimizer):
         self._plan: list[tuple[np.ndarray, ...]] = []  # (cells, neighbours, rows) per wave
         self._plan_of: CGAState | None = None  # the state whose schedule ``_plan`` holds
         self._fast_one_point = self._xo is one_point and not cfg.crossover_params
+        self._masks: tuple[np.ndarray, np.ndarray] | None = None  # (draws, one_point_masks)
 
     def table(self, generation: int) -> np.ndarray:
         key = generation % 2 if self.cfg.neighbourhood == "Margolus" else 0
@@ -183,9 +206,10 @@ class CellularGA(Optimizer):
             waves = update_waves(seq, table)
         state.sequence, state.waves = np.asarray(seq), waves
 
-    def _wave_plan(self, state: CGAState) -> list[tuple[np.ndarray, ...]]:
-        """``(cells, neighbours, arange(len(cells)))`` of every wave of the current schedule,
-        split once per schedule (kept across generations for the line and fixed sweeps)."""
+    def _wave_plan(self, state: CGAState) -> list[tuple[Any, ...]]:
+        """``(cells, neighbours, arange(len(cells)), slice of the sweep)`` of every wave of
+        the current schedule, split once per schedule (kept across generations for the line
+        and fixed sweeps)."""
         if self._plan_of is state:
             return self._plan
         fixed = self.cfg.update in ("line_sweep", "fixed_random_sweep", "synchronous")
@@ -194,8 +218,10 @@ class CellularGA(Optimizer):
             order = np.argsort(state.waves, kind="stable")  # sequence order within a wave
             ends = np.cumsum(np.bincount(state.waves))[:-1]
             table = self.table(state.generation)
-            plan = [(c, table[c, 1:], np.arange(len(c)))
-                    for c in np.split(state.sequence[order], ends)]
+            bounds = np.r_[0, ends, len(order)].tolist()
+            plan = [(c, table[c, 1:], np.arange(len(c)), slice(lo, hi))
+                    for c, lo, hi in zip(np.split(state.sequence[order], ends), bounds[:-1],
+                                         bounds[1:], strict=True)]
             if not fixed:
                 self._plan, self._plan_of = plan, state
                 return plan
@@ -209,32 +235,31 @@ class CellularGA(Optimizer):
         if state.wave == 0:
             self._schedule(state, rng)
             self._plan_of = None
+            state.draws = rng.random((5, len(state.sequence)))
         c, g = self.cfg, self.genome
-        cells, nbr, rows = self._wave_plan(state)[state.wave]
+        cells, nbr, rows, part = self._wave_plan(state)[state.wave]
+        u = state.draws[:, part]
         ncost = state.cost[nbr]
         if c.mate_selection == "roulette":
-            j = roulette_rows(ncost, rng)
+            j = roulette_rows(ncost, None, u[0, :, None])
         elif c.mate_selection == "tournament":
-            a, b = rng.integers(0, nbr.shape[1], (2, len(cells)))
+            a, b = (u[:2] * nbr.shape[1]).astype(np.int64)
             j = np.where(ncost[rows, a] <= ncost[rows, b], a, b)
         else:
             j = np.argmin(ncost, axis=1)
         mates = nbr[rows, j]
         a, b = state.pop[cells], state.pop[mates]
         if self._fast_one_point and g.dim >= 2:
-            # one_point fused with the pick of a child and the crossover test: the same
-            # draws in the same order; child 0 takes b on the tail, child 1 off the tail
-            cut = rng.integers(1, g.dim, size=(len(cells), 1))
-            pick = rng.integers(0, 2, len(cells))
-            cross = rng.random(len(cells)) < c.crossover_rate
-            take_b = (np.arange(g.dim) >= cut) != (pick == 1)[:, None]
-            child = np.where(take_b & cross[:, None], b, a)
+            # one_point fused with the pick of a child and the crossover test; the masks of
+            # the whole sweep are built once per generation
+            if self._masks is None or self._masks[0] is not state.draws:
+                self._masks = (state.draws, one_point_masks(state.draws, g.dim,
+                                                            c.crossover_rate))
+            child = np.where(self._masks[1][part], b, a)
         else:
             kids = self._xo(a, b, rng, **c.crossover_params)
-            pick = rng.integers(0, 2, len(cells))
-            child = np.where(pick[:, None] == 0, kids[0], kids[1])
-            cross = rng.random(len(cells)) < c.crossover_rate
-            child = np.where(cross[:, None], child, a)
+            child = np.where(u[3, :, None] < 0.5, kids[0], kids[1])
+            child = np.where(u[4, :, None] < c.crossover_rate, child, a)
         if self._mutate is not None:
             child = self._mutate(child, rng, c.mutation_rate)
         else:

@@ -10,7 +10,9 @@ Zhang et al. (2014, sec. 3.1 and 3.2.3):
   replace it by a free position on its perpendicular, and repeat while the path is invalid
   (bounded by ``retries``; on failure the point is left as it was).
 
-Everything is vectorised over the individuals; the loops run over genes and retries.
+Everything is vectorised over the individuals; the loops run over genes and retries. The
+initialisation draws the re-draws in batches of 2, 4, 8, ... (most succeed at once); the
+mutation, called on a few rows per cGA wave, draws all ``retries`` at once.
 """
 
 from __future__ import annotations
@@ -136,45 +138,36 @@ class PathOperators:
 
     def _draw(self, genes: np.ndarray, rng: np.random.Generator) -> tuple[np.ndarray, ...]:
         """:meth:`draw` and the stretch index ``j`` of each draw."""
-        j = (rng.random(genes.size) * self.count[genes]).astype(int)
+        u = rng.random((2, genes.size))
+        j = (u[0] * self.count[genes]).astype(int)
         lo, hi = self.lo[genes, j], self.hi[genes, j]
-        return lo + (hi - lo) * rng.uniform(0.05, 0.95, genes.size), j
+        return lo + (hi - lo) * (0.05 + 0.9 * u[1]), j
 
     def _first_valid_cells(self, genes: np.ndarray, ia: np.ndarray, ib: np.ndarray,
                            rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
-        """:meth:`_first_valid` (with a right end) by table lookups only: ``ia``/``ib`` are the
-        table positions of the end points, the drawn cell comes from :attr:`piece_cell`.
-        The same draws in the same order, so the same result."""
-        t, cell = self.tables, self.piece_cell
-        n = genes.size
-        y_out = np.zeros(n)
-        found = np.zeros(n, dtype=bool)
-        todo = np.arange(n)
-        into = t.offset[genes] + ia * t.sizes[genes + 1]  # + drawn position: segment in
-        out_base, out_mul = t.offset[genes + 1] + ib, t.sizes[genes + 2]  # segment out
-        for R in _stages(self.retries):
-            if todo.size == 0:
-                break
-            gr = genes[todo].repeat(R)
-            y, j = self._draw(gr, rng)
-            ip = cell[gr, j]
-            ok = t.valid[into[todo].repeat(R) + ip]
-            ok &= t.valid[out_base[todo].repeat(R) + ip * out_mul[todo].repeat(R)]
-            ok = ok.reshape(todo.size, R)
-            hit = ok.any(1)
-            pick = np.where(hit, ok.argmax(1), R - 1)
-            y_out[todo] = y.reshape(todo.size, R)[np.arange(todo.size), pick]
-            found[todo[hit]] = True
-            todo = todo[~hit]
-        return y_out, found
+        """:meth:`_first_valid` (with a right end, all ``retries`` drawn at once) by table
+        lookups only: ``ia``/``ib`` are the table positions of the end points, the drawn
+        cell comes from :attr:`piece_cell`. The same draws, so the same result where a
+        valid position is found (elsewhere the returned ``y`` is not used)."""
+        t, R, n = self.tables, self.retries, genes.size
+        gr = genes.repeat(R)
+        y, j = self._draw(gr, rng)
+        ip = self.piece_cell[gr, j]
+        into = (t.offset[genes] + ia * t.sizes[genes + 1]).repeat(R)  # segment in
+        out = t.offset[genes + 1] + ib  # segment out: + drawn position * next layer's size
+        ok = t.valid[into + ip] & t.valid[out.repeat(R) + ip * t.sizes[gr + 2]]
+        ok = ok.reshape(n, R)
+        return y.reshape(n, R)[np.arange(n), ok.argmax(1)], ok.any(1)
 
     def _point(self, genes: np.ndarray, y: np.ndarray) -> np.ndarray:
         return self.enc.snap(self.enc.foot_points()[genes] + y[:, None] * self.enc.normal)
 
     def _first_valid(self, genes: np.ndarray, left: np.ndarray, right: np.ndarray | None,
-                     rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+                     rng: np.random.Generator,
+                     stages: list[int] | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Up to ``retries`` free positions on perpendicular ``genes[k]``; the first whose
-        segments from ``left[k]`` (and to ``right[k]``) are valid, and whether one was.
+        segments from ``left[k]`` (and to ``right[k]``) are valid, and whether one was;
+        drawn in batches of ``stages`` (default 2, 4, 8, ... adding up to ``retries``).
 
         All re-draws are made at once; taking the first valid one is the same as drawing
         until one is valid (on failure the last draw is returned with ``ok = False``).
@@ -187,7 +180,7 @@ class PathOperators:
         # table positions of the fixed end points, found once (None: use _seg_ok)
         ia = self._layer_index(genes, left)
         ib = None if right is None else self._layer_index(genes + 2, right)
-        for R in _stages(self.retries):  # small batches first: most succeed at once
+        for R in stages or _stages(self.retries):
             if todo.size == 0:
                 break
             gr = np.repeat(genes[todo], R)
@@ -234,9 +227,13 @@ class PathOperators:
     def mutate(self, x: np.ndarray, rng: np.random.Generator, rate: float) -> np.ndarray:
         """Seed mutation on each row with probability ``rate`` (see module doc)."""
         n, d = x.shape
-        rows = np.flatnonzero(rng.random(n) < rate)
-        point = rng.integers(0, d + 1, rows.size)  # 0 is the start point: no change
+        u = rng.random(n)  # u < rate picks the row; u / rate (uniform) picks the point
+        rows = np.flatnonzero(u < rate)
         x = np.array(x, dtype=float)
+        if rows.size == 0:
+            return x
+        # point 0 is the start point: no change
+        point = np.minimum((u[rows] * ((d + 1) / rate)).astype(np.int64), d)
         rows, genes = rows[point > 0], point[point > 0] - 1
         if rows.size == 0:
             return x
@@ -248,6 +245,7 @@ class PathOperators:
             y, ok = self._first_valid_cells(genes, full[k, genes], full[k, genes + 2], rng)
         else:
             poly = self.enc.decode(x[rows])
-            y, ok = self._first_valid(genes, poly[k, genes], poly[k, genes + 2], rng)
+            y, ok = self._first_valid(genes, poly[k, genes], poly[k, genes + 2], rng,
+                                      [self.retries])
         x[rows[ok], genes[ok]] = y[ok]
         return x
