@@ -271,19 +271,23 @@ class CellularGA(Optimizer):
     def _tell(self, state: CGAState, genomes, cost, rng):
         if not state.evaluated:
             state.pop, state.cost, state.evaluated = genomes.copy(), cost.copy(), True
-        else:
-            cells, old = state.cells, state.cost[state.cells]
-            rep = self.cfg.replacement
-            better = (cost < old if rep == "if_better" else cost <= old if rep == "if_not_worse"
-                      else np.ones(len(cells), bool))
-            state.pop[cells[better]] = genomes[better]
-            state.cost[cells[better]] = cost[better]
-            state.wave += 1
-            if state.wave >= len(self._wave_plan(state)):
-                state.wave, state.generation = 0, state.generation + 1
-        i = int(np.argmin(state.cost))
-        if state.cost[i] < state.best_cost:
-            state.best_cost, state.best_x = float(state.cost[i]), state.pop[i].copy()
+            i = int(np.argmin(state.cost))
+            if state.cost[i] < state.best_cost:
+                state.best_cost, state.best_x = float(state.cost[i]), state.pop[i].copy()
+            return state
+        cells, old = state.cells, state.cost[state.cells]
+        rep = self.cfg.replacement
+        better = (cost < old if rep == "if_better" else cost <= old if rep == "if_not_worse"
+                  else np.ones(len(cells), bool))
+        if better.any():
+            won, x, f = cells[better], genomes[better], cost[better]
+            state.pop[won], state.cost[won] = x, f
+            i = int(np.argmin(f))  # only new entries can beat the best seen so far
+            if f[i] < state.best_cost:
+                state.best_cost, state.best_x = float(f[i]), x[i].copy()
+        state.wave += 1
+        if state.wave >= len(self._wave_plan(state)):
+            state.wave, state.generation = 0, state.generation + 1
         return state
 
     def best(self, state: CGAState):
