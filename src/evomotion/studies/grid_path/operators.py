@@ -85,6 +85,9 @@ class PathOperators:
     def __post_init__(self) -> None:
         self.lo, self.hi, self.count = free_pieces(self.enc, self.blocked)
         self.piece_cell = self._piece_cells()
+        t = self.tables  # per gene g: table offset and layer size of the segments in and out
+        self._gene_pairs = None if t is None else (
+            t.offset[:-1], t.sizes[1:-1], t.offset[1:], t.sizes[2:])
 
     def _piece_cells(self) -> np.ndarray | None:
         """Table position ``[g, j]`` of the cell of free stretch ``j`` of perpendicular ``g``,
@@ -153,9 +156,10 @@ class PathOperators:
         gr = genes.repeat(R)
         y, j = self._draw(gr, rng)
         ip = self.piece_cell[gr, j]
-        into = (t.offset[genes] + ia * t.sizes[genes + 1]).repeat(R)  # segment in
-        out = t.offset[genes + 1] + ib  # segment out: + drawn position * next layer's size
-        ok = t.valid[into + ip] & t.valid[out.repeat(R) + ip * t.sizes[gr + 2]]
+        in_off, in_mul, out_off, out_mul = self._gene_pairs
+        into = (in_off[genes] + ia * in_mul[genes]).repeat(R)  # segment in: + drawn position
+        out = (out_off[genes] + ib).repeat(R)  # segment out: + drawn position * out_mul
+        ok = t.valid[into + ip] & t.valid[out + ip * out_mul[gr]]
         ok = ok.reshape(n, R)
         return y.reshape(n, R)[np.arange(n), ok.argmax(1)], ok.any(1)
 
@@ -234,7 +238,8 @@ class PathOperators:
             return x
         # point 0 is the start point: no change
         point = np.minimum((u[rows] * ((d + 1) / rate)).astype(np.int64), d)
-        rows, genes = rows[point > 0], point[point > 0] - 1
+        moved = point > 0
+        rows, genes = rows[moved], point[moved] - 1
         if rows.size == 0:
             return x
         k = np.arange(rows.size)
