@@ -59,11 +59,15 @@ def run_plan(problem_cfg: QuadrupedPlanConfig, out_dir: str | Path, quiet: bool 
     say(f"quadruped-plan {cfg.method} rule set {cfg.rule_set}"
         + (f" function ({cfg.function}) k={constants(cfg)}" if cfg.method == "best-first"
            else "") + f": {res.message}")
+    if cfg.method != "best-first" and (cfg.pos_grid, cfg.angle_grid) != (POS_GRID, ANGLE_GRID):
+        say(f"note: least cost and bound hold for the duplicate grid ({cfg.pos_grid:g} units, "
+            f"{cfg.angle_grid:g} rad) only; a finer grid can have shorter plans")
     if res.found:
         search = {"method": cfg.method, "function": cfg.function, "k": list(constants(cfg)),
                   "weight": cfg.weight, "stop_reason": res.stop_reason,
                   "expansions": res.expansions, "generated": res.generated,
-                  "reopened": res.reopened, "seconds": res.seconds, "cost": res.cost}
+                  "reopened": res.reopened, "seconds": res.seconds, "cost": res.cost,
+                  "pos_grid": cfg.pos_grid, "angle_grid": cfg.angle_grid}
         if cfg.method != "best-first":  # proved: least plan length >= lower_bound
             search["lower_bound"] = res.lower_bound
         doc = plan_document(problem.model, res.states, res.rules, problem.goal,
