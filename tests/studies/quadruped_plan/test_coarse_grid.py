@@ -71,3 +71,14 @@ def test_coarse_grid_astar_on_the_seed_task_a_b_never_longer_than_best_first() -
                            angle_grid=0.2))
     costs = [_checked(replace(task, function=function)).cost for function in (1, 2, 3)]
     assert opt.cost <= min(costs)
+
+
+def test_coarse_grid_plans_are_replayed_exactly() -> None:
+    """Weighted A* re-parents many cells; on A/a at 1 unit / 0.2 rad its traced states broke
+    the checker (a foot moved during a body move) until ``replay`` re-applied the rules
+    exactly from the start (and finished the plan where the replay missed the goal)."""
+    cfg = QuadrupedPlanConfig(rule_set="A", start_phi=math.pi / 4, method="weighted-astar",
+                              heuristic_gain="analytic", weight=3.0, pos_grid=1.0,
+                              angle_grid=0.2, max_expansions=100_000, max_seconds=60)
+    res = _checked(cfg)
+    assert res.rules[0] is None and len(res.rules) == len(res.states)

@@ -148,4 +148,41 @@ def solve(cfg: QuadrupedPlanConfig, problem: WalkProblem | None = None,
     h = plan_length_heuristic(problem.model, (cfg.goal_x, cfg.goal_y), cfg.goal_tolerance,
                               cfg.sense, cfg.heuristic_gain)
     weight = 1.0 if cfg.method == "astar" else cfg.weight
-    return walk_astar(problem, h, weight, cfg.max_expansions, secs)
+    res = walk_astar(problem, h, weight, cfg.max_expansions, secs)
+    if res.found and (problem.pos_grid, problem.angle_grid) != (POS_GRID, ANGLE_GRID):
+        exact = replay(problem, res.rules)
+        if exact is not None:
+            res.states, res.rules = exact
+            res.cost = float(len(exact[0]) - 1)
+    return res
+
+
+def replay(problem: WalkProblem, rules: list, finish_expansions: int = 50_000
+           ) -> tuple[list[tuple], list] | None:
+    """The plan's rules applied exactly from the start, as ``(states, rules)``.
+
+    With a coarse duplicate grid a node stores one state of its cell, and a node re-parented
+    onto a cheaper path keeps children made from its earlier state, so the traced states can
+    disagree with the rules by up to a grid cell; the replayed states are the exact ones. If
+    a rule is not applicable there or the replayed end misses the goal, a fine-grid weighted A*
+    (w = 3, at most ``finish_expansions``) finishes the plan from the last exact state, which
+    can make it longer; None if that fails too."""
+    s = problem.start()
+    states, out_rules = [s], [rules[0]]
+    for rule in rules[1:]:
+        nxt = next((c for r, c, _ in problem.successors(s) if r == rule), None)
+        if nxt is None:
+            break
+        s = nxt
+        states.append(s)
+        out_rules.append(rule)
+    if problem.is_goal(s):
+        return states, out_rules
+    rest = WalkProblem(problem.model, s[:11], problem.goal, problem.rule_set,
+                       problem.goal_tolerance, problem.sense, problem.zone)
+    h = plan_length_heuristic(problem.model, problem.goal, problem.goal_tolerance,
+                              problem.sense, "sampled")
+    tail = walk_astar(rest, h, 3.0, finish_expansions)
+    if not tail.found:
+        return None
+    return states + list(tail.states[1:]), out_rules + list(tail.rules[1:])
