@@ -165,8 +165,9 @@ def replay(problem: WalkProblem, rules: list, finish_expansions: int = 50_000
     onto a cheaper path keeps children made from its earlier state, so the traced states can
     disagree with the rules by up to a grid cell; the replayed states are the exact ones. If
     a rule is not applicable there or the replayed end misses the goal, a fine-grid weighted A*
-    (w = 3, at most ``finish_expansions``) finishes the plan from the last exact state, which
-    can make it longer; None if that fails too."""
+    (w = 3), else the seed's best-first with function (3) (each at most ``finish_expansions``)
+    finishes the plan from the last exact state (or from 4, 8, 16, 32 states earlier when
+    that fails), which can make it longer; None if all fail."""
     s = problem.start()
     states, out_rules = [s], [rules[0]]
     for rule in rules[1:]:
@@ -178,11 +179,18 @@ def replay(problem: WalkProblem, rules: list, finish_expansions: int = 50_000
         out_rules.append(rule)
     if problem.is_goal(s):
         return states, out_rules
-    rest = WalkProblem(problem.model, s[:11], problem.goal, problem.rule_set,
-                       problem.goal_tolerance, problem.sense, problem.zone)
     h = plan_length_heuristic(problem.model, problem.goal, problem.goal_tolerance,
                               problem.sense, "sampled")
-    tail = walk_astar(rest, h, 3.0, finish_expansions)
-    if not tail.found:
-        return None
-    return states + list(tail.states[1:]), out_rules + list(tail.rules[1:])
+    ev = seed_evaluation(3, SEED_CONSTANTS[(3, problem.rule_set)], problem.goal, problem.sense)
+    n = len(states)
+    for cut in sorted({max(1, n - back) for back in (0, 4, 8, 16, 32)}, reverse=True):
+        rest = WalkProblem(problem.model, states[cut - 1][:11], problem.goal,
+                           problem.rule_set, problem.goal_tolerance, problem.sense,
+                           problem.zone)
+        tail = walk_astar(rest, h, 3.0, finish_expansions)
+        if not tail.found:  # the seed's best-first search with its function (3)
+            tail = walk_best_first(rest, ev, finish_expansions)
+        if tail.found:
+            return (states[:cut] + list(tail.states[1:]),
+                    out_rules[:cut] + list(tail.rules[1:]))
+    return None
