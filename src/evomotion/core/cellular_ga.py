@@ -41,7 +41,7 @@ from evomotion.core.neighbourhoods import NEIGHBOURHOODS, grid_shape, neighbour_
 from evomotion.core.operators import CROSSOVERS, MUTATIONS
 from evomotion.core.operators.crossover import one_point
 from evomotion.core.operators.mutation import clip_to_bounds
-from evomotion.core.optimizer import Optimizer
+from evomotion.core.optimizer import Optimizer, check_rates
 from evomotion.core.problem import GenomeSpec
 from evomotion.core.registry import lookup
 
@@ -74,10 +74,7 @@ class CGAConfig:
 
     def validate(self) -> None:
         grid_shape(self.pop_size, self.rows)
-        for key in ("crossover_rate", "mutation_rate"):
-            v = getattr(self, key)
-            if not 0.0 <= v <= 1.0:
-                raise ValueError(f"algorithm.{key} must be in [0, 1], got {v}")
+        check_rates(self, "crossover_rate", "mutation_rate")
         lookup(dict.fromkeys(NEIGHBOURHOODS), "neighbourhood", self.neighbourhood)
         lookup(dict.fromkeys(UPDATE_POLICIES), "update policy", self.update)
         lookup(dict.fromkeys(MATE_SELECTIONS), "mate selection", self.mate_selection)

@@ -19,7 +19,7 @@ import numpy as np
 
 from evomotion.core.operators import CROSSOVERS, MUTATIONS, REPLACEMENTS, SELECTIONS
 from evomotion.core.operators.mutation import clip_to_bounds
-from evomotion.core.optimizer import Optimizer
+from evomotion.core.optimizer import Optimizer, check_rates
 from evomotion.core.problem import GenomeSpec
 from evomotion.core.registry import lookup
 
@@ -44,10 +44,7 @@ class GAConfig:
     def validate(self) -> None:
         if self.pop_size < 2:
             raise ValueError(f"algorithm.pop_size must be >= 2, got {self.pop_size}")
-        for key in ("crossover_rate", "mutation_rate"):
-            v = getattr(self, key)
-            if not 0.0 <= v <= 1.0:
-                raise ValueError(f"algorithm.{key} must be in [0, 1], got {v}")
+        check_rates(self, "crossover_rate", "mutation_rate")
         if self.elitism < 0 or (self.elitism >= 1 and self.elitism > self.pop_size):
             raise ValueError(f"algorithm.elitism must be a fraction in [0, 1) or a count "
                              f"<= pop_size, got {self.elitism}")

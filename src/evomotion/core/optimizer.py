@@ -17,6 +17,14 @@ import numpy as np
 from evomotion.core.problem import GenomeSpec
 
 
+def check_rates(cfg: Any, *keys: str) -> None:
+    """Raise ``ValueError`` unless every ``cfg.<key>`` is a probability in [0, 1]."""
+    for key in keys:
+        v = getattr(cfg, key)
+        if not 0.0 <= v <= 1.0:
+            raise ValueError(f"algorithm.{key} must be in [0, 1], got {v}")
+
+
 class Optimizer(ABC):
     """Base class of ask/tell optimizers over a real-valued genome."""
 
