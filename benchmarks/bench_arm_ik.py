@@ -25,6 +25,7 @@ import numpy as np
 from evomotion.studies.arm_ik.problem import ArmIKConfig, ArmIKProblem
 from evomotion.studies.arm_ik.scenario import bundled_names
 from evomotion.studies.arm_ik.schedule import evolve
+from evomotion.studies.arm_ik.success import success_table
 
 
 def _orient(a, b, c):
@@ -104,17 +105,10 @@ def success(seeds: int, matchings: list[str], wall: float, scenarios: list[str])
     print("|---|---|---|---|---|---|")
     for m in matchings:
         for name in scenarios:
-            cfg = ArmIKConfig(scenario=name, matching=m, pictures=False, wall_seconds=wall)
-            wall_t, cpu_t, gens, ok = [], [], [], 0
-            for s in range(seeds):
-                r = evolve(cfg, s)
-                ok += r.solved
-                wall_t.append(r.time_to_solution_s if r.solved else np.inf)
-                cpu_t.append(r.time_to_solution_cpu_s if r.solved else np.inf)
-                gens.append(r.generations)
-            print(f"| {name} | {m} | {ok}/{seeds} ({100 * ok / seeds:.0f}%) | "
-                  f"{np.median(wall_t):.2f} | {np.median(cpu_t):.2f} | {np.median(gens):.0f} |",
-                  flush=True)
+            r = success_table(name, seeds, matching=m, wall_seconds=wall)
+            print(f"| {name} | {m} | {r.solved}/{seeds} ({100 * r.rate:.0f}%) | "
+                  f"{r.median_time_s:.2f} | {r.median_cpu_s:.2f} | "
+                  f"{r.median_generations:.0f} |", flush=True)
 
 
 ABLATIONS: dict[str, dict] = {
