@@ -78,13 +78,14 @@ def test_waves_reproduce_sequential_order(name, seed, repeats):
 
 
 def _run(cfg: CGAConfig, generations: int, seed: int = 0, pop=None, fn=None):
+    """The initial evaluation and ``generations`` sweeps (``state.generation`` counts both)."""
     g = GenomeSpec.box(1 if pop is not None else 6, -5.0, 5.0)
     opt = CellularGA(g, cfg)
     rng = np.random.default_rng(seed)
     state = opt.init(rng, pop)
     fn = fn or (lambda x: (x ** 2).sum(1))
     tells = 0
-    while state.generation < generations:
+    while state.generation < generations + 1:
         x, state = opt.ask(state, rng)
         state = opt.tell(state, x, fn(x), rng)
         tells += 1
@@ -116,7 +117,7 @@ def test_every_policy_and_neighbourhood_improves_monotonically(update, name):
     start = state.cost.copy()
     x0 = state.pop.copy()
     rng = np.random.default_rng(1)
-    while state.generation < 15:
+    while state.generation < 16:
         x, state = opt.ask(state, rng)
         state = opt.tell(state, x, (x ** 2).sum(1), rng)
     assert np.all(state.cost <= start)  # replace-if-better never worsens a cell
@@ -155,7 +156,8 @@ def test_mutate_hook_replaces_registry_mutation():
         return x + 0.0
 
     g = GenomeSpec.box(3, 0.0, 1.0)
-    opt = CellularGA(g, CGAConfig(pop_size=9, update="synchronous", mutation_rate=0.25), hook)
+    opt = CellularGA(g, CGAConfig(pop_size=9, update="synchronous", mutation_rate=0.25),
+                     mutate=hook)
     rng = np.random.default_rng(0)
     state = opt.init(rng)
     x, state = opt.ask(state, rng)
@@ -245,7 +247,7 @@ def _sequential_generation(opt, pop, cost, state, fn, mutate):
     order = np.argsort(state.waves, kind="stable")
     col = np.empty_like(order)
     col[order] = np.arange(len(order))
-    table = opt.table(state.generation).tolist()
+    table = opt.table(state.generation - 1).tolist()  # this sweep's table
     u = state.draws.tolist()
     for p, c in enumerate(state.sequence.tolist()):
         k = int(col[p])

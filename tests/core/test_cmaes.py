@@ -137,3 +137,25 @@ def test_invalid_config_rejected():
                 dict(levy=True, levy_beta=3.0), dict(pop_size=1)):
         with pytest.raises(ValueError):
             CMAESConfig(**bad).validate()
+
+
+def test_initial_population_sets_the_mean_and_mutate_is_rejected():
+    g = GenomeSpec.box(3, -5, 5)
+    opt = CMAES(g, CMAESConfig())
+    pop = np.array([[1.0, 2.0, -1.0], [3.0, 0.0, -3.0]])
+    s = opt.init(np.random.default_rng(0), pop)
+    assert np.allclose(opt.to_genome(s.mean), [2.0, 1.0, -2.0])
+    # the same random stream as without a population
+    r1, r2 = np.random.default_rng(5), np.random.default_rng(5)
+    opt.init(r1, pop), opt.init(r2)
+    assert r1.bit_generator.state == r2.bit_generator.state
+    with pytest.raises(ValueError, match="mutate"):
+        make_cmaes(g, CMAESConfig(), mutate=lambda x, rng, rate: x)
+
+
+def test_generation_counts_every_generation_across_restarts():
+    opt, s = run(sphere, 3, CMAESConfig(restarts="ipop", max_restarts=2, tolfun=1e-6),
+                 max_evals=4000, target=-1)
+    assert s.restarts >= 1
+    assert s.generation > s.restart_generation
+    assert s.evaluations >= s.generation * opt.lam0

@@ -85,3 +85,33 @@ def test_state_round_trip_and_determinism():
 def test_invalid_config_rejected(bad):
     with pytest.raises((ValueError, KeyError)):
         GA(G, GAConfig(**bad))
+
+
+def _path_like_mutation(x, rng, rate):
+    """A problem mutation drawing from ``rng`` (like the grid-path one)."""
+    u = rng.random(x.shape[0])
+    x = np.array(x, dtype=float)
+    rows = u < rate
+    x[rows, 0] += rng.standard_normal(int(rows.sum()))
+    return x
+
+
+@pytest.mark.parametrize("cfg", [GAConfig(pop_size=12),
+                                 GAConfig(pop_size=11, crossover="linear", replacement="plus"),
+                                 GAConfig(pop_size=10, mutation="perturb_k", elitism=0)])
+def test_mutate_hook_equals_rate_zero_ga_with_outer_mutation(cfg):
+    """GA(mutate=m) is, random stream included, the grid-path study's former loop: a GA with
+    mutation_rate=0 whose asked children (not the initial population) are mutated by m."""
+    pop0 = G.sample(np.random.default_rng(9), cfg.pop_size)
+    hooked = GA(G, cfg, mutate=_path_like_mutation)
+    outer = GA(G, dataclasses.replace(cfg, mutation_rate=0.0))
+    ra, rb = np.random.default_rng(4), np.random.default_rng(4)
+    sa, sb = hooked.init(ra, pop0), outer.init(rb, pop0)
+    for gen in range(12):
+        xa, sa = hooked.ask(sa, ra)
+        xb, sb = outer.ask(sb, rb)
+        if gen > 0:
+            xb = _path_like_mutation(xb, rb, cfg.mutation_rate)
+        assert np.array_equal(xa, xb)
+        sa, sb = hooked.tell(sa, xa, (xa**2).sum(1), ra), outer.tell(sb, xb, (xb**2).sum(1), rb)
+    assert np.array_equal(sa.pop, sb.pop) and hooked.best(sa)[1] == outer.best(sb)[1]

@@ -1,13 +1,23 @@
-"""Registry of ask/tell optimizers: name -> (config dataclass, factory(genome, cfg))."""
+"""Registry of ask/tell optimizers: ``name -> (config dataclass, factory)``.
+
+Every factory is ``factory(genome, cfg, *, mutate=None)``: ``genome`` a
+:class:`evomotion.core.problem.GenomeSpec`, ``cfg`` an instance of the config dataclass, and
+``mutate(x[n, d], rng, rate) -> x'`` an optional problem-supplied mutation
+(:data:`evomotion.core.optimizer.MutateFn`). The GA and the cellular GA use it in place of the
+registry mutation; CMA-ES has no mutation operator and raises ``ValueError`` when given one.
+"""
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 from evomotion.core.cellular_ga import CGAConfig, make_cga
 from evomotion.core.cmaes import CMAESConfig, make_cmaes
-from evomotion.core.ga import GA, GAConfig
+from evomotion.core.ga import GAConfig, make_ga
+from evomotion.core.optimizer import Optimizer
 
-ALGORITHMS: dict[str, tuple[type, object]] = {
-    "ga": (GAConfig, GA),
+ALGORITHMS: dict[str, tuple[type, Callable[..., Optimizer]]] = {
+    "ga": (GAConfig, make_ga),
     "cga": (CGAConfig, make_cga),
     "cmaes": (CMAESConfig, make_cmaes),
 }

@@ -17,12 +17,21 @@ Asynchronous policies are executed *exactly* but vectorised: the update sequence
 into waves, where a cell's wave is one more than the latest wave of any earlier cell of the
 sequence in its (symmetric) neighbourhood. Cells in one wave never read each other, and
 every cell sees all earlier updates it would see sequentially, so a wave-by-wave update is
-the sequential update. One ``ask``/``tell`` pair handles one wave; ``state.generation``
-counts completed sweeps (``synchronous`` has one wave per generation).
+the sequential update. One ``ask``/``tell`` pair handles one wave; a generation is one
+whole sweep (``synchronous`` has one wave per generation), so :meth:`CellularGA.generation_done`
+is true only after the last wave of a sweep (and after the initial evaluation), and
+``state.generation - 1`` is the number of completed sweeps (it picks the Margolus parity).
+
+State and caches: the optimizer object holds only frozen settings (the config, the grid and
+its neighbour tables, pure functions of the config). What depends on the run lives in the
+state and is replaced, never mutated: the fixed random sweep and the waves of the fixed sweeps
+(``line_sweep``, ``fixed_random_sweep``), computed once in ``init``; and per generation the
+update sequence, its waves, the sequence in wave order with the start of each wave, and the
+uniforms of the sweep.
 
 Random numbers: at the start of each generation, after the update sequence is drawn, one
 call draws ``draws[5, L]`` uniforms for the ``L`` updates of the sweep, in wave order (the
-order of :meth:`CellularGA._wave_plan`): row 0 the mate pick (roulette, or tournament
+order of ``state.wave_cells``): row 0 the mate pick (roulette, or tournament
 entrant 1), row 1 tournament entrant 2, row 2 the one-point cut, row 3 which child is kept,
 row 4 the crossover test. Update ``k`` of the sweep uses column ``k`` whichever wave it falls
 in, so a one-cell-at-a-time sweep consuming the same columns gives the same result. Only
@@ -31,8 +40,7 @@ the mutation (and a registry crossover other than one-point) draws per wave.
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -41,7 +49,7 @@ from evomotion.core.neighbourhoods import NEIGHBOURHOODS, grid_shape, neighbour_
 from evomotion.core.operators import CROSSOVERS, MUTATIONS
 from evomotion.core.operators.crossover import one_point
 from evomotion.core.operators.mutation import clip_to_bounds
-from evomotion.core.optimizer import Optimizer, check_rates
+from evomotion.core.optimizer import MutateFn, Optimizer, check_rates
 from evomotion.core.problem import GenomeSpec
 from evomotion.core.registry import lookup
 
@@ -50,8 +58,8 @@ UPDATE_POLICIES: tuple[str, ...] = (
 MATE_SELECTIONS: tuple[str, ...] = ("roulette", "tournament", "best")
 REPLACEMENTS: tuple[str, ...] = ("if_better", "if_not_worse", "always")
 
-#: ``mutate(x[n, d], rng, rate) -> x'``: a problem-supplied mutation replacing the registry one
-MutateFn = Callable[[np.ndarray, np.random.Generator, float], np.ndarray]
+__all__ = ["CGAConfig", "CGAState", "CellularGA", "MutateFn", "make_cga", "one_point_masks",
+           "roulette_rows", "update_waves"]
 
 
 @dataclass(frozen=True)
@@ -85,16 +93,20 @@ class CGAConfig:
 
 @dataclass
 class CGAState:
-    pop: np.ndarray
+    pop: np.ndarray  # one individual per cell [pop_size, d]
     cost: np.ndarray
     best_x: np.ndarray
     best_cost: float
     sweep_order: np.ndarray  # the fixed random sweep (drawn at init)
+    #: ``[parities, pop_size]``: wave of each position of the fixed sweep (line and fixed
+    #: random sweeps; one row per Margolus parity), empty for the other policies
+    fixed_waves: np.ndarray
     sequence: np.ndarray  # cells of this generation's update sequence
     waves: np.ndarray  # wave of each sequence position
-    cells: np.ndarray  # cells whose offspring were asked last
-    generation: int = 0
-    wave: int = 0
+    wave_cells: np.ndarray  # the sequence in wave order (stable within a wave)
+    wave_starts: np.ndarray  # start of each wave in ``wave_cells``, then its length
+    generation: int = 0  # completed generations (sweeps), the initial evaluation included
+    wave: int = 0  # the wave asked next (or last asked, until its tell)
     evaluated: bool = False
     #: this generation's uniforms, ``[5, len(sequence)]`` in wave order (see module doc)
     draws: np.ndarray = field(default_factory=lambda: np.empty((5, 0)))
@@ -154,87 +166,72 @@ class CellularGA(Optimizer):
 
     name = "cga"
 
-    def __init__(self, genome: GenomeSpec, cfg: CGAConfig, mutate: MutateFn | None = None):
-        super().__init__(genome)
+    def __init__(self, genome: GenomeSpec, cfg: CGAConfig, *,
+                 mutate: MutateFn | None = None) -> None:
+        super().__init__(genome, mutate=mutate)
         cfg.validate()
         self.cfg = cfg
         self.rows, self.cols = grid_shape(cfg.pop_size, cfg.rows)
         self._xo = CROSSOVERS[cfg.crossover]
-        self._mutate = mutate
-        self._tables: dict[int, np.ndarray] = {}
-        self._waves: dict[int, np.ndarray] = {}
-        self._plans: dict[int, list[tuple[np.ndarray, ...]]] = {}  # fixed sweeps
-        self._plan: list[tuple[np.ndarray, ...]] = []  # (cells, neighbours, rows) per wave
-        self._plan_of: CGAState | None = None  # the state whose schedule ``_plan`` holds
         self._fast_one_point = self._xo is one_point and not cfg.crossover_params
-        self._masks: tuple[np.ndarray, np.ndarray] | None = None  # (draws, one_point_masks)
+        parities = 2 if cfg.neighbourhood == "Margolus" else 1
+        self._tables = tuple(neighbour_table(cfg.neighbourhood, self.rows, self.cols, p)
+                             for p in range(parities))
 
-    def table(self, generation: int) -> np.ndarray:
-        key = generation % 2 if self.cfg.neighbourhood == "Margolus" else 0
-        if key not in self._tables:
-            self._tables[key] = neighbour_table(self.cfg.neighbourhood, self.rows, self.cols, key)
-        return self._tables[key]
+    def table(self, sweep: int) -> np.ndarray:
+        """Neighbour table of sweep number ``sweep`` (0: the first sweep after the initial
+        evaluation; only the Margolus table depends on it, by parity)."""
+        return self._tables[sweep % len(self._tables)]
 
-    def init(self, rng: np.random.Generator, pop: np.ndarray | None = None) -> CGAState:
+    def init(self, rng: np.random.Generator, population: np.ndarray | None = None) -> CGAState:
         n, d = self.cfg.pop_size, self.genome.dim
-        pop = self.genome.sample(rng, n) if pop is None else np.array(pop, dtype=float)
+        pop = self.genome.sample(rng, n) if population is None else np.array(population,
+                                                                             dtype=float)
         if pop.shape != (n, d):
             raise ValueError(f"cga: initial population has shape {pop.shape}, want {(n, d)}")
+        sweep_order = rng.permutation(n)
+        fixed = {"line_sweep": np.arange(n), "fixed_random_sweep": sweep_order}.get(
+            self.cfg.update)
+        if fixed is None:
+            fixed_waves = np.empty((0, n), dtype=np.int64)
+        else:
+            fixed_waves = np.stack([update_waves(fixed, t) for t in self._tables])
         empty = np.empty(0, dtype=np.int64)
         return CGAState(pop=pop, cost=np.full(n, np.inf), best_x=np.full(d, np.nan),
-                        best_cost=np.inf, sweep_order=rng.permutation(n), sequence=empty,
-                        waves=empty, cells=empty)
+                        best_cost=np.inf, sweep_order=sweep_order, fixed_waves=fixed_waves,
+                        sequence=empty, waves=empty, wave_cells=empty, wave_starts=empty)
 
-    def _schedule(self, state: CGAState, rng: np.random.Generator) -> None:
+    def _schedule(self, state: CGAState, rng: np.random.Generator) -> CGAState:
+        """The state with this sweep's update sequence, its waves and its uniforms."""
         n, pol = self.cfg.pop_size, self.cfg.update
-        table = self.table(state.generation)
+        sweep = state.generation - 1
         if pol == "synchronous":
-            state.sequence, state.waves = np.arange(n), np.zeros(n, dtype=np.int64)
-            return
-        seq = {"line_sweep": np.arange(n), "fixed_random_sweep": state.sweep_order,
-               "new_random_sweep": rng.permutation(n) if pol == "new_random_sweep" else None,
-               "uniform_choice": rng.integers(0, n, n) if pol == "uniform_choice" else None}[pol]
-        key = state.generation % 2 if self.cfg.neighbourhood == "Margolus" else 0
-        if pol in ("line_sweep", "fixed_random_sweep"):
-            if key not in self._waves:
-                self._waves[key] = update_waves(seq, table)
-            waves = self._waves[key]
+            seq, waves = np.arange(n), np.zeros(n, dtype=np.int64)
+        elif pol in ("line_sweep", "fixed_random_sweep"):
+            seq = np.arange(n) if pol == "line_sweep" else state.sweep_order
+            waves = state.fixed_waves[sweep % len(state.fixed_waves)]
         else:
-            waves = update_waves(seq, table)
-        state.sequence, state.waves = np.asarray(seq), waves
+            seq = rng.permutation(n) if pol == "new_random_sweep" else rng.integers(0, n, n)
+            waves = update_waves(seq, self.table(sweep))
+        order = np.argsort(waves, kind="stable")  # sequence order within a wave
+        starts = np.r_[0, np.cumsum(np.bincount(waves))]
+        return replace(state, sequence=np.asarray(seq), waves=waves, wave_cells=seq[order],
+                       wave_starts=starts, draws=rng.random((5, len(seq))))
 
-    def _wave_plan(self, state: CGAState) -> list[tuple[Any, ...]]:
-        """``(cells, neighbours, arange(len(cells)), slice of the sweep)`` of every wave of
-        the current schedule, split once per schedule (kept across generations for the line
-        and fixed sweeps)."""
-        if self._plan_of is state:
-            return self._plan
-        fixed = self.cfg.update in ("line_sweep", "fixed_random_sweep", "synchronous")
-        key = state.generation % 2 if self.cfg.neighbourhood == "Margolus" else 0
-        if not (fixed and key in self._plans):
-            order = np.argsort(state.waves, kind="stable")  # sequence order within a wave
-            ends = np.cumsum(np.bincount(state.waves))[:-1]
-            table = self.table(state.generation)
-            bounds = np.r_[0, ends, len(order)].tolist()
-            plan = [(c, table[c, 1:], np.arange(len(c)), slice(lo, hi))
-                    for c, lo, hi in zip(np.split(state.sequence[order], ends), bounds[:-1],
-                                         bounds[1:], strict=True)]
-            if not fixed:
-                self._plan, self._plan_of = plan, state
-                return plan
-            self._plans[key] = plan
-        self._plan, self._plan_of = self._plans[key], state
-        return self._plan
+    def _wave(self, state: CGAState) -> tuple[np.ndarray, slice]:
+        """Cells of the current wave and their columns (slice of the sweep, wave order)."""
+        lo, hi = state.wave_starts[state.wave], state.wave_starts[state.wave + 1]
+        return state.wave_cells[lo:hi], slice(int(lo), int(hi))
 
     def _ask(self, state: CGAState, rng: np.random.Generator):
         if not state.evaluated:
             return state.pop.copy(), state
         if state.wave == 0:
-            self._schedule(state, rng)
-            self._plan_of = None
-            state.draws = rng.random((5, len(state.sequence)))
+            state = self._schedule(state, rng)
         c, g = self.cfg, self.genome
-        cells, nbr, rows, part = self._wave_plan(state)[state.wave]
+        cells, part = self._wave(state)
+        nbr = self.table(state.generation - 1)[cells, 1:]
+        rows = np.arange(len(cells))
         u = state.draws[:, part]
         ncost = state.cost[nbr]
         if c.mate_selection == "roulette":
@@ -247,54 +244,44 @@ class CellularGA(Optimizer):
         mates = nbr[rows, j]
         a, b = state.pop[cells], state.pop[mates]
         if self._fast_one_point and g.dim >= 2:
-            # one_point fused with the pick of a child and the crossover test; the masks of
-            # the whole sweep are built once per generation
-            if self._masks is None or self._masks[0] is not state.draws:
-                self._masks = (state.draws, one_point_masks(state.draws, g.dim,
-                                                            c.crossover_rate))
-            child = np.where(self._masks[1][part], b, a)
+            # one_point fused with the pick of a child and the crossover test
+            child = np.where(one_point_masks(u, g.dim, c.crossover_rate), b, a)
         else:
             kids = self._xo(a, b, rng, **c.crossover_params)
             child = np.where(u[3, :, None] < 0.5, kids[0], kids[1])
             child = np.where(u[4, :, None] < c.crossover_rate, child, a)
-        if self._mutate is not None:
-            child = self._mutate(child, rng, c.mutation_rate)
+        if self.mutate is not None:
+            child = self.mutate(child, rng, c.mutation_rate)
         else:
             child = MUTATIONS[c.mutation](child, g.lower, g.upper, rng, c.mutation_rate,
                                           **c.mutation_params)
-        state.cells = cells
         return clip_to_bounds(child, g.lower, g.upper), state
 
     def _tell(self, state: CGAState, genomes, cost, rng):
         if not state.evaluated:
-            state.pop, state.cost, state.evaluated = genomes.copy(), cost.copy(), True
-            i = int(np.argmin(state.cost))
-            if state.cost[i] < state.best_cost:
-                state.best_cost, state.best_x = float(state.cost[i]), state.pop[i].copy()
-            return state
-        cells, old = state.cells, state.cost[state.cells]
+            return replace(state, pop=np.array(genomes, dtype=float), cost=cost.copy(),
+                           evaluated=True)
+        cells, _ = self._wave(state)
+        if len(genomes) != len(cells):
+            raise ValueError(f"cga: tell got {len(genomes)} genomes for a wave of {len(cells)}")
+        old = state.cost[cells]
         rep = self.cfg.replacement
         better = (cost < old if rep == "if_better" else cost <= old if rep == "if_not_worse"
                   else np.ones(len(cells), bool))
+        pop, pcost = state.pop, state.cost
         if better.any():
-            won, x, f = cells[better], genomes[better], cost[better]
-            state.pop[won], state.cost[won] = x, f
-            i = int(np.argmin(f))  # only new entries can beat the best seen so far
-            if f[i] < state.best_cost:
-                state.best_cost, state.best_x = float(f[i]), x[i].copy()
-        state.wave += 1
-        if state.wave >= len(self._wave_plan(state)):
-            state.wave, state.generation = 0, state.generation + 1
-        return state
+            pop, pcost = pop.copy(), pcost.copy()
+            pop[cells[better]], pcost[cells[better]] = genomes[better], cost[better]
+        wave = state.wave + 1
+        return replace(state, pop=pop, cost=pcost,
+                       wave=0 if wave >= len(state.wave_starts) - 1 else wave)
 
-    def best(self, state: CGAState):
-        return state.best_x, state.best_cost
-
-    def end_of_generation(self, state: CGAState) -> bool:
-        """True right after the last wave of a generation (or the initial evaluation)."""
+    def generation_done(self, state: CGAState) -> bool:
+        """True right after the last wave of a sweep (or the initial evaluation)."""
         return state.evaluated and state.wave == 0
 
 
-def make_cga(genome: GenomeSpec, cfg: CGAConfig, mutate: MutateFn | None = None) -> CellularGA:
+def make_cga(genome: GenomeSpec, cfg: CGAConfig, *,
+             mutate: MutateFn | None = None) -> CellularGA:
     """Factory for the ``ALGORITHMS`` registry (``"cga"``)."""
-    return CellularGA(genome, cfg, mutate)
+    return CellularGA(genome, cfg, mutate=mutate)

@@ -41,6 +41,19 @@ fraction of each gene's range. How the options enter one generation:
    tolstagnation, maxiter) triggers a restart (IPOP: lambda *= inc_popsize; BIPOP: alternates
    large and small populations by evaluations spent) until ``max_restarts``; the reasons are
    kept in ``state.stop_log`` and the final one in ``state.stop_reason``.
+
+Modules: the strategy parameters are in :mod:`~evomotion.core.cmaes_params` (Table 1), the
+update steps in :mod:`~evomotion.core.cmaes_update` (one function per tutorial equation), the
+termination criteria in :mod:`~evomotion.core.cmaes_stop`, IPOP/BIPOP in
+:mod:`~evomotion.core.cmaes_restarts`, the Lévy and Tent options in
+:mod:`~evomotion.core.cmaes_extras`; this module holds the config, the state and the ask/tell
+that chain them. State is replaced, never mutated. ``state.generation`` counts every
+generation (all restarts); ``state.restart_generation`` is the tutorial's ``g`` within the
+current run (reset by a restart or a Tent jump).
+
+``init(rng, population)``: the mean starts at the mean of the given ``[k, d]`` genomes
+(normalised; fixed genes 0) instead of ``x0``; the random stream is the same as without it.
+CMA-ES has no mutation operator: a ``mutate`` hook raises ``ValueError``.
 """
 
 from __future__ import annotations
@@ -50,11 +63,22 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from evomotion.core.chaos import tent_map, tent_to_box, validate_tent
+from evomotion.core.chaos import validate_tent
+from evomotion.core.cmaes_extras import chaos_due, chaos_jump, levy_candidates, tent_start
 from evomotion.core.cmaes_params import StrategyParams, strategy_params
-from evomotion.core.cmaes_update import cmaes_update
-from evomotion.core.levy import mantegna_sigma_u, mantegna_steps
-from evomotion.core.optimizer import Optimizer
+from evomotion.core.cmaes_restarts import fresh_distribution, initial_lambda, restart
+from evomotion.core.cmaes_stop import push_history, stop_reason
+from evomotion.core.cmaes_update import (
+    clip_injected,
+    sample,
+    update_covariance,
+    update_eigensystem,
+    update_evolution_paths,
+    update_mean,
+    update_step_size,
+)
+from evomotion.core.levy import mantegna_sigma_u
+from evomotion.core.optimizer import MutateFn, Optimizer
 from evomotion.core.problem import GenomeSpec
 
 
@@ -125,12 +149,12 @@ class CMAESState:
     best_x: np.ndarray
     best_cost: float
     tent_x: np.ndarray  # chaos state per dimension
-    best_hist: np.ndarray  # best cost per generation of this restart
+    best_hist: np.ndarray  # best cost per generation of this run
     median_hist: np.ndarray
-    generation: int = 0  # within this restart
-    total_generations: int = 0
+    generation: int = 0  # completed generations, all restarts
+    restart_generation: int = 0  # g: generations since the last restart or Tent jump
     evaluations: int = 0
-    eigen_generation: int = 0
+    eigen_generation: int = 0  # restart_generation of the last eigendecomposition
     restarts: int = 0
     restart_best: float = math.inf
     since_improvement: int = 0
@@ -152,22 +176,21 @@ class CMAES(Optimizer):
 
     name = "cmaes"
 
-    def __init__(self, genome: GenomeSpec, cfg: CMAESConfig | None = None) -> None:
+    def __init__(self, genome: GenomeSpec, cfg: CMAESConfig | None = None, *,
+                 mutate: MutateFn | None = None) -> None:
+        if mutate is not None:
+            raise ValueError("cmaes: CMA-ES has no mutation operator to replace; "
+                             "a mutate hook is not supported")
         super().__init__(genome)
         self.cfg = cfg or CMAESConfig()
         self.cfg.validate()
-        n = genome.dim
-        self.n = n
+        self.n = genome.dim
         self.span = np.where(genome.span > 0, genome.span, 1.0)
         self.fixed = genome.span <= 0
-        self.lam0 = self.cfg.pop_size or 4 + int(3 * math.log(n))
-        self._params: dict[int, StrategyParams] = {}
+        self.lam0 = initial_lambda(self.cfg, self.n)
 
-    # -- helpers -------------------------------------------------------------------
     def params(self, lam: int) -> StrategyParams:
-        if lam not in self._params:
-            self._params[lam] = strategy_params(self.n, lam)
-        return self._params[lam]
+        return strategy_params(self.n, lam)
 
     def to_genome(self, u: np.ndarray) -> np.ndarray:
         return self.genome.lower + self.span * u
@@ -175,44 +198,31 @@ class CMAES(Optimizer):
     def to_unit(self, x: np.ndarray) -> np.ndarray:
         return (x - self.genome.lower) / self.span
 
-    def _fresh(self, rng: np.random.Generator, lam: int,
-               sigma: float) -> dict:
-        n = self.n
-        mean = rng.uniform(0, 1, n) if self.cfg.x0 == "uniform" else np.full(n, 0.5)
-        mean[self.fixed] = 0.0
-        eye = np.eye(n)
-        return dict(mean=mean, sigma=float(sigma), C=eye.copy(), B=eye.copy(), D=np.ones(n),
-                    p_sigma=np.zeros(n), p_c=np.zeros(n), lam=int(lam),
-                    best_hist=np.zeros(0), median_hist=np.zeros(0),
-                    generation=0, eigen_generation=0, restart_best=math.inf, since_improvement=0,
-                    restart_jumps=0)
-
-    def init(self, rng: np.random.Generator) -> CMAESState:
-        tent0 = rng.uniform(0.05, 0.95, self.n)
-        if self.cfg.chaos:
-            fixed = self.cfg.chaos_mu / (1 + self.cfg.chaos_mu)
-            tent0 = np.where(np.abs(tent0 - fixed) < 1e-9, tent0 + 1e-3, tent0)
-        lam, n = self.lam0, self.n
-        return CMAESState(**self._fresh(rng, lam, self.cfg.sigma0),
-                          pop=np.zeros((lam, n)), cost=np.full(lam, np.inf),
+    def init(self, rng: np.random.Generator,
+             population: np.ndarray | None = None) -> CMAESState:
+        n, lam = self.n, self.lam0
+        tent0 = tent_start(self.cfg, rng, n)
+        fresh = fresh_distribution(self.cfg, self.fixed, rng, lam, self.cfg.sigma0)
+        if population is not None:
+            x = np.asarray(population, dtype=float)
+            if x.ndim != 2 or x.shape[0] < 1 or x.shape[1] != n:
+                raise ValueError(f"cmaes: initial population has shape {x.shape}, "
+                                 f"want (k, {n})")
+            fresh["mean"] = np.where(self.fixed, 0.0, self.to_unit(x.mean(axis=0)))
+        return CMAESState(**fresh, pop=np.zeros((lam, n)), cost=np.full(lam, np.inf),
                           modified=np.zeros(lam, bool),
                           best_x=self.to_genome(np.full(n, 0.5)), best_cost=math.inf,
                           tent_x=tent0)
 
-    # -- ask -------------------------------------------------------------------------
     def _ask(self, state: CMAESState, rng: np.random.Generator) -> tuple[np.ndarray, CMAESState]:
-        cfg, lam, n = self.cfg, state.lam, self.n
-        z = rng.standard_normal((lam, n))
-        u = state.mean + state.sigma * (z * state.D) @ state.B.T
+        cfg, lam = self.cfg, state.lam
+        u = sample(rng, lam, state.mean, state.sigma, state.B, state.D)  # eqs. 38-40
         modified = np.zeros(lam, bool)
         levy_moves = state.levy_moves
         if cfg.levy:
-            k = max(1, int(round(cfg.levy_fraction * lam)))
-            rows = rng.choice(lam, size=k, replace=False)
-            s_levy = mantegna_steps(rng, (k, n), cfg.levy_beta)
-            u[rows] += cfg.levy_alpha * state.sigma * (s_levy * state.D) @ state.B.T
+            u, rows = levy_candidates(cfg, state, u, rng)
             modified[rows] = True
-            levy_moves += k
+            levy_moves += len(rows)
         if cfg.bound_handling == "reinject":
             clipped = np.clip(u, 0.0, 1.0)
             modified |= np.any(clipped != u, axis=1)
@@ -222,33 +232,49 @@ class CMAES(Optimizer):
         return pop, replace(state, pop=pop, cost=np.full(lam, np.inf), modified=modified,
                             levy_moves=levy_moves)
 
-    # -- tell ------------------------------------------------------------------------
-    def _tell(self, state: CMAESState, genomes: np.ndarray, cost: np.ndarray,
+    def _tell(self, s: CMAESState, genomes: np.ndarray, cost: np.ndarray,
               rng: np.random.Generator) -> CMAESState:
-        return cmaes_update(self, state, genomes, cost, rng)
-
-    def best(self, state: CMAESState) -> tuple[np.ndarray, float]:
-        return state.best_x, float(state.best_cost)
+        """One generation: selection, the tutorial's update of m, p_sigma, p_c, C, sigma,
+        then termination (and restart) or a Tent jump."""
+        if genomes.shape[0] != s.lam:
+            raise ValueError(f"cmaes: tell got {genomes.shape[0]} genomes, asked {s.lam}")
+        p, cfg = strategy_params(self.n, s.lam), self.cfg
+        order = np.argsort(cost, kind="stable")
+        costs_sorted = cost[order]
+        improved = costs_sorted[0] < s.restart_best
+        s = replace(s, cost=cost.copy(), evaluations=s.evaluations + s.lam,
+                    restart_best=float(costs_sorted[0]) if improved else s.restart_best,
+                    since_improvement=0 if improved else s.since_improvement + 1)
+        # steps y_{i:lambda} of the evaluated genomes; injected ones clipped (Hansen 2011)
+        changed = (s.modified | np.any(genomes != s.pop, axis=1))[order]
+        y = (self.to_unit(genomes[order]) - s.mean) / s.sigma
+        y[:, self.fixed] = 0.0
+        y, z, znorm = clip_injected(y, changed, s.B, s.D)
+        gen = s.restart_generation + 1
+        mean, y_w = update_mean(p, s.mean, s.sigma, y)  # eqs. 41-42
+        p_sigma, p_c, h_sigma = update_evolution_paths(p, s.p_sigma, s.p_c, z, y_w, gen)
+        C = update_covariance(p, s.C, p_c, h_sigma, y, znorm, changed)  # eqs. 46-47
+        sigma = update_step_size(p, s.sigma, p_sigma, costs_sorted)  # eq. 44
+        s = replace(s, mean=mean, sigma=sigma, C=C, p_sigma=p_sigma, p_c=p_c,
+                    restart_generation=gen,
+                    best_hist=push_history(s.best_hist, costs_sorted[0]),
+                    median_hist=push_history(s.median_hist, float(np.median(costs_sorted))))
+        if gen - s.eigen_generation >= p.eigen_every:
+            C, B, D = update_eigensystem(s.C)
+            s = replace(s, C=C, B=B, D=D, eigen_generation=gen)
+        reason = stop_reason(cfg, s, costs_sorted)
+        if reason:
+            return restart(cfg, self.fixed, s, reason, rng)
+        if chaos_due(cfg, s):
+            s = chaos_jump(cfg, self.fixed, s)
+        return s
 
     def stop(self, state: CMAESState) -> str | None:
         """Why the search ended (``None`` while restarts or the run continue)."""
         return state.stop_reason if state.done else None
 
-    def chaos_patience(self, lam: int) -> int:
-        return self.cfg.chaos_patience or 10 + int(math.ceil(30 * self.n / lam))
 
-    def chaos_step(self, state: CMAESState) -> tuple[np.ndarray, np.ndarray]:
-        """Next Tent state and the mean perturbation ``Delta m`` (normalised units)."""
-        x = tent_map(state.tent_x, self.cfg.chaos_mu)
-        c = tent_to_box(x, self.cfg.chaos_mu, np.zeros(self.n), np.ones(self.n))
-        return x, self.cfg.chaos_strength * (c - state.mean)
-
-    def fresh_run(self, rng: np.random.Generator, lam: int, sigma: float) -> dict:
-        """Fields of a restarted distribution; the last population stays for statistics
-        until the next ``ask``."""
-        return self._fresh(rng, lam, sigma)
-
-
-def make_cmaes(genome: GenomeSpec, cfg: CMAESConfig) -> CMAES:
-    """Factory for the ``ALGORITHMS`` registry: ``"cmaes": (CMAESConfig, make_cmaes)``."""
-    return CMAES(genome, cfg)
+def make_cmaes(genome: GenomeSpec, cfg: CMAESConfig, *,
+               mutate: MutateFn | None = None) -> CMAES:
+    """Factory for the ``ALGORITHMS`` registry (``"cmaes"``); ``mutate`` must be ``None``."""
+    return CMAES(genome, cfg, mutate=mutate)

@@ -7,19 +7,27 @@ GA of seeds 000 (BLX-alpha, roulette, elitism 0.1) and 004 (panmictic baseline).
 
 Wright's linear crossover yields three children per pair; all three are evaluated and
 ``tell`` keeps the best two of each triple before replacement (Wright 1991).
+
+A problem mutation ``mutate(x, rng, rate)`` (``GA(genome, cfg, mutate=m)``) replaces the
+registry mutation: the registry mutation still runs, at rate 0 (it draws its random numbers
+but changes nothing), then the children are clipped into the box and ``m(children, rng,
+cfg.mutation_rate)`` is applied to them. This is, random stream included, the grid-path
+study's former outer loop (a GA built with ``mutation_rate=0`` whose asked children were
+mutated by the path mutation). ``init(rng, population)`` starts from the given
+``[pop_size, d]`` population instead of a uniform sample. State is replaced, never mutated.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 
 from evomotion.core.operators import CROSSOVERS, MUTATIONS, REPLACEMENTS, SELECTIONS
 from evomotion.core.operators.mutation import clip_to_bounds
-from evomotion.core.optimizer import Optimizer, check_rates
+from evomotion.core.optimizer import MutateFn, Optimizer, check_rates
 from evomotion.core.problem import GenomeSpec
 from evomotion.core.registry import lookup
 
@@ -61,21 +69,23 @@ class GAConfig:
 
 @dataclass
 class GAState:
-    pop: np.ndarray
-    cost: np.ndarray
+    pop: np.ndarray  # current population [pop_size, d]
+    cost: np.ndarray  # its costs (inf before the first tell)
     best_x: np.ndarray
     best_cost: float
-    generation: int = 0
-    evaluated: bool = False
+    generation: int = 0  # completed generations, the initial evaluation included
+    evaluated: bool = False  # the initial population has been told
 
 
 class GA(Optimizer):
-    """Generational GA; ``cfg`` is a :class:`GAConfig`."""
+    """Generational GA; ``cfg`` is a :class:`GAConfig`; ``mutate`` replaces the registry
+    mutation (see the module doc)."""
 
     name = "ga"
 
-    def __init__(self, genome: GenomeSpec, cfg: GAConfig) -> None:
-        super().__init__(genome)
+    def __init__(self, genome: GenomeSpec, cfg: GAConfig, *,
+                 mutate: MutateFn | None = None) -> None:
+        super().__init__(genome, mutate=mutate)
         cfg.validate()
         self.cfg = cfg
         self._xo = CROSSOVERS[cfg.crossover]
@@ -89,12 +99,16 @@ class GA(Optimizer):
         c = self.cfg
         return c.pop_size - c.n_elite if c.replacement == "generational" else c.pop_size
 
-    def init(self, rng: np.random.Generator, pop: np.ndarray | None = None) -> GAState:
-        d = self.genome.dim
-        if pop is None:
-            pop = self.genome.sample(rng, self.cfg.pop_size)
-        return GAState(pop=np.asarray(pop, float), cost=np.full(len(pop), np.inf),
-                       best_x=np.full(d, np.nan), best_cost=np.inf)
+    def init(self, rng: np.random.Generator, population: np.ndarray | None = None) -> GAState:
+        n, d = self.cfg.pop_size, self.genome.dim
+        if population is None:
+            pop = self.genome.sample(rng, n)
+        else:
+            pop = np.array(population, dtype=float)
+            if pop.shape != (n, d):
+                raise ValueError(f"ga: initial population has shape {pop.shape}, want {(n, d)}")
+        return GAState(pop=pop, cost=np.full(n, np.inf), best_x=np.full(d, np.nan),
+                       best_cost=np.inf)
 
     def _ask(self, state: GAState, rng: np.random.Generator):
         if not state.evaluated:
@@ -103,38 +117,36 @@ class GA(Optimizer):
         n_pairs = math.ceil(self.n_offspring / 2)
         idx = self._sel(state.cost, 2 * n_pairs, rng, **c.selection_params)
         a, b = state.pop[idx[:n_pairs]], state.pop[idx[n_pairs:]]
-        kids = self._xo(a, b, rng, **c.crossover_params)  # [k, n_pairs, d]
+        kids = self._xo(a, b, rng, **c.crossover_params)  # [k, n_pairs, d], a new array
         keep = rng.random(n_pairs) >= c.crossover_rate
         if keep.any():
             kids[0, keep], kids[1, keep] = a[keep], b[keep]
             if self._k == 3:
                 kids[2, keep] = a[keep]
         flat = kids.transpose(1, 0, 2).reshape(-1, g.dim)  # pair-major
-        flat = self._mut(flat, g.lower, g.upper, rng, c.mutation_rate, **c.mutation_params)
+        rate = 0.0 if self.mutate is not None else c.mutation_rate
+        flat = self._mut(flat, g.lower, g.upper, rng, rate, **c.mutation_params)
         flat = clip_to_bounds(flat, g.lower, g.upper, out=flat)
         if self._k == 2:
             flat = flat[: self.n_offspring]
+        if self.mutate is not None:
+            flat = self.mutate(flat, rng, c.mutation_rate)
         return flat, state
 
     def _tell(self, state: GAState, genomes, cost, rng):
         if not state.evaluated:
-            state.cost = cost.copy()
-            state.pop = genomes.copy()
-            state.evaluated = True
-        else:
-            kids, kcost = genomes, cost
-            if self._k == 3:
-                kids, kcost = _best_two_of_three(kids, kcost, self.n_offspring)
-            state.pop, state.cost = self._rep(state.pop, state.cost, kids, kcost,
-                                              self.cfg.n_elite)
-            state.generation += 1
-        i = int(np.argmin(state.cost))
-        if state.cost[i] < state.best_cost:
-            state.best_cost, state.best_x = float(state.cost[i]), state.pop[i].copy()
-        return state
+            return replace(state, pop=np.array(genomes, dtype=float), cost=cost.copy(),
+                           evaluated=True)
+        kids, kcost = genomes, cost
+        if self._k == 3:
+            kids, kcost = _best_two_of_three(kids, kcost, self.n_offspring)
+        pop, pcost = self._rep(state.pop, state.cost, kids, kcost, self.cfg.n_elite)
+        return replace(state, pop=pop, cost=pcost)
 
-    def best(self, state: GAState):
-        return state.best_x, state.best_cost
+
+def make_ga(genome: GenomeSpec, cfg: GAConfig, *, mutate: MutateFn | None = None) -> GA:
+    """Factory for the ``ALGORITHMS`` registry (``"ga"``)."""
+    return GA(genome, cfg, mutate=mutate)
 
 
 def _best_two_of_three(kids: np.ndarray, cost: np.ndarray, n: int):

@@ -1,20 +1,38 @@
 """The ask/tell optimizer interface shared by the GA, cellular GA and CMA-ES.
 
-State is explicit: an optimizer object holds only its (frozen) settings; everything that
-changes lives in a state dataclass passed in and returned, so that a checkpoint is just
-``state_to_arrays(state)`` plus the RNG state. Costs are always minimised (see
-:mod:`evomotion.core.problem`). The public ``ask``/``tell`` validate and call the private
-``_ask``/``_tell`` of each algorithm.
+State is explicit and *replaced, never mutated*: an optimizer object holds only its frozen
+settings; everything that changes lives in a state dataclass that ``ask``/``tell`` take and
+return as a new object (``dataclasses.replace``), so that a checkpoint is just
+``state_to_arrays(state)`` plus the RNG state. Randomness comes only from the ``rng`` passed
+in. Costs are always minimised (see :mod:`evomotion.core.problem`).
+
+The public ``ask``/``tell`` validate and call the private ``_ask``/``_tell`` of each algorithm;
+``tell`` then does the bookkeeping every algorithm shares, once: the best genome and cost seen
+so far (from the told genomes and costs; ``nan`` costs count as ``inf``) and the generation
+counter. Every state dataclass therefore has the fields ``best_x``, ``best_cost`` and
+``generation``. ``generation`` counts completed generations, the evaluation of the initial
+population included: a ``tell`` completes one when :meth:`Optimizer.generation_done` says so
+(always, except between the waves of an asynchronous cellular-GA sweep).
+
+Construction is uniform: every registered factory is ``factory(genome, cfg, *, mutate=None)``
+(see :mod:`evomotion.core.algorithms`), where ``mutate`` is a problem-supplied mutation
+:data:`MutateFn`; an algorithm that cannot use one raises ``ValueError``. Every
+``init(rng, population=None)`` accepts an optional initial population.
 """
 
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from collections.abc import Callable
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
 
 from evomotion.core.problem import GenomeSpec
+
+#: ``mutate(x[n, d], rng, rate) -> x'``: a problem-supplied mutation replacing the registry one
+MutateFn = Callable[[np.ndarray, np.random.Generator, float], np.ndarray]
 
 
 def check_rates(cfg: Any, *keys: str) -> None:
@@ -30,25 +48,26 @@ class Optimizer(ABC):
 
     name: str = "optimizer"
 
-    def __init__(self, genome: GenomeSpec) -> None:
+    def __init__(self, genome: GenomeSpec, *, mutate: MutateFn | None = None) -> None:
         self.genome = genome
+        self.mutate = mutate
 
     @abstractmethod
-    def init(self, rng: np.random.Generator) -> Any:
-        """A fresh state; the first ``ask`` returns the initial population."""
+    def init(self, rng: np.random.Generator, population: np.ndarray | None = None) -> Any:
+        """A fresh state; the first ``ask`` returns the initial population (``population``
+        when given, see each algorithm for what it does with it)."""
 
     @abstractmethod
     def _ask(self, state: Any, rng: np.random.Generator) -> tuple[np.ndarray, Any]: ...
 
     @abstractmethod
     def _tell(self, state: Any, genomes: np.ndarray, cost: np.ndarray,
-              rng: np.random.Generator) -> Any: ...
-
-    @abstractmethod
-    def best(self, state: Any) -> tuple[np.ndarray, float]:
-        """Best genome seen so far and its cost (``inf`` before any tell)."""
+              rng: np.random.Generator) -> Any:
+        """The algorithm's update; ``best_x``, ``best_cost`` and ``generation`` are left to
+        :meth:`tell`."""
 
     def ask(self, state: Any, rng: np.random.Generator) -> tuple[np.ndarray, Any]:
+        """Genomes to evaluate next, and the new state."""
         genomes, state = self._ask(state, rng)
         if genomes.ndim != 2 or genomes.shape[1] != self.genome.dim:
             raise ValueError(f"{self.name}: ask returned shape {genomes.shape}")
@@ -56,11 +75,35 @@ class Optimizer(ABC):
 
     def tell(self, state: Any, genomes: np.ndarray, cost: np.ndarray,
              rng: np.random.Generator) -> Any:
+        """The new state after the evaluated ``genomes`` got ``cost`` (minimised)."""
+        genomes = np.asarray(genomes)
         cost = np.asarray(cost, dtype=float)
+        if genomes.ndim != 2 or genomes.shape[1] != self.genome.dim:
+            raise ValueError(f"{self.name}: tell got genomes of shape {genomes.shape}")
         if cost.shape != (genomes.shape[0],):
             raise ValueError(f"{self.name}: {cost.shape} costs for {genomes.shape[0]} genomes")
         cost = np.where(np.isfinite(cost), cost, np.inf)
-        return self._tell(state, genomes, cost, rng)
+        new = self._tell(state, genomes, cost, rng)
+        if cost.size:
+            i = int(np.argmin(cost))  # the first of equal minima
+            if cost[i] < new.best_cost:
+                new = replace(new, best_x=np.array(genomes[i], dtype=float),
+                              best_cost=float(cost[i]))
+        if self.generation_done(new):
+            new = replace(new, generation=new.generation + 1)
+        return new
+
+    def best(self, state: Any) -> tuple[np.ndarray, float]:
+        """Best genome seen so far and its cost (``inf`` before any tell)."""
+        return state.best_x, float(state.best_cost)
+
+    def generation_done(self, state: Any) -> bool:
+        """Whether the ``tell`` that returned ``state`` completed a generation."""
+        return True
+
+    def end_of_generation(self, state: Any) -> bool:
+        """Alias of :meth:`generation_done` (kept for existing callers)."""
+        return self.generation_done(state)
 
     def stop(self, state: Any) -> str | None:
         """The optimizer's own stopping reason (for example CMA-ES ``tolfun``), or ``None``."""
