@@ -24,7 +24,8 @@ import numpy as np
 
 from evomotion.studies.arm_ik.problem import ArmIKConfig, ArmIKProblem
 from evomotion.studies.arm_ik.scenario import bundled_names
-from evomotion.studies.arm_ik.schedule import evolve
+from evomotion.studies.arm_ik.outcome import evolve, split_overrides
+from evomotion.studies.arm_ik.schedule import ScheduleConfig
 from evomotion.studies.arm_ik.success import success_table
 
 
@@ -137,10 +138,11 @@ def ablation(seeds: int, wall: float, scenarios: list[str], only: list[str] | No
         if only and not any(o in label for o in only):
             continue
         for name in scenarios:
-            cfg = ArmIKConfig(scenario=name, pictures=False, wall_seconds=wall, **kw)
+            pk, ak, _ = split_overrides(**kw)
+            cfg, sched = ArmIKConfig(scenario=name, pictures=False, **pk), ScheduleConfig(**ak)
             cpu_t, gens, ok = [], [], 0
             for s in range(seeds):
-                r = evolve(cfg, s)
+                r = evolve(cfg, s, sched, wall, problem=ArmIKProblem(cfg))
                 ok += r.solved
                 cpu_t.append(r.time_to_solution_cpu_s if r.solved else np.inf)
                 gens.append(r.generations)

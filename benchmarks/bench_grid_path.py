@@ -23,7 +23,7 @@ import numpy as np
 
 from evomotion.core.cellular_ga import CGAConfig
 from evomotion.core.neighbourhoods import neighbour_table
-from evomotion.studies.grid_path.driver import evolve
+from evomotion.studies.grid_path.outcome import evolve
 from evomotion.studies.grid_path.problem import GridPathConfig, GridPathProblem
 
 

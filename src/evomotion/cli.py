@@ -19,9 +19,15 @@ SetOpt = Annotated[list[str] | None, typer.Option("--set", help="Override, e.g. 
 
 @app.command("studies")
 def studies_cmd() -> None:
-    """List the studies with one-line descriptions."""
+    """List the studies with one-line descriptions, methods and presets."""
+    from evomotion.run.config import default_algorithm, study_algorithms
+
     for s in all_studies():
         typer.echo(f"{s.name:16s} {s.description}")
+        algs = ", ".join(study_algorithms(s))
+        typer.echo(f"{'':16s}   methods: {algs} (default {default_algorithm(s)})")
+        for p in s.presets:
+            typer.echo(f"{'':16s}   --preset {p}: {s.preset_notes.get(p, '')}")
 
 
 @app.command("run")
@@ -34,10 +40,12 @@ def run_cmd(
     workers: Annotated[int | None, typer.Option(help="Worker count (0: all cores)")] = None,
     address: Annotated[str | None, typer.Option(help="Cluster address (ray/dask)")] = None,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No console output")] = False,
+    preset: Annotated[str | None, typer.Option(
+        help="Named setting, e.g. 'seed' (the paper's literal one); default: best known")] = None,
 ) -> None:
     """Run STUDY and write a run folder (config, stats, checkpoints, plots, artifacts)."""
-    from evomotion.run.config import config_to_toml, resolve_config
-    from evomotion.run.folder import atomic_write_text, make_run_dir
+    from evomotion.run.config import resolve_config
+    from evomotion.run.folder import make_run_dir
     from evomotion.run.runner import run_study
 
     s = get_study(study)
@@ -45,11 +53,8 @@ def run_cmd(
     for key, val in (("evaluator", evaluator), ("workers", workers), ("address", address)):
         if val is not None:
             overrides.append(f"run.{key}={val!r}" if isinstance(val, str) else f"run.{key}={val}")
-    cfg = resolve_config(s, config, overrides)
+    cfg = resolve_config(s, config, overrides, preset=preset)
     out_dir = make_run_dir(s.name, out)
-    if s.run is not None:
-        atomic_write_text(out_dir / "config.toml", config_to_toml(cfg))
-        raise typer.Exit(s.run(cfg, out_dir, cfg.run.evaluator, quiet))
     _finish(run_study(s, cfg, out_dir, quiet=quiet), quiet)
 
 
@@ -82,8 +87,6 @@ def resume_cmd(
 
     name, raw = config_from_run_dir(run_dir)
     s = get_study(name)
-    if s.run is not None:
-        raise InputError(f"study {name!r} runs to completion in one go; run it again instead")
     raw.setdefault("run", {})
     for key, val in (("evaluator", evaluator), ("workers", workers), ("address", address)):
         if val is not None:
@@ -124,7 +127,7 @@ def replay_cmd(
     video: Annotated[Path | None, typer.Option(help="Write an MP4 of the replay")] = None,
 ) -> None:
     """Play a Webots .motion on the NAO model: displacement, heading change, fall."""
-    from evomotion.studies.humanoid_step.replay import replay_command
+    from evomotion.sim.nao.replay import replay_command
 
     if not motion.is_file():
         raise InputError(f"{motion}: no such motion file")
@@ -132,9 +135,16 @@ def replay_cmd(
 
 
 def _mount_study_app(argv: list[str]) -> None:
-    """Mount ``evomotion <study> ...`` subcommands for the study named on the command line."""
+    """Mount the ``evomotion <study> ...`` command groups: the one named on the command line,
+    or all of them for the top-level help (importing every study costs a second or two)."""
     if len(argv) > 1 and argv[1] in STUDIES:
-        s = get_study(argv[1])
+        names = [argv[1]]
+    elif len(argv) == 1 or argv[1] in ("--help", "-h"):
+        names = list(STUDIES)
+    else:
+        return
+    for name in names:
+        s = get_study(name)
         if s.cli is not None:
             app.add_typer(s.cli, name=s.name, help=s.description)
 

@@ -61,6 +61,7 @@ class Config:
     run: RunSection
     algorithm: Any
     problem: Any
+    preset: str | None = None  # the preset it was resolved with (recorded in config.toml)
 
 
 def parse_value(text: str) -> Any:
@@ -169,27 +170,52 @@ def build_section(cls: type, values: dict[str, Any], section: str) -> Any:
     return obj
 
 
+def study_algorithms(study: Any) -> dict[str, type]:
+    """``algorithm.name`` -> config dataclass of every method ``study`` accepts: its own
+    (``study.algorithms``) and the registered optimizers it allows (``study.core_algorithms``)."""
+    allowed = getattr(study, "core_algorithms", None)
+    out = {n: cls for n, (cls, _f) in ALGORITHMS.items() if allowed is None or n in allowed}
+    out.update({n: cls for n, (cls, _f) in getattr(study, "algorithms", {}).items()})
+    return out
+
+
+def default_algorithm(study: Any) -> str:
+    """The method a study runs when ``algorithm.name`` is not given."""
+    name = study.defaults.get("algorithm", {}).get("name")
+    return name or next(iter(study_algorithms(study)))
+
+
 def resolve_config(study: Any, file: Path | None = None,
-                   overrides: list[str] | tuple[str, ...] = ()) -> Config:
-    """Resolve the full config of ``study`` (a :class:`~evomotion.studies.base.Study`)."""
+                   overrides: list[str] | tuple[str, ...] = (),
+                   preset: str | None = None) -> Config:
+    """Resolve the full config of ``study`` (a :class:`~evomotion.studies.base.Study`):
+    dataclass defaults < study defaults < ``preset`` < TOML ``file`` < ``overrides``."""
     user: dict[str, Any] = {}
     if file is not None:
         user = load_toml(file)
         user.pop("study", None)
+        user.pop("preset", None)
     for item in overrides:
         user = apply_override(user, item)
     defaults = {k: dict(v) for k, v in study.defaults.items()}
-    default_alg = defaults.get("algorithm", {}).get("name", "ga")
+    if preset is not None:
+        presets = getattr(study, "presets", {})
+        if preset not in presets:
+            raise InputError(f"--preset: unknown preset {preset!r} for study {study.name!r}; "
+                             f"available: {', '.join(presets) or 'none'}")
+        defaults = _merge(defaults, presets[preset])
+    default_alg = defaults.get("algorithm", {}).get("name") or default_algorithm(study)
     user_alg = user.get("algorithm", {}) if isinstance(user.get("algorithm"), dict) else {}
     if user_alg.get("name", default_alg) != default_alg:
         defaults.pop("algorithm", None)  # the study's tuning is for its own algorithm
-    raw: dict[str, Any] = {"run": {}, "algorithm": {}, "problem": {}}
+    raw: dict[str, Any] = {"run": {}, "algorithm": {"name": default_alg}, "problem": {}}
     raw = _merge(_merge(raw, defaults), user)
-    return config_from_dict(study, raw)
+    cfg = config_from_dict(study, raw)
+    return dataclasses.replace(cfg, preset=preset)
 
 
 def config_from_dict(study: Any, raw: dict[str, Any]) -> Config:
-    extra = set(raw) - {"run", "algorithm", "problem", "study"}
+    extra = set(raw) - {"run", "algorithm", "problem", "study", "preset"}
     if extra:
         raise InputError(f"unknown section '{sorted(extra)[0]}'; valid sections: "
                          "algorithm, problem, run")
@@ -199,11 +225,14 @@ def config_from_dict(study: Any, raw: dict[str, Any]) -> Config:
     run = build_section(RunSection, raw.get("run", {}), "run")
     run.validate()
     alg_raw = dict(raw.get("algorithm", {}))
-    name = alg_raw.get("name", "ga")
-    alg_cls, _ = lookup(ALGORITHMS, "algorithm", str(name))
+    name = alg_raw.get("name", default_algorithm(study))
+    alg_cls = lookup(study_algorithms(study), "algorithm", str(name))
+    alg_raw["name"] = name
     algorithm = build_section(alg_cls, alg_raw, "algorithm")
     problem = build_section(study.problem_config, raw.get("problem", {}), "problem")
-    return Config(study=study.name, run=run, algorithm=algorithm, problem=problem)
+    preset = raw.get("preset")
+    return Config(study=study.name, run=run, algorithm=algorithm, problem=problem,
+                  preset=preset if isinstance(preset, str) else None)
 
 
 def _strip_none(obj: Any) -> Any:
@@ -215,7 +244,8 @@ def _strip_none(obj: Any) -> Any:
 
 
 def config_to_toml(cfg: Config) -> str:
-    data = {"study": cfg.study, "run": dataclasses.asdict(cfg.run),
+    data = {"study": cfg.study, **({"preset": cfg.preset} if cfg.preset else {}),
+            "run": dataclasses.asdict(cfg.run),
             "algorithm": dataclasses.asdict(cfg.algorithm),
             "problem": dataclasses.asdict(cfg.problem)}
     return tomli_w.dumps(_strip_none(data))

@@ -19,7 +19,7 @@ class RunContext:
     """
 
     study: str
-    out_dir: Path
+    out_dir: Path | None
     config: Any  # the resolved top-level config dataclass (config.problem is the study's)
     problem: Any
     generation: int = 0
@@ -29,6 +29,9 @@ class RunContext:
     best_metrics: dict[str, float] = field(default_factory=dict)
     stop_reason: str | None = None
     log: Callable[[str], None] = print
+    driver: Any = None  # the run's Driver (its final state is ``state``)
+    state: Any = None
+    cache: dict[str, Any] = field(default_factory=dict)  # hooks' shared results (one run)
 
     @property
     def plots_dir(self) -> Path:

@@ -52,6 +52,24 @@ class StatsWriter:
             fh.write(buf.getvalue())
 
 
+class MemoryStats:
+    """The same interface as :class:`StatsWriter`, keeping rows in memory (no-folder runs)."""
+
+    def __init__(self, columns: tuple[str, ...] = COLUMNS) -> None:
+        self.columns = columns
+        self.rows: list[dict] = []
+
+    @property
+    def offset(self) -> int:
+        return len(self.rows)
+
+    def truncate(self, offset: int) -> None:
+        del self.rows[offset:]
+
+    def write(self, row: dict) -> None:
+        self.rows.append(dict(row))
+
+
 def _fmt(v: object) -> str:
     if isinstance(v, float):
         return repr(v)
@@ -59,10 +77,17 @@ def _fmt(v: object) -> str:
 
 
 def read_stats(path: Path) -> dict[str, np.ndarray]:
-    """``stats.csv`` as columns of floats."""
-    with open(path) as fh:
+    """``stats.csv`` as columns of floats; a cell that is not a number (a study's text column,
+    such as arm-ik's ``phase``) reads as NaN."""
+    with open(path, encoding="utf-8", errors="replace") as fh:
         rows = list(csv.DictReader(fh))
     if not rows:
         return {}
-    return {k: np.array([float(r[k]) if r[k] not in ("", None) else np.nan for r in rows])
-            for k in rows[0]}
+    return {k: np.array([_float(r.get(k)) for r in rows]) for k in rows[0] if k is not None}
+
+
+def _float(v: object) -> float:
+    try:
+        return float(v)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        return float("nan")

@@ -1,4 +1,4 @@
-"""The study descriptor: how a study plugs into the runner and the CLI."""
+"""The study descriptor: how a study plugs into the run loop and the CLI."""
 
 from __future__ import annotations
 
@@ -12,18 +12,24 @@ from evomotion.run.context import RunContext
 
 @dataclass(frozen=True)
 class Study:
-    """A study: problem factory, typed problem config, defaults and optional hooks.
+    """A study: problem factory, typed problem config, defaults, presets and optional hooks.
 
     - ``problem_config``: a frozen dataclass type; its defaults are the study's defaults and
       it must be picklable (process/Ray workers rebuild the problem from it).
     - ``make_problem(problem_cfg)`` builds the :class:`Problem` (once per worker).
-    - ``defaults``: overrides of the generic sections, e.g.
+    - ``defaults``: the study's best-known setting, as overrides of the sections, e.g.
       ``{"algorithm": {"pop_size": 100, "crossover": "blx_alpha"}, "run": {"generations": 60}}``.
-    - ``on_checkpoint(ctx)``: called every ``run.checkpoint_every`` generations (for example
-      to write ``best.motion``); ``finalize(ctx)`` once at the end (plots, videos, best.json).
+    - ``presets``: named settings over the defaults (``--preset seed``: the paper's literal
+      setting), same form as ``defaults``; ``preset_notes`` says in one line what each is.
+    - ``core_algorithms``: the registered optimizers the study accepts (``None``: all of them).
+    - ``algorithms``: the study's own methods, ``name -> (config dataclass, factory(problem,
+      config) -> Driver)``, for methods that are not plain ask/tell (a multi-phase schedule, a
+      search); their config is the ``[algorithm]`` section like any optimizer's.
+    - ``on_checkpoint(ctx)``: called every ``run.checkpoint_every`` steps and at the end (for
+      example to write ``best.motion``); ``finalize(ctx)`` once at the end of a run that was not
+      interrupted (plots, videos); it may return an exit code (e.g. 3: not solved).
+    - ``best_record(ctx) -> dict``: the study's own ``best.json`` keys (after the envelope).
     - ``cli``: a ``typer.Typer`` with the study's own subcommands (``evomotion <name> ...``).
-    - ``run``: a custom driver ``run(config, out_dir, evaluator_name, quiet) -> int`` replacing
-      the generic ask/tell loop (for search-based or multi-phase studies).
     """
 
     name: str
@@ -31,7 +37,11 @@ class Study:
     problem_config: type
     make_problem: Callable[[Any], Problem]
     defaults: dict[str, dict[str, Any]] = field(default_factory=dict)
+    presets: dict[str, dict[str, dict[str, Any]]] = field(default_factory=dict)
+    preset_notes: dict[str, str] = field(default_factory=dict)
+    core_algorithms: tuple[str, ...] | None = None
+    algorithms: dict[str, tuple[type, Callable[..., Any]]] = field(default_factory=dict)
     on_checkpoint: Callable[[RunContext], None] | None = None
-    finalize: Callable[[RunContext], None] | None = None
+    finalize: Callable[[RunContext], int | None] | None = None
+    best_record: Callable[[RunContext], dict[str, Any]] | None = None
     cli: Any = None
-    run: Callable[..., int] | None = None

@@ -12,8 +12,9 @@ import pytest
 from evomotion.core.cellular_ga import CGAConfig
 from evomotion.core.ga import GAConfig
 from evomotion.run.config import resolve_config
+from evomotion.run.runner import run_study
 from evomotion.studies import get_study
-from evomotion.studies.grid_path.driver import evolve
+from evomotion.studies.grid_path.outcome import evolve
 from evomotion.studies.grid_path.experiments import algorithm_for, beyond_table, seed_table
 from evomotion.studies.grid_path.maps import read_map
 from evomotion.studies.grid_path.problem import GridPathConfig, GridPathProblem
@@ -29,11 +30,12 @@ def test_run_folder_and_best_json(tmp_path):
     study = get_study("grid-path")
     cfg = resolve_config(study, overrides=["run.generations=6", "algorithm.pop_size=36",
                                            "algorithm.crossover_rate=0.9",
-                                           "algorithm.mutation_rate=0.3"])
+                                           "algorithm.mutation_rate=0.3"], preset="seed")
     assert isinstance(cfg.algorithm, CGAConfig) and cfg.algorithm.update == "line_sweep"
-    assert study.run(cfg, tmp_path, quiet=True) == 0
+    assert run_study(study, cfg, tmp_path, quiet=True).exit_code == 0
     best = json.loads((tmp_path / "best.json").read_text())
-    assert list(best) == ["waypoints", "length", "valid", "optima", "gap_percent"]
+    assert list(best)[:10] == ["study", "sense", "fitness", "genome", "metrics", "waypoints",
+                               "length", "valid", "optima", "gap_percent"]
     assert set(best["optima"]) == set(best["gap_percent"]) == {"octile", "centres", "free"}
     pts = np.array(best["waypoints"])
     assert np.allclose(pts[0], [0.5, 0.5]) and np.allclose(pts[-1], [9.5, 9.5])
@@ -93,6 +95,8 @@ def test_cli_make_map_and_study(tmp_path):
     (["grid-path", "study", "--map", "x"], "unknown 'x'"),
     (["grid-path", "study", "--experiment", "beyond", "--update", "zig"], "--update: expected"),
     (["grid-path", "study", "--experiment", "other"], "expected 'seed' or 'beyond'"),
+    (["run", "grid-path", "--preset", "paper"], "unknown preset 'paper'"),
+    (["run", "grid-path", "--set", "algorithm.name='cmaes'"], "available: cga, ga"),
 ])
 def test_bad_input_is_one_line_error(tmp_path, args, msg):
     r = cli(*args, cwd=tmp_path)
@@ -106,10 +110,11 @@ def _run_folder(tmp, evaluator: str):
                                            "algorithm.mutation_rate=0.3", "run.seed=4",
                                            f"run.evaluator='{evaluator}'", "run.workers=2",
                                            "run.chunks_per_worker=2"])
-    assert study.run(cfg, tmp, cfg.run.evaluator, quiet=True) == 0
+    assert run_study(study, cfg, tmp, quiet=True).exit_code == 0
     stats = [line.split(",") for line in (tmp / "stats.csv").read_text().splitlines()]
-    wall = stats[0].index("wall_s")
-    return (tmp / "best.json").read_text(), [r[:wall] + r[wall + 1:] for r in stats]
+    timed = {stats[0].index("wall_s"), stats[0].index("evals_per_s")}
+    return (tmp / "best.json").read_text(), [[v for i, v in enumerate(r) if i not in timed]
+                                             for r in stats]
 
 
 def test_process_evaluator_is_bit_identical_to_serial(tmp_path):
@@ -119,14 +124,18 @@ def test_process_evaluator_is_bit_identical_to_serial(tmp_path):
 
 
 def test_evolve_evaluates_every_batch_through_the_evaluator():
+    from evomotion.run.evaluators import SerialEvaluator
+
     p = GridPathProblem(GridPathConfig(map="seed10a"))
     sizes: list[int] = []
 
-    def spy(x):
-        sizes.append(len(x))
-        return p.evaluate(x)
+    class Spy(SerialEvaluator):
+        def __call__(self, x):
+            sizes.append(len(x))
+            return super().__call__(x)
 
-    r = evolve(p, algorithm_for("cga-L5-line", 36, 0.9, 0.3), 1, 3, evaluate=spy)
+    r = evolve(p, algorithm_for("cga-L5-line", 36, 0.9, 0.3), 1, 3,
+               evaluator=Spy(lambda _c: p, None))
     assert sum(sizes) == r.evaluations and sizes[0] == 36 and len(sizes) > 4
     assert evolve(p, algorithm_for("cga-L5-line", 36, 0.9, 0.3), 1, 3).genome.tolist() \
         == r.genome.tolist()

@@ -16,7 +16,19 @@ from evomotion.studies.quadruped_plan.checker import PlanViolationError, check_p
 from evomotion.studies.quadruped_plan.experiment import SEED_FIGURES, format_table, run_config
 from evomotion.studies.quadruped_plan.plan import plan_document, read_plan, write_plan
 from evomotion.studies.quadruped_plan.planner import QuadrupedPlanConfig, make_problem, solve
-from evomotion.studies.quadruped_plan.study import STUDY, cli, run_plan
+from evomotion.studies.quadruped_plan.study import STUDY, cli
+
+
+def run_plan(problem_cfg: QuadrupedPlanConfig, out: Path, **alg) -> int:
+    """One run of the study through the run loop with this ``[problem]``."""
+    from evomotion.run.config import Config, RunSection
+    from evomotion.run.runner import run_study
+    from evomotion.studies.quadruped_plan.search_driver import SearchConfig
+
+    out.mkdir(parents=True, exist_ok=True)
+    cfg = Config("quadruped-plan", RunSection(generations=10**6), SearchConfig(**alg),
+                 problem_cfg)
+    return run_study(STUDY, cfg, out, quiet=True).exit_code
 
 SHORT = QuadrupedPlanConfig(start_phi=0.0, goal_x=0.0, goal_y=-7.0, rule_set="B", function=3,
                             gif_max_frames=12)
@@ -113,11 +125,33 @@ def test_unreachable_goal_and_zero_budget_exit_non_zero(tmp_path: Path) -> None:
 def test_study_descriptor_and_runner_entry(tmp_path: Path) -> None:
     from evomotion.run.config import resolve_config
 
-    assert STUDY.name == "quadruped-plan" and STUDY.run is not None
+    from evomotion.run.runner import run_study
+
+    assert STUDY.name == "quadruped-plan" and "search" in STUDY.algorithms
     cfg = resolve_config(STUDY, overrides=["problem.goal_y=-7.0", "problem.goal_x=0.0",
                                            "problem.start_phi=0.0", "problem.gif_max_frames=8"])
-    assert STUDY.run(cfg, tmp_path, "serial", True) == 0
+    assert run_study(STUDY, cfg, tmp_path, quiet=True).exit_code == 0
     assert (tmp_path / "config.toml").exists() and (tmp_path / "plan.gif").exists()
+
+
+def test_batches_of_expansions_give_the_one_shot_plan(tmp_path: Path) -> None:
+    assert run_plan(SHORT, tmp_path / "small", batch_expansions=97) == 0
+    one = solve(SHORT, make_problem(SHORT))
+    doc = read_plan(tmp_path / "small" / "plan.json")
+    assert len(doc["states"]) == len(one.states)
+    assert doc["search"]["expansions"] == one.expansions
+    rows = (tmp_path / "small" / "stats.csv").read_text().splitlines()
+    assert len(rows) - 1 == -(-one.expansions // 97)
+
+
+def test_a_process_evaluator_is_refused(tmp_path: Path) -> None:
+    from evomotion.errors import InputError
+    from evomotion.run.config import resolve_config
+    from evomotion.run.runner import run_study
+
+    cfg = resolve_config(STUDY, overrides=["run.evaluator='process'"])
+    with pytest.raises(InputError, match="no batch evaluation"):
+        run_study(STUDY, cfg, tmp_path, quiet=True)
 
 
 def test_cli_check_exit_codes(doc: dict, tmp_path: Path) -> None:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -26,29 +28,17 @@ from evomotion.studies.arm_ik.visibility import VisibilityGraph
 
 @dataclass(frozen=True)
 class ArmIKConfig:
-    """``[problem]`` section of the arm-ik study (angles in degrees, lengths in board units)."""
+    """``[problem]`` section of the arm-ik study (angles in degrees, lengths in board units).
+
+    The GA and its schedule are the ``[algorithm]`` section
+    (:class:`evomotion.studies.arm_ik.schedule.ScheduleConfig`)."""
 
     scenario: str = "seed_example"  # bundled name or path to a scenario file
     matching: str = "optimal"  # greedy | optimal | chromosome
     distance: str = "straight"  # straight | obstacle (way around the obstacles)
-    pop_size: int = 60
-    arm_generations: int = 15  # seed schedule: N arm generations,
-    finger_generations: int = 15  # then M finger generations,
-    whole_generations: int = 3000  # then whole-limb generations (until solved)
-    wall_seconds: float = 30.0  # give up after this long (whole run)
-    restart_after: int = 60  # whole-limb generations without a 1% gain -> restart (0 = never)
-    tournament_k: int = 2  # parent tournament size
-    blend_prob: float = 0.5  # per active gene: beta-blend, else inherit (uniform swap)
-    circular_blend: bool = True  # blend full-circle angles along the shorter arc
-    mutation_rate: float = 1.0  # probability that a child gets one angle perturbed
-    mutation_min_deg: float = 1e-3  # perturbation magnitude is log-uniform in [min, max]
-    mutation_max_deg: float = 60.0
-    infeasible_fraction: float = 0.1  # IDEA: share of survivors kept infeasible
-    survival: str = "pairwise"  # pairwise | tournament (seed's literal: with replacement)
     board_walls: bool = True  # a joint outside the board counts as one intersection
     cell_size: float = 0.0  # heuristic cell side (board units); 0 = diagonal / 150
     tolerance: float = 1e-3  # solved: every tip within tolerance * diagonal of its target
-    stop_when_solved: bool = True
     pictures: bool = True  # board.png and best.gif in the run folder
     gif_frames: int = 30
 
@@ -59,15 +49,6 @@ class ArmIKConfig:
         if self.distance not in DISTANCES:
             raise InputError(f"problem.distance: expected one of {', '.join(DISTANCES)}, "
                              f"got {self.distance!r}")
-        if self.survival not in ("pairwise", "tournament"):
-            raise InputError(f"problem.survival: expected pairwise or tournament, "
-                             f"got {self.survival!r}")
-        if self.pop_size < 4 or self.pop_size % 2:
-            raise InputError(f"problem.pop_size: expected an even number >= 4, got {self.pop_size}")
-        if not 0 <= self.infeasible_fraction < 1:
-            raise InputError("problem.infeasible_fraction: expected a value in [0, 1)")
-        if not 0 < self.mutation_min_deg <= self.mutation_max_deg:
-            raise InputError("problem.mutation_min_deg/max_deg: expected 0 < min <= max")
 
 
 @dataclass
@@ -98,6 +79,7 @@ class ArmIKProblem:
     metric_names = ("distance", "intersections", "max_tip_error", "solved")
 
     def __init__(self, cfg: ArmIKConfig, scenario: Scenario | None = None) -> None:
+        t0, c0 = time.perf_counter(), time.process_time()
         cfg.validate()
         self.cfg = cfg
         self.scn = scenario if scenario is not None else load_scenario(cfg.scenario)
@@ -107,6 +89,9 @@ class ArmIKProblem:
         self.wrist_map: WristMap = build_wrist_map(self.scn, cfg.cell_size)
         self.visibility = VisibilityGraph.build(self.scn) if cfg.distance == "obstacle" else None
         self.tol = cfg.tolerance * self.scn.diagonal
+        # the heuristics are part of the method: the schedule's time to solution counts them
+        self.build_seconds = time.perf_counter() - t0
+        self.build_cpu_s = time.process_time() - c0
 
     def assess(self, genomes: np.ndarray) -> Assessment:
         g = np.atleast_2d(np.asarray(genomes, dtype=float))
@@ -143,12 +128,34 @@ class ArmIKProblem:
         return (x < 0) | (y < 0) | (x > self.scn.width) | (y > self.scn.height)
 
     def evaluate(self, genomes: np.ndarray) -> Evaluation:
-        """Whole-limb fitness ``distance + diagonal * intersections`` (for generic optimizers)."""
+        """Whole-limb fitness ``distance + diagonal * intersections``; the metrics carry the
+        whole :class:`Assessment` (keys ``assessment.<field>``) for the schedule's phases."""
         a = self.assess(genomes)
-        fit = a.distance + self.scn.diagonal * a.intersections
         metrics = {"distance": a.distance, "intersections": a.intersections.astype(float),
                    "max_tip_error": a.tip_error.max(axis=1), "solved": a.solved.astype(float)}
-        return Evaluation(fit, metrics)
+        metrics.update({f"assessment.{k}": v for k, v in vars(a).items()})
+        return Evaluation(self.fitness(a), metrics)
+
+    def fitness(self, a: Assessment) -> np.ndarray:
+        return a.distance + self.scn.diagonal * a.intersections
+
+    def assessment_of(self, ev: Evaluation) -> Assessment:
+        """The :class:`Assessment` carried by ``ev`` (from any evaluator); an individual
+        whose evaluation failed counts as infinitely far with one intersection per bone."""
+        fields = [f.name for f in dataclasses.fields(Assessment)]
+        if all(f"assessment.{k}" in ev.metrics for k in fields):
+            a = Assessment(**{k: np.asarray(ev.metrics[f"assessment.{k}"]) for k in fields})
+        else:
+            n, F = len(ev), self.scn.n_targets
+            a = Assessment(np.full(n, np.inf), np.ones(n, int), np.ones(n, int),
+                           np.full(n, np.inf), np.full((n, F), np.inf), np.zeros((n, F), int),
+                           np.full((n, F, 2), np.nan), np.zeros(n, bool))
+        if ev.failed is not None and ev.failed.any():
+            bad = ev.failed
+            a.distance = np.where(bad, np.inf, a.distance)
+            a.wrist_distance = np.where(bad, np.inf, a.wrist_distance)
+            a.solved = a.solved & ~bad
+        return a
 
 
 def make_problem(cfg: ArmIKConfig) -> ArmIKProblem:

@@ -1,29 +1,73 @@
-"""Seed 001's schedule (section 2): N arm generations, then M finger generations, then
-whole-limb generations until a solution is found or the budget (generations, wall time) ends.
+"""Seed 001's schedule (section 2) as a driver: N arm generations, then M finger generations,
+then whole-limb generations until a solution is found or the budget ends, with restarts.
 
 In the arm phase the objective is the wrist's distance to the nearest wrist-candidate cell
 and only arm bones count as intersections; in the finger and whole-limb phases it is the sum
 of matched tip-target distances and every bone counts (section 3.3). A solution: every tip
 within ``tolerance * diagonal`` of a distinct target, no intersection, all limits respected.
+When the whole-limb phase gains less than 1% in ``restart_after`` generations, the schedule
+restarts from a fresh population (the best limb found so far is kept).
+
+One driver step is one generation (the first step evaluates the initial population); the
+state is explicit, so a run stops, checkpoints and resumes like any other.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import time
-from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
+from evomotion.errors import InputError
+from evomotion.run.driver import Driver, Evaluate, StepReport
 from evomotion.studies.arm_ik.evolution import crossover, mutate, parents, rank_order, survivors
-from evomotion.studies.arm_ik.problem import ArmIKConfig, ArmIKProblem, Assessment
+from evomotion.studies.arm_ik.problem import ArmIKProblem, Assessment
 
-STATS_COLUMNS = (
-    "generation", "phase", "evaluations", "time_s", "best_objective", "best_intersections",
-    "best_feasible_objective", "mean_objective", "var_objective", "mean_intersections",
-    "var_intersections", "originality", "feasible_fraction", "best_limb_distance",
-    "best_limb_intersections", "best_limb_max_tip_error", "solved", "restarts",
+EXTRA_COLUMNS = (
+    "phase", "best_objective", "best_intersections", "best_feasible_objective",
+    "mean_objective", "var_objective", "mean_intersections", "var_intersections",
+    "originality", "feasible_fraction", "best_limb_distance", "best_limb_intersections",
+    "best_limb_max_tip_error", "solved", "restarts",
 )
+
+
+@dataclass(frozen=True)
+class ScheduleConfig:
+    """``[algorithm]`` of arm-ik (``name = "schedule"``): the seed's GA and its phases."""
+
+    name: str = "schedule"
+    pop_size: int = 60
+    arm_generations: int = 15  # seed schedule: N arm generations,
+    finger_generations: int = 15  # then M finger generations,
+    whole_generations: int = 3000  # then whole-limb generations (until solved)
+    restart_after: int = 60  # whole-limb generations without a 1% gain -> restart (0 = never)
+    tournament_k: int = 2  # parent tournament size
+    blend_prob: float = 0.5  # per active gene: beta-blend, else inherit (uniform swap)
+    circular_blend: bool = True  # blend full-circle angles along the shorter arc
+    mutation_rate: float = 1.0  # probability that a child gets one angle perturbed
+    mutation_min_deg: float = 1e-3  # perturbation magnitude is log-uniform in [min, max]
+    mutation_max_deg: float = 60.0
+    infeasible_fraction: float = 0.1  # IDEA: share of survivors kept infeasible
+    survival: str = "pairwise"  # pairwise | tournament (seed's literal: with replacement)
+    stop_when_solved: bool = True
+
+    def validate(self) -> None:
+        if self.survival not in ("pairwise", "tournament"):
+            raise InputError(f"algorithm.survival: expected pairwise or tournament, "
+                             f"got {self.survival!r}")
+        if self.pop_size < 4 or self.pop_size % 2:
+            raise InputError(f"algorithm.pop_size: expected an even number >= 4, "
+                             f"got {self.pop_size}")
+        if not 0 <= self.infeasible_fraction < 1:
+            raise InputError("algorithm.infeasible_fraction: expected a value in [0, 1)")
+        if not 0 < self.mutation_min_deg <= self.mutation_max_deg:
+            raise InputError("algorithm.mutation_min_deg/max_deg: expected 0 < min <= max")
+        for k in ("arm_generations", "finger_generations", "whole_generations",
+                  "restart_after", "tournament_k"):
+            if getattr(self, k) < 0:
+                raise InputError(f"algorithm.{k}: expected >= 0, got {getattr(self, k)}")
 
 
 def phase_objective(a: Assessment, mode: str) -> tuple[np.ndarray, np.ndarray]:
@@ -33,146 +77,178 @@ def phase_objective(a: Assessment, mode: str) -> tuple[np.ndarray, np.ndarray]:
     return a.distance, a.intersections
 
 
-@dataclass
-class RunResult:
-    """Outcome of one schedule run; ``best`` is the best whole limb (first solution if any)."""
-
-    problem: ArmIKProblem
-    best: np.ndarray
-    best_assessment: Assessment
-    solved: bool
-    time_to_solution_s: float | None
-    generations: int
-    evaluations: int
-    elapsed_s: float
-    history: np.ndarray  # (generations + 1, dim): best whole limb after each generation
-    stats: list[dict] = field(default_factory=list)
-    restarts: int = 0
-    final_population: np.ndarray | None = None
-    final_distance: np.ndarray | None = None  # whole-limb objective of the final population
-    time_to_solution_cpu_s: float | None = None  # process CPU time (robust on a busy machine)
-
-
-def _limb_key(a: Assessment) -> np.ndarray:
+def limb_key(a: Assessment) -> np.ndarray:
     return rank_order(a.intersections, a.distance)
 
 
-class _Run:
-    """Mutable state of one schedule run (population, best limb, counters)."""
+@dataclass
+class ScheduleState:
+    pop: np.ndarray
+    assessment: Assessment
+    best_x: np.ndarray
+    best_a: Assessment
+    history: np.ndarray  # (generations + 1, dim): best whole limb after each generation
+    generation: int = -1  # -1: the initial population is not evaluated yet
+    phase: str = "arm"
+    in_phase: int = 0  # generations done in the arm or finger phase
+    whole_left: int = 0
+    mark: float = float("inf")
+    mark_generation: int = 0
+    restarts: int = 0
+    mode: str = "init"  # phase of the last generation
+    elapsed_s: float = 0.0  # wall time in this driver's steps (and building the problem)
+    cpu_s: float = 0.0  # the same in process CPU time
+    solved_s: float = float("nan")  # elapsed_s when the first solution was found
+    solved_cpu_s: float = float("nan")
 
-    def __init__(self, cfg: ArmIKConfig, prob: ArmIKProblem, seed: int, t0: float) -> None:
-        self.cfg, self.prob, self.t0 = cfg, prob, t0
-        self.c0 = time.process_time()
-        self.solved_cpu: float | None = None
-        self.rng = np.random.default_rng(seed)
-        self.gen = self.evals = self.restarts = 0
-        self.solved_at: float | None = None
-        self.stats: list[dict] = []
-        self.fresh_population()
-        i = int(np.argmin(_limb_key(self.A)))
-        self.best, self.best_a = self.pop[i].copy(), self.A.take(np.array([i]))
-        self.history = [self.best.copy()]
-        self.note_solution()
 
-    def fresh_population(self) -> None:
-        self.pop = self.prob.genome.sample(self.rng, self.cfg.pop_size)
-        self.A = self.prob.assess(self.pop)
-        self.evals += self.cfg.pop_size
+class ScheduleDriver(Driver):
+    """Steps the schedule on an :class:`ArmIKProblem`."""
 
-    def note_solution(self) -> None:
-        if self.best_a.solved[0] and self.solved_at is None:
-            self.solved_at = time.perf_counter() - self.t0
-            self.solved_cpu = time.process_time() - self.c0
+    sense = "min"
+    extra_columns = EXTRA_COLUMNS
 
-    @property
-    def done(self) -> bool:
-        out_of_time = time.perf_counter() - self.t0 > self.cfg.wall_seconds
-        return out_of_time or (self.solved_at is not None and self.cfg.stop_when_solved)
+    def __init__(self, problem: ArmIKProblem, cfg: ScheduleConfig) -> None:
+        cfg.validate()
+        self.problem, self.cfg = problem, cfg
 
-    def generation(self, mode: str) -> dict:
-        cfg, lay, N, rng = self.cfg, self.prob.layout, self.cfg.pop_size, self.rng
-        obj, hits = phase_objective(self.A, mode)
+    def init(self, rng: np.random.Generator) -> ScheduleState:
+        d = self.problem.genome.dim
+        empty = Assessment(*(np.zeros((0,)) for _ in range(4)), np.zeros((0, 1)),
+                           np.zeros((0, 1), int), np.zeros((0, 1, 2)), np.zeros(0, bool))
+        return ScheduleState(np.zeros((0, d)), empty, np.full(d, np.nan), empty,
+                             np.zeros((0, d)), whole_left=self.cfg.whole_generations,
+                             elapsed_s=self.problem.build_seconds,
+                             cpu_s=self.problem.build_cpu_s)
+
+    def best(self, state: ScheduleState) -> tuple[np.ndarray, float]:
+        if state.generation < 0:
+            return state.best_x, float("inf")
+        return state.best_x, float(self.problem.fitness(state.best_a)[0])
+
+    def stop(self, state: ScheduleState) -> str | None:
+        if state.generation < 0:
+            return None
+        if self.cfg.stop_when_solved and bool(state.best_a.solved[0]):
+            return "solved"
+        if self._next_phase(state.phase, state.in_phase) == "whole" and state.whole_left <= 0:
+            return "whole_generations"
+        return None
+
+    def step(self, state: ScheduleState, rng: np.random.Generator,
+             evaluate: Evaluate) -> tuple[ScheduleState, StepReport]:
+        t0, c0 = time.perf_counter(), time.process_time()
+        s = dataclasses.replace(state)
+        n_eval, failed, errors = 0, 0, []
+
+        def assess(x: np.ndarray) -> Assessment:
+            nonlocal n_eval, failed
+            ev = evaluate(x)
+            n_eval += len(x)
+            failed += int(ev.failed.sum()) if ev.failed is not None else 0
+            errors.extend(ev.errors)
+            return self.problem.assessment_of(ev)
+
+        mode = "init"
+        if s.generation < 0:
+            s.pop = self.problem.genome.sample(rng, self.cfg.pop_size)
+            s.assessment = assess(s.pop)
+            i = int(np.argmin(limb_key(s.assessment)))
+            s.best_x, s.best_a = s.pop[i].copy(), s.assessment.take(np.array([i]))
+            s.history = s.best_x[None].copy()
+            s.phase = self._next_phase("arm", 0)
+        else:
+            mode = self._advance(s, rng, assess)
+            self._generation(s, mode, rng, assess)
+        s.generation += 1
+        s.elapsed_s += time.perf_counter() - t0
+        s.cpu_s += time.process_time() - c0
+        if bool(s.best_a.solved[0]) and np.isnan(s.solved_s):
+            s.solved_s, s.solved_cpu_s = s.elapsed_s, s.cpu_s
+        report = self._report(s, mode, n_eval, failed, errors, changed=mode != state.mode)
+        s.mode = mode
+        return s, report
+
+    def _next_phase(self, phase: str, done: int) -> str:
+        if phase == "arm" and done >= self.cfg.arm_generations:
+            phase, done = "fingers", 0
+        if phase == "fingers" and done >= self.cfg.finger_generations:
+            phase = "whole"
+        return phase
+
+    def _advance(self, s: ScheduleState, rng: np.random.Generator, assess) -> str:
+        """The phase of this step's generation (after any phase change or restart)."""
+        for _ in range(3):
+            nxt = self._next_phase(s.phase, s.in_phase)
+            if nxt != s.phase:
+                s.phase, s.in_phase = nxt, 0
+                if nxt == "whole":
+                    s.mark, s.mark_generation = float("inf"), s.generation
+            if s.phase != "whole":
+                s.in_phase += 1
+                return s.phase
+            d = float(s.assessment.distance[np.argmin(limb_key(s.assessment))])
+            if d < 0.99 * s.mark:
+                s.mark, s.mark_generation = d, s.generation
+            elif self.cfg.restart_after and \
+                    s.generation - s.mark_generation >= self.cfg.restart_after:
+                s.restarts += 1
+                s.pop = self.problem.genome.sample(rng, self.cfg.pop_size)
+                s.assessment = assess(s.pop)
+                s.phase, s.in_phase = "arm", 0
+                continue
+            s.whole_left -= 1
+            return "whole"
+        raise RuntimeError("arm-ik schedule: no phase left to run")
+
+    def _generation(self, s: ScheduleState, mode: str, rng: np.random.Generator,
+                    assess) -> None:
+        cfg, lay, N = self.cfg, self.problem.layout, self.cfg.pop_size
+        obj, hits = phase_objective(s.assessment, mode)
         ia, ib = parents(rank_order(hits, obj), N // 2, rng, cfg.tournament_k)
-        kids = crossover(self.pop[ia], self.pop[ib], lay, mode, rng, cfg.blend_prob,
+        kids = crossover(s.pop[ia], s.pop[ib], lay, mode, rng, cfg.blend_prob,
                          cfg.circular_blend)
         kids = mutate(kids, lay, mode, rng, cfg.mutation_rate, cfg.mutation_min_deg,
                       cfg.mutation_max_deg)
-        K = self.prob.assess(kids)
-        self.evals += N
-        pool, PA = np.concatenate([self.pop, kids]), Assessment.concat(self.A, K)
+        K = assess(kids)
+        pool, PA = np.concatenate([s.pop, kids]), Assessment.concat(s.assessment, K)
         obj, hits = phase_objective(PA, mode)
-        keep = survivors(hits, obj, N, rng, cfg.infeasible_fraction,
-                         cfg.survival == "pairwise")
-        self.gen += 1
+        keep = survivors(hits, obj, N, rng, cfg.infeasible_fraction, cfg.survival == "pairwise")
         # best whole limb so far (a child may hold it even when its phase ranks it low)
-        j = int(np.argmin(_limb_key(K)))
-        if _limb_key(Assessment.concat(self.best_a, K.take(np.array([j]))))[1] == 0:
-            self.best, self.best_a = kids[j].copy(), K.take(np.array([j]))
-        self.pop, self.A = pool[keep], PA.take(keep)
-        self.history.append(self.best.copy())
-        self.note_solution()
-        row = _stats_row(self.gen, mode, self.evals, time.perf_counter() - self.t0, self.pop,
-                         self.A, self.best_a)
-        row["restarts"] = self.restarts
-        self.stats.append(row)
-        return row
+        j = int(np.argmin(limb_key(K)))
+        if limb_key(Assessment.concat(s.best_a, K.take(np.array([j]))))[1] == 0:
+            s.best_x, s.best_a = kids[j].copy(), K.take(np.array([j]))
+        s.pop, s.assessment = pool[keep], PA.take(keep)
+        s.history = np.concatenate([s.history, s.best_x[None]])
+
+    def _report(self, s: ScheduleState, mode: str, n: int, failed: int,
+                errors: list[str], changed: bool) -> StepReport:
+        A, b_a = s.assessment, s.best_a
+        obj, hits = phase_objective(A, "arm" if mode == "arm" else "whole")
+        r = rank_order(hits, obj)
+        b = int(np.argmin(r))
+        feas = hits == 0
+        extras = {
+            "phase": mode, "best_objective": float(obj[b]), "best_intersections": int(hits[b]),
+            "best_feasible_objective": float(obj[feas].min()) if feas.any() else float("nan"),
+            "mean_objective": float(obj.mean()), "var_objective": float(obj.var()),
+            "mean_intersections": float(hits.mean()), "var_intersections": float(hits.var()),
+            "originality": np.unique(s.pop, axis=0).shape[0] / s.pop.shape[0],
+            "feasible_fraction": float(feas.mean()),
+            "best_limb_distance": float(b_a.distance[0]),
+            "best_limb_intersections": int(b_a.intersections[0]),
+            "best_limb_max_tip_error": float(b_a.tip_error[0].max()),
+            "solved": int(b_a.solved[0]), "restarts": s.restarts,
+        }
+        metrics = {"distance": float(b_a.distance[0]),
+                   "intersections": float(b_a.intersections[0]),
+                   "max_tip_error": float(b_a.tip_error[0].max()),
+                   "solved": float(b_a.solved[0])}
+        lines = [f"{mode} phase" + (f" (restart {s.restarts})" if s.restarts and mode == "arm"
+                                    else "")] if changed and mode != "init" else []
+        return StepReport(n, self.problem.fitness(A), s.pop, failed, errors, metrics, extras,
+                          lines)
 
 
-def evolve(cfg: ArmIKConfig, seed: int, problem: ArmIKProblem | None = None,
-           on_generation: Callable[[dict], None] | None = None) -> RunResult:
-    """Run the schedule with ``numpy.random.default_rng(seed)``; time includes the heuristics.
-
-    When the whole-limb phase gains less than 1% in ``restart_after`` generations, the
-    schedule restarts from a fresh population (the best limb found so far is kept).
-    """
-    t0 = time.perf_counter()
-    prob = problem if problem is not None else ArmIKProblem(cfg)
-    run = _Run(cfg, prob, seed, t0)
-    restarts, whole_left = -1, cfg.whole_generations
-    while not run.done and (restarts < 0 or whole_left > 0):
-        restarts += 1
-        run.restarts = restarts
-        if restarts:
-            run.fresh_population()
-        for mode, n_gen in (("arm", cfg.arm_generations), ("fingers", cfg.finger_generations)):
-            for _ in range(n_gen):
-                if run.done:
-                    break
-                row = run.generation(mode)
-                if on_generation is not None:
-                    on_generation(row)
-        mark, mark_gen = np.inf, run.gen
-        while whole_left > 0 and not run.done:
-            d = float(run.A.distance[np.argmin(_limb_key(run.A))])
-            if d < 0.99 * mark:
-                mark, mark_gen = d, run.gen
-            elif cfg.restart_after and run.gen - mark_gen >= cfg.restart_after:
-                break
-            whole_left -= 1
-            row = run.generation("whole")
-            if on_generation is not None:
-                on_generation(row)
-    return RunResult(prob, run.best, run.best_a, bool(run.best_a.solved[0]), run.solved_at,
-                     run.gen, run.evals, time.perf_counter() - t0, np.array(run.history),
-                     run.stats, max(restarts, 0), run.pop, run.A.distance, run.solved_cpu)
-
-
-def _stats_row(gen: int, mode: str, evals: int, t: float, pop: np.ndarray, A: Assessment,
-               best_a: Assessment) -> dict:
-    obj, hits = phase_objective(A, mode)
-    r = rank_order(hits, obj)
-    b = int(np.argmin(r))
-    feas = hits == 0
-    return {
-        "generation": gen, "phase": mode, "evaluations": evals, "time_s": round(t, 4),
-        "best_objective": float(obj[b]), "best_intersections": int(hits[b]),
-        "best_feasible_objective": float(obj[feas].min()) if feas.any() else float("nan"),
-        "mean_objective": float(obj.mean()), "var_objective": float(obj.var()),
-        "mean_intersections": float(hits.mean()), "var_intersections": float(hits.var()),
-        "originality": np.unique(pop, axis=0).shape[0] / pop.shape[0],
-        "feasible_fraction": float(feas.mean()),
-        "best_limb_distance": float(best_a.distance[0]),
-        "best_limb_intersections": int(best_a.intersections[0]),
-        "best_limb_max_tip_error": float(best_a.tip_error[0].max()),
-        "solved": int(best_a.solved[0]),
-    }
+def make_driver(problem: ArmIKProblem, config) -> ScheduleDriver:
+    return ScheduleDriver(problem, config.algorithm)

@@ -1,28 +1,22 @@
-"""The arm-ik study (seed 001): descriptor, run adapter and the ``evomotion arm-ik`` commands."""
+"""The arm-ik study (seed 001): descriptor and the ``evomotion arm-ik`` commands.
+
+``evomotion run arm-ik`` runs the seed's schedule (``[algorithm]`` name ``schedule``) through
+the run loop: stats.csv (core columns, then the seed's GUI statistics), best.json, board.png,
+best.gif; exit code 3 when no solution was found.
+"""
 
 from __future__ import annotations
 
-import dataclasses
-from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated
 
 import typer
 
 from evomotion.errors import InputError
-from evomotion.studies.arm_ik.driver import run_schedule
+from evomotion.studies.arm_ik.outcome import best_record, finalize
 from evomotion.studies.arm_ik.problem import ArmIKConfig, make_problem
 from evomotion.studies.arm_ik.scenario import bundled_names, load_scenario
+from evomotion.studies.arm_ik.schedule import ScheduleConfig, make_driver
 from evomotion.studies.base import Study
-
-
-def run(config: Any, out_dir: Path, evaluator: str = "serial", quiet: bool = False) -> int:
-    """Study.run adapter: ``config.problem`` is an :class:`ArmIKConfig`, ``config.run.seed``
-    the seed; a positive ``run.wall_seconds`` overrides ``problem.wall_seconds``."""
-    cfg: ArmIKConfig = config.problem
-    wall = float(getattr(config.run, "wall_seconds", 0.0) or 0.0)
-    if wall > 0:
-        cfg = dataclasses.replace(cfg, wall_seconds=wall)
-    return run_schedule(cfg, int(config.run.seed), out_dir, quiet)
 
 
 cli = typer.Typer(add_completion=False, no_args_is_help=True,
@@ -59,6 +53,19 @@ STUDY = Study(
     description="Arm + fingers inverse kinematics among obstacles (seed 001)",
     problem_config=ArmIKConfig,
     make_problem=make_problem,
+    # generations are counted by the schedule (algorithm.whole_generations); the seed gives
+    # a run 30 s of wall time
+    defaults={"run": {"generations": 1_000_000, "wall_seconds": 30.0,
+                      "checkpoint_every": 50}},
+    presets={"seed": {"problem": {"matching": "greedy"},
+                      "algorithm": {"survival": "tournament", "restart_after": 0,
+                                    "circular_blend": False, "mutation_min_deg": 5.0,
+                                    "mutation_max_deg": 5.0}}},
+    preset_notes={"seed": "the seed's literal choices: greedy matching, fixed 5 deg mutation, "
+                          "linear angle blend, no restarts, survival with replacement"},
+    core_algorithms=(),
+    algorithms={"schedule": (ScheduleConfig, make_driver)},
+    finalize=finalize,
+    best_record=best_record,
     cli=cli,
-    run=run,
 )

@@ -6,8 +6,9 @@ import dataclasses
 
 import numpy as np
 
-from evomotion.studies.arm_ik.problem import ArmIKConfig
-from evomotion.studies.arm_ik.schedule import evolve
+from evomotion.studies.arm_ik.outcome import evolve, split_overrides
+from evomotion.studies.arm_ik.problem import ArmIKConfig, ArmIKProblem
+from evomotion.studies.arm_ik.schedule import ScheduleConfig
 
 
 @dataclasses.dataclass
@@ -37,11 +38,14 @@ HEADER = ("| scenario | matching | solved | median wall s to solution | median C
 
 
 def success_table(scenario: str, seeds: int, **overrides) -> SuccessRow:
-    """Run ``seeds`` seeds (0..seeds-1) of the schedule on ``scenario`` (no pictures)."""
-    cfg = ArmIKConfig(scenario=scenario, pictures=False, **overrides)
+    """Run ``seeds`` seeds (0..seeds-1) of the schedule on ``scenario`` (no pictures);
+    ``overrides`` are problem or algorithm keys, or ``wall_seconds`` (default 30)."""
+    pk, ak, rk = split_overrides(**overrides)
+    cfg = ArmIKConfig(scenario=scenario, pictures=False, **pk)
+    sched = ScheduleConfig(**ak)
     times, cpu, gens, errs, ok = [], [], [], [], 0
     for s in range(seeds):
-        r = evolve(cfg, s)
+        r = evolve(cfg, s, sched, rk.get("wall_seconds", 30.0), problem=ArmIKProblem(cfg))
         ok += r.solved
         times.append(r.time_to_solution_s if r.solved else np.inf)
         cpu.append(r.time_to_solution_cpu_s if r.solved else np.inf)

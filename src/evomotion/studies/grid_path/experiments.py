@@ -17,7 +17,7 @@ import numpy as np
 
 from evomotion.core.cellular_ga import CGAConfig
 from evomotion.core.ga import GAConfig
-from evomotion.studies.grid_path.driver import evolve
+from evomotion.studies.grid_path.outcome import evolve
 from evomotion.studies.grid_path.problem import GridPathConfig, GridPathProblem
 from evomotion.studies.grid_path.solvers import Solution, all_optima
 

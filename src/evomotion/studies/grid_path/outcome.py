@@ -1,38 +1,24 @@
-"""The grid-path run driver: the seed's cGA (or the panmictic GA) with its path operators.
+"""The outcome of a grid-path run: the best path (repaired when enabled), its length, validity
+and gap to the exact optima, and :func:`evolve`, one in-memory run through the run loop.
 
-The generic runner counts one ``tell`` as a generation and builds optimizers from the
-genome alone; the seed's method needs the valid initial paths and the validity-keeping
-mutation of :mod:`.operators`, and an asynchronous cGA sweep spans several ``ask``/``tell``
-waves. :func:`evolve` therefore drives the ask/tell loop itself: one statistics row per
-generation (one full sweep), the cGA built with ``mutate=operators.mutate``, the GA with its
-registry mutation switched off and the same path mutation applied to its children.
-
-Fitness batches (each ``ask``) go through ``evaluate`` (by default the problem in this process;
-:func:`.study.run` passes an evaluator from :func:`evomotion.run.evaluators.make_evaluator`).
-The validity checks inside the initialisation, the validity-keeping mutation and the final
-repair are not fitness evaluations (they test single segments, by table lookup or geometry,
-while re-drawing points) and stay in this process. The fitness of a path depends on that
-path only, so results are bit-identical whichever evaluator splits the batches.
+The seed's method needs the valid initial paths and the validity-keeping mutation of
+:mod:`.operators`; the problem supplies both (``initial_population``, ``mutate``) and the
+generic ask/tell driver of :mod:`evomotion.run.ask_tell` passes them to the optimizer, so a
+grid-path run is an ordinary run of the engine (one stats row per generation = one sweep).
 """
 
 from __future__ import annotations
 
-import dataclasses
 import time
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from evomotion.core.cellular_ga import CellularGA, CGAConfig
-from evomotion.core.ga import GA, GAConfig
-from evomotion.core.problem import Evaluation
-from evomotion.run.stats import diversity, population_stats
 from evomotion.studies.grid_path.geometry import polyline_segments_valid
 from evomotion.studies.grid_path.problem import GridPathProblem
 from evomotion.studies.grid_path.repair import repair_population
-from evomotion.studies.grid_path.solvers import Solution, all_optima
+from evomotion.studies.grid_path.solvers import Solution
 
 
 @dataclass
@@ -51,68 +37,52 @@ class PathResult:
     rows: list[dict[str, float]] = field(default_factory=list)
 
 
-def make_optimizer(problem: GridPathProblem, alg: Any) -> tuple[Any, bool]:
-    """The optimizer for ``alg`` and whether the driver must apply the path mutation."""
-    if isinstance(alg, CGAConfig):
-        return CellularGA(problem.genome, alg, mutate=problem.operators.mutate), False
-    if isinstance(alg, GAConfig):
-        return GA(problem.genome, dataclasses.replace(alg, mutation_rate=0.0)), True
-    raise ValueError(f"grid-path supports the 'cga' and 'ga' algorithms, got {alg.name!r}")
-
-
-def evolve(problem: GridPathProblem, alg: Any, seed: int, generations: int,
-           on_generation: Callable[[dict[str, float]], None] | None = None,
-           evaluate: Callable[[np.ndarray], Evaluation] | None = None) -> PathResult:
-    """Run ``generations`` generations from the seed's valid initial paths; ``evaluate``
-    maps a genome batch to its :class:`Evaluation` (default: ``problem.evaluate``)."""
-    evaluate = evaluate or problem.evaluate
-    rng = np.random.default_rng(seed)
-    opt, outer_mutation = make_optimizer(problem, alg)
-    ops = problem.operators
-    t0 = time.perf_counter()
-    state = opt.init(rng, ops.initial_population(alg.pop_size, rng))
-    evals, gen, rows = 0, -1, []
-    best_hist: list[float] = []
-    while gen < generations:
-        x, state = opt.ask(state, rng)
-        if outer_mutation and gen >= 0:
-            x = ops.mutate(x, rng, alg.mutation_rate)
-        cost = np.asarray(evaluate(x).fitness, dtype=float)
-        state = opt.tell(state, x, cost, rng)
-        evals += len(x)
-        if isinstance(opt, CellularGA) and not opt.end_of_generation(state):
-            continue
-        gen += 1
-        _, pcost = opt.population(state)
-        best = opt.best(state)[1]
-        best_hist.append(best)
-        row = {"generation": gen, "evaluations": evals, "best": float(np.min(pcost)),
-               **population_stats(pcost), "best_so_far": best,
-               "wall_s": round(time.perf_counter() - t0, 4),
-               "diversity": diversity(opt.population(state)[0], problem.genome.span),
-               "failed": 0}
-        rows.append(row)
-        if on_generation is not None:
-            on_generation(row)
-    bx, bc = opt.best(state)
-    conv = int(np.argmax(np.asarray(best_hist) <= bc + 1e-12))
-    pts = problem.decode(bx[None])[0]
+def path_of(problem: GridPathProblem, best_x: np.ndarray, best_cost: float,
+            pop: np.ndarray, pcost: np.ndarray) -> tuple[np.ndarray, float, bool]:
+    """Waypoints, length and validity of the best path (repaired with the population's
+    paths when ``problem.repair``)."""
+    pts = problem.decode(best_x[None])[0]
     if problem.cfg.repair:
-        pop, pcost = opt.population(state)
         polys = np.concatenate([pts[None], problem.decode(pop)])
-        pts, _ = repair_population(problem.map.blocked, polys, np.r_[bc, pcost],
+        pts, _ = repair_population(problem.map.blocked, polys, np.r_[best_cost, pcost],
                                    problem.cfg.repair_paths, problem.cfg.repair_radius)
     rule = "open" if problem.cfg.repair else problem.rule
     valid = bool(polyline_segments_valid(problem.map.blocked, pts[None], rule).all())
     length = float(np.hypot(*np.diff(pts, axis=0).T).sum())
-    return PathResult(pts, length, valid, float(bc), bx, gen, evals, conv,
-                      time.perf_counter() - t0, rows)
+    return pts, length, valid
 
 
-def best_record(res: PathResult, optima: dict[str, Solution]) -> dict[str, Any]:
-    """``best.json``: exactly the keys waypoints, length, valid, optima, gap_percent."""
+def outcome(problem: GridPathProblem, driver: Any, state: Any, rows: list[dict],
+            generations: int, evaluations: int, seconds: float) -> PathResult:
+    bx, bc = driver.best(state)
+    pop, pcost = driver.opt.population(state)
+    pts, length, valid = path_of(problem, bx, bc, pop, pcost)
+    hist = np.array([r["best_so_far"] for r in rows]) if rows else np.array([bc])
+    conv = int(np.argmax(hist <= bc + 1e-12))
+    return PathResult(pts, length, valid, float(bc), bx, generations, evaluations, conv,
+                      seconds, rows)
+
+
+def evolve(problem: GridPathProblem, alg: Any, seed: int, generations: int,
+           evaluator: Any = None) -> PathResult:
+    """One run of ``generations`` generations without a run folder (the experiments' many
+    short runs); ``evaluator`` (default: this process) evaluates every fitness batch."""
+    from evomotion.run.config import Config, RunSection
+    from evomotion.run.runner import run_study
+    from evomotion.studies.grid_path.study import STUDY
+
+    cfg = Config("grid-path", RunSection(seed=seed, generations=generations, checkpoint_every=0),
+                 alg, problem.cfg)
+    t0 = time.perf_counter()
+    res = run_study(STUDY, cfg, None, problem=problem, evaluator=evaluator)
+    return outcome(problem, res.driver, res.state, res.rows, res.generation, res.evaluations,
+                   time.perf_counter() - t0)
+
+
+def best_record(res: PathResult | Any, optima: dict[str, Solution]) -> dict[str, Any]:
+    """The study keys of ``best.json``: waypoints, length, valid, optima, gap_percent."""
     return {
-        "waypoints": res.waypoints.tolist(),
+        "waypoints": np.asarray(res.waypoints).tolist(),
         "length": res.length,
         "valid": res.valid,
         "optima": {k: s.length for k, s in optima.items()},
@@ -120,5 +90,3 @@ def best_record(res: PathResult, optima: dict[str, Solution]) -> dict[str, Any]:
     }
 
 
-def solve_optima(problem: GridPathProblem) -> dict[str, Solution]:
-    return all_optima(problem.map)

@@ -116,6 +116,14 @@ class GridPathProblem:
     def decode(self, genomes: np.ndarray) -> np.ndarray:
         return self.enc.decode(genomes)
 
+    def initial_population(self, n: int, rng: np.random.Generator) -> np.ndarray:
+        """The seed's valid initial paths (the run loop passes them to the optimizer)."""
+        return self.operators.initial_population(n, rng)
+
+    def mutate(self, x: np.ndarray, rng: np.random.Generator, rate: float) -> np.ndarray:
+        """The seed's validity-keeping path mutation, replacing the registry mutation."""
+        return self.operators.mutate(x, rng, rate)
+
     def evaluate(self, genomes: np.ndarray) -> Evaluation:
         genomes = np.asarray(genomes, dtype=float).reshape(-1, self.genome.dim)
         looked_up = self.tables.chromosomes(genomes) if self.tables is not None else None

@@ -1,11 +1,13 @@
-"""The grid-path study (seed 004): descriptor, run driver and ``evomotion grid-path`` commands.
+"""The grid-path study (seed 004): descriptor, artifacts and ``evomotion grid-path`` commands.
 
-``evomotion run grid-path --out DIR`` writes ``config.toml``, ``stats.csv`` (one row per
-generation), ``best.json`` (keys ``waypoints``, ``length``, ``valid``, ``optima``,
-``gap_percent``), ``log.txt``, ``plots/fitness.png`` (best/mean per generation) and
-``path.png``. ``--evaluator process|ray|dask`` sends every fitness batch to that evaluator
-(results are bit-identical to ``serial``). Runs are short and write no checkpoint: the engine's
-``evomotion resume`` refuses studies with their own run driver, so a grid-path run is re-run.
+``evomotion run grid-path --out DIR`` is an ordinary run of the engine (resume, evaluators, stop
+rules, stats): the problem supplies the seed's valid initial paths and validity-keeping
+mutation, the cellular GA (or the panmictic GA) is stepped one generation (one sweep) at a time.
+Besides the engine's files it writes ``path.png`` and the path keys of ``best.json``
+(``waypoints``, ``length``, ``valid``, ``optima``, ``gap_percent``). The default is the best
+known setting (continuous encoding + repair, synchronous cGA: the exact free optimum on every
+bundled map); ``--preset seed`` is the seed's literal one (discrete encoding, line sweep,
+pc 0.05, pm 0.01). Exit code 3 when the final path is not valid.
 """
 
 from __future__ import annotations
@@ -17,59 +19,50 @@ import numpy as np
 import typer
 
 from evomotion.errors import InputError
-from evomotion.run.config import config_to_toml
-from evomotion.run.evaluators import make_evaluator
-from evomotion.run.folder import atomic_write_text, write_json
-from evomotion.run.plots import plot_fitness
-from evomotion.run.stats import StatsWriter
 from evomotion.studies.base import Study
-from evomotion.studies.grid_path.driver import best_record, evolve
 from evomotion.studies.grid_path.maps import random_map, write_map
+from evomotion.studies.grid_path.outcome import best_record as path_record
+from evomotion.studies.grid_path.outcome import outcome
 from evomotion.studies.grid_path.problem import GridPathConfig, GridPathProblem
 from evomotion.studies.grid_path.solvers import all_optima
-from evomotion.studies.grid_path.views import save_path_png
+
+NOT_VALID = 3
 
 
 def make_problem(cfg: GridPathConfig) -> GridPathProblem:
     return GridPathProblem(cfg)
 
 
-def run(config: Any, out_dir: Path, evaluator: str = "serial", quiet: bool = False) -> int:
-    """Study.run: evolve one path and write the run folder (see module doc)."""
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    if not (out / "config.toml").exists():
-        atomic_write_text(out / "config.toml", config_to_toml(config))
-    problem = GridPathProblem(config.problem)
-    stats = StatsWriter(out / "stats.csv")
-    rc = config.run
-    evaluate = None  # serial: the problem built above
-    if evaluator != "serial":
-        evaluate = make_evaluator(evaluator, make_problem, config.problem, rc.workers,
-                                  rc.chunks_per_worker, rc.address)
-    try:
-        res = evolve(problem, config.algorithm, int(rc.seed), int(rc.generations),
-                     on_generation=stats.write, evaluate=evaluate)
-    finally:
-        if evaluate is not None:
-            evaluate.close()
-    optima = all_optima(problem.map)
-    rec = best_record(res, optima)
-    write_json(out / "best.json", rec)
-    plot_fitness(out / "stats.csv", out / "plots" / "fitness",
-                 title=f"grid-path {problem.map.name}")
+def _result(ctx: Any):
+    """The run's path outcome and optima, computed once per context."""
+    if "grid-path" not in ctx.cache:
+        res = outcome(ctx.problem, ctx.driver, ctx.state, [], ctx.generation, ctx.evaluations,
+                      0.0)
+        ctx.cache["grid-path"] = (res, all_optima(ctx.problem.map))
+    return ctx.cache["grid-path"]
+
+
+def best_record(ctx: Any) -> dict[str, Any]:
+    res, optima = _result(ctx)
+    return path_record(res, optima)
+
+
+def finalize(ctx: Any) -> int:
+    """``path.png`` and the one-line summary; exit code 3 when the path is not valid."""
+    from evomotion.studies.grid_path.views import save_path_png
+
+    res, optima = _result(ctx)
+    problem = ctx.problem
     ends = problem.enc.foot_points()[:, None, :] + np.stack(
         [problem.enc.lower, problem.enc.upper], 1)[..., None] * problem.enc.normal
-    save_path_png(problem.map, res.waypoints, optima, out / "path.png",
-                  f"{problem.map.name}: {config.algorithm.name}, length {res.length:.4f}",
+    save_path_png(problem.map, res.waypoints, optima, ctx.out_dir / "path.png",
+                  f"{problem.map.name}: {ctx.config.algorithm.name}, length {res.length:.4f}",
                   perpendiculars=ends)
-    gaps = ", ".join(f"{k} {v:+.2f}%" for k, v in rec["gap_percent"].items())
-    msg = (f"{problem.map.name}: length {res.length:.4f} valid {res.valid} after "
-           f"{res.generations} generations ({res.seconds:.2f} s); gap to optima: {gaps}")
-    (out / "log.txt").write_text(msg + "\n")
-    if not quiet:
-        typer.echo(msg)
-    return 0 if res.valid else 3
+    gaps = ", ".join(f"{k} {100.0 * (res.length / s.length - 1.0):+.2f}%"
+                     for k, s in optima.items())
+    ctx.log(f"{problem.map.name}: length {res.length:.4f} valid {res.valid} after "
+            f"{ctx.generation} generations; gap to optima: {gaps}")
+    return 0 if res.valid else NOT_VALID
 
 
 cli = typer.Typer(add_completion=False, no_args_is_help=True,
@@ -126,16 +119,31 @@ def study(
         typer.echo(row.line())
 
 
+SEED_PRESET = {
+    "problem": {"mode": "discrete", "m": 1.2, "repair": False},
+    "algorithm": {"name": "cga", "pop_size": 100, "neighbourhood": "L5", "update": "line_sweep",
+                  "crossover": "one_point", "crossover_rate": 0.05, "mutation_rate": 0.01},
+    "run": {"generations": 50},
+}
+
 STUDY = Study(
     name="grid-path",
     description="Grid path planning with a cellular GA (seed 004)",
     problem_config=GridPathConfig,
     make_problem=make_problem,
-    # pc 0.9 / pm 0.2: the rates that reproduce the seed's results (docs/grid-path.md); the
-    # seed's literal 0.05 / 0.01 barely move the population and stay one --set away.
-    defaults={"algorithm": {"name": "cga", "pop_size": 100, "crossover": "one_point",
-                            "crossover_rate": 0.9, "mutation_rate": 0.2},
+    # best known (docs/grid-path.md, "beyond the seed"): continuous encoding + repair r5 with
+    # a synchronous cGA at pc 0.9 / pm 0.2 reaches the exact free optimum (299/300 runs)
+    defaults={"algorithm": {"name": "cga", "pop_size": 100, "update": "synchronous",
+                            "crossover": "one_point", "crossover_rate": 0.9,
+                            "mutation_rate": 0.2},
+              "problem": {"mode": "continuous", "m": 1.05, "repair": True,
+                          "repair_radius": 5.0},
               "run": {"generations": 50}},
+    presets={"seed": SEED_PRESET},
+    preset_notes={"seed": "the seed's literal setting: discrete encoding, cGA L5 line sweep, "
+                          "pc 0.05, pm 0.01, 100 x 50"},
+    core_algorithms=("cga", "ga"),
+    finalize=finalize,
+    best_record=best_record,
     cli=cli,
-    run=run,
 )

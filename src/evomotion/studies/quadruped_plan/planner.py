@@ -148,7 +148,11 @@ def solve(cfg: QuadrupedPlanConfig, problem: WalkProblem | None = None,
     h = plan_length_heuristic(problem.model, (cfg.goal_x, cfg.goal_y), cfg.goal_tolerance,
                               cfg.sense, cfg.heuristic_gain)
     weight = 1.0 if cfg.method == "astar" else cfg.weight
-    res = walk_astar(problem, h, weight, cfg.max_expansions, secs)
+    return exact_plan(problem, walk_astar(problem, h, weight, cfg.max_expansions, secs))
+
+
+def exact_plan(problem: WalkProblem, res: SearchResult) -> SearchResult:
+    """With a non-default duplicate grid, the found plan replayed exactly (see :func:`replay`)."""
     if res.found and (problem.pos_grid, problem.angle_grid) != (POS_GRID, ANGLE_GRID):
         exact = replay(problem, res.rules)
         if exact is not None:

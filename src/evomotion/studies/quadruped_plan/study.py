@@ -1,7 +1,9 @@
 """Study ``quadruped-plan``: quadruped walking plans by best-first / A* search (seed 003).
 
-``evomotion run quadruped-plan`` searches one plan (``[problem]`` = QuadrupedPlanConfig)
-and writes ``config.toml``, ``plan.json``, ``plan.png``, ``plan.gif`` and ``log.txt``.
+``evomotion run quadruped-plan`` searches one plan through the run loop (``[problem]`` =
+QuadrupedPlanConfig, ``[algorithm]`` = the search stepped in batches of expansions, see
+:mod:`.search_driver`): stats.csv per batch, checkpoints, resume; at the end ``plan.json``,
+``plan.png``, ``plan.gif`` and the checker's verdict in ``log.txt``.
 ``evomotion quadruped-plan study`` prints the seed's 12-configuration table;
 ``evomotion quadruped-plan check PLAN.json`` re-verifies a plan (exit 1 on a violation).
 Exit codes: 0 plan found; 1 no plan (unreachable goal, budget spent) or a violation.
@@ -22,80 +24,68 @@ from evomotion.studies.quadruped_plan.plan import plan_document, read_plan, writ
 from evomotion.studies.quadruped_plan.planner import (
     QuadrupedPlanConfig,
     constants,
+    exact_plan,
     make_problem,
-    solve,
-    unreachable_reason,
-    validate,
 )
 from evomotion.studies.quadruped_plan.rules import ANGLE_GRID, POS_GRID
+from evomotion.studies.quadruped_plan.search_driver import SearchConfig, make_driver
 
 NO_PLAN = 1
 
 
-def run_plan(problem_cfg: QuadrupedPlanConfig, out_dir: str | Path, quiet: bool = True,
-             wall_seconds: float = 0.0) -> int:
-    """Plan once and write the run folder artifacts; returns the exit code."""
+def _outcome(ctx: Any) -> tuple[Any, dict | None]:
+    """The search result (exact plan) and its plan document, computed once per context."""
+    if "plan" not in ctx.cache:
+        cfg, problem = ctx.config.problem, ctx.problem
+        res = exact_plan(problem, ctx.driver.result(ctx.state))
+        doc = None
+        if res.found:
+            search = {"method": cfg.method, "function": cfg.function,
+                      "k": list(constants(cfg)), "weight": cfg.weight,
+                      "stop_reason": res.stop_reason, "expansions": res.expansions,
+                      "generated": res.generated, "reopened": res.reopened,
+                      "seconds": res.seconds, "cost": res.cost, "pos_grid": cfg.pos_grid,
+                      "angle_grid": cfg.angle_grid}
+            if cfg.method != "best-first":  # proved: least plan length >= lower_bound
+                search["lower_bound"] = res.lower_bound
+            doc = plan_document(problem.model, res.states, res.rules, problem.goal,
+                                cfg.goal_tolerance, cfg.sense, cfg.rule_set, problem.zone,
+                                search)
+        ctx.cache["plan"] = (res, doc)
+    return ctx.cache["plan"]
+
+
+def best_record(ctx: Any) -> dict[str, Any]:
+    res, _ = _outcome(ctx)
+    return {"found": res.found, "states": len(res.states), "search_stop": res.stop_reason,
+            "expansions": res.expansions, "lower_bound": res.lower_bound}
+
+
+def finalize(ctx: Any) -> int:
+    """plan.json / plan.png / plan.gif and the checker's verdict; exit 1 without a plan."""
     from evomotion.studies.quadruped_plan.views import animate_plan, plot_plan
 
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    validate(problem_cfg)
-    lines: list[str] = []
-
-    def say(msg: str) -> None:
-        lines.append(msg)
-        if not quiet:
-            typer.echo(msg)
-
-    cfg = problem_cfg
-    why = unreachable_reason(cfg)
-    if why is not None:
-        say(why)
-        (out / "log.txt").write_text("\n".join(lines) + "\n")
-        return NO_PLAN
-    problem = make_problem(cfg)
-    secs = cfg.max_seconds if wall_seconds <= 0 else min(cfg.max_seconds, wall_seconds)
-    res = solve(cfg, problem, max_seconds=secs)
-    say(f"quadruped-plan {cfg.method} rule set {cfg.rule_set}"
-        + (f" function ({cfg.function}) k={constants(cfg)}" if cfg.method == "best-first"
-           else "") + f": {res.message}")
+    cfg = ctx.config.problem
+    res, doc = _outcome(ctx)
+    ctx.log(f"quadruped-plan {cfg.method} rule set {cfg.rule_set}"
+            + (f" function ({cfg.function}) k={constants(cfg)}" if cfg.method == "best-first"
+               else "") + f": {res.message}")
     if cfg.method != "best-first" and (cfg.pos_grid, cfg.angle_grid) != (POS_GRID, ANGLE_GRID):
-        say(f"note: least cost and bound hold for the duplicate grid ({cfg.pos_grid:g} units, "
-            f"{cfg.angle_grid:g} rad) only; a finer grid can have shorter plans")
-    if res.found:
-        search = {"method": cfg.method, "function": cfg.function, "k": list(constants(cfg)),
-                  "weight": cfg.weight, "stop_reason": res.stop_reason,
-                  "expansions": res.expansions, "generated": res.generated,
-                  "reopened": res.reopened, "seconds": res.seconds, "cost": res.cost,
-                  "pos_grid": cfg.pos_grid, "angle_grid": cfg.angle_grid}
-        if cfg.method != "best-first":  # proved: least plan length >= lower_bound
-            search["lower_bound"] = res.lower_bound
-        doc = plan_document(problem.model, res.states, res.rules, problem.goal,
-                            cfg.goal_tolerance, cfg.sense, cfg.rule_set, problem.zone, search)
-        write_plan(out / "plan.json", doc)
-        try:
-            summary = check_plan(doc)
-            say(f"checker: ok, {summary['leg_moves']} leg moves over "
+        ctx.log(f"note: least cost and bound hold for the duplicate grid ({cfg.pos_grid:g} "
+                f"units, {cfg.angle_grid:g} rad) only; a finer grid can have shorter plans")
+    if doc is None:
+        return NO_PLAN
+    write_plan(ctx.out_dir / "plan.json", doc)
+    try:
+        summary = check_plan(doc)
+        ctx.log(f"checker: ok, {summary['leg_moves']} leg moves over "
                 f"{summary['travel']:.2f} units ({summary['leg_moves_per_unit']:.2f} per unit)")
-        except PlanViolationError as e:
-            say(f"checker: {e}")
-            res.stop_reason = "check-failed"
-        plot_plan(doc, out / "plan.png")
-        animate_plan(doc, out / "plan.gif", max_frames=cfg.gif_max_frames)
-    (out / "log.txt").write_text("\n".join(lines) + "\n")
-    return 0 if res.found else NO_PLAN
-
-
-def run(config: Any, out_dir: Path, evaluator: str = "serial", quiet: bool = False) -> int:
-    """Study.run: the custom driver called by the generic runner."""
-    from evomotion.run.config import config_to_toml
-    from evomotion.run.folder import atomic_write_text
-
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    if not (out / "config.toml").exists():
-        atomic_write_text(out / "config.toml", config_to_toml(config))
-    return run_plan(config.problem, out, quiet, float(getattr(config.run, "wall_seconds", 0)))
+    except PlanViolationError as e:
+        ctx.log(f"checker: {e}")
+        return NO_PLAN
+    plot_plan(doc, ctx.out_dir / "plan.png")
+    animate_plan(doc, ctx.out_dir / "plan.gif", max_frames=cfg.gif_max_frames)
+    return 0
 
 
 cli = typer.Typer(add_completion=False, no_args_is_help=True,
@@ -141,7 +131,14 @@ STUDY = Study(
     description="Quadruped walking plans by best-first / A* search (seed 003).",
     problem_config=QuadrupedPlanConfig,
     make_problem=make_problem,
-    defaults={"run": {"generations": 1}},
+    # steps are batches of expansions; the search's own budgets ([problem]) end it
+    defaults={"run": {"generations": 1_000_000, "checkpoint_every": 5}},
+    presets={"seed": {"problem": {"method": "best-first", "function": 1, "rule_set": "A"}}},
+    preset_notes={"seed": "the seed's first experiment: best-first with its function (1), "
+                          "rule set A (the default is function (3), rule set B)"},
+    core_algorithms=(),
+    algorithms={"search": (SearchConfig, make_driver)},
+    finalize=finalize,
+    best_record=best_record,
     cli=cli,
-    run=run,
 )

@@ -38,94 +38,153 @@ from evomotion.core.search import (
 from evomotion.studies.quadruped_plan.rules import WalkProblem
 
 
+class WalkSearch:
+    """The search of :func:`walk_best_first` as an object that runs in batches: ``run(n)``
+    expands until ``n`` expansions in total (or a goal, an empty OPEN, the deadline); running
+    to 1,000 and then to 2,000 expands exactly what one run to 2,000 does. ``nodes``/``heap``
+    are the OPEN/CLOSED records (see :mod:`evomotion.core.search`); :mod:`.search_state`
+    turns them into arrays for checkpoints."""
+
+    def __init__(self, problem: WalkProblem, evaluate: Evaluate,
+                 min_improvement: float = 1e-9) -> None:
+        self.problem, self.evaluate, self.min_improvement = problem, evaluate, min_improvement
+        s0 = problem.start()
+        f0 = evaluate(None, None, None, s0, None, 0.0)
+        # node record: [f, g, state, parent_key, rule, closed, step_cost] (as in core.search)
+        self.nodes: dict[int, list] = {s0[11]: [f0, 0.0, s0, None, None, False, 0.0]}
+        self.heap: list[tuple[float, int, int, int]] = [(f0, 0 if problem.is_goal(s0) else 1,
+                                                         0, s0[11])]
+        self.counter = self.expansions = self.generated = self.reopened = 0
+        self.reason: str | None = None  # FOUND / OPEN_EMPTY once the search has ended
+        self.goal_key: int | None = None
+        self.last_f = f0  # f of the last state taken from OPEN
+        self.seconds = 0.0
+
+    def run(self, max_expansions: int, max_seconds: float = float("inf")) -> str:
+        """Expand until ``max_expansions`` in total; returns the stop reason of this batch."""
+        if self.reason is not None:
+            return self.reason
+        t0 = time.perf_counter()
+        problem, evaluate, min_improvement = self.problem, self.evaluate, self.min_improvement
+        nodes, heap = self.nodes, self.heap
+        is_goal, body_moves = problem.is_goal, problem.body_moves
+        leg_delta = getattr(evaluate, "leg_delta", None)
+        leg_eval = getattr(evaluate, "leg", None)
+        leg_options, parts = problem.leg_options, problem.parts
+        get = nodes.get
+        push, pop = heapq.heappush, heapq.heappop
+        counter, expansions = self.counter, self.expansions
+        generated, reopened = self.generated, self.reopened
+        reason = OPEN_EMPTY
+        f = self.last_f
+        try:
+            while heap:
+                if expansions >= max_expansions:
+                    reason = EXPANSION_BUDGET
+                    break
+                if (expansions & 255) == 0 and time.perf_counter() - t0 > max_seconds:
+                    reason = TIME_BUDGET
+                    break
+                f, _, _, k = pop(heap)
+                rec = nodes[k]
+                if rec[5] or rec[0] != f:  # stale heap entry
+                    continue
+                rec[5] = True
+                expansions += 1
+                state, g = rec[2], rec[1]
+                if is_goal(state):
+                    reason, self.goal_key = FOUND, k
+                    break
+                for rule, child, step_cost in body_moves(state):
+                    generated += 1
+                    fc = evaluate(f, g, state, child, rule, step_cost)
+                    kc = child[11]
+                    old = get(kc)
+                    if old is None:
+                        nodes[kc] = [fc, g + step_cost, child, k, rule, False, step_cost]
+                    elif fc < old[0] - min_improvement and not is_ancestor(nodes, kc, k):
+                        if old[5]:
+                            reopened += 1
+                        old[:] = fc, g + step_cost, child, k, rule, False, step_cost
+                    else:
+                        continue
+                    counter += 1
+                    push(heap, (fc, 0 if is_goal(child) else 1, counter, kc))
+                # leg moves keep the body: never a goal here (the parent was not one); cost 1.
+                # The same children, in the same order, as problem.leg_targets(state), unrolled.
+                opts = leg_options(state)
+                if not opts:
+                    continue
+                key, gc = state[11], g + 1.0
+                fl = None if leg_delta is None else f + leg_delta  # f of every leg child
+                for part in parts:
+                    for leg, moves in opts:
+                        generated += len(moves[part])
+                        for rule, fx, fy, dk in moves[part]:
+                            kc = key + dk
+                            if fl is not None:
+                                fc = fl
+                            elif leg_eval is not None:
+                                fc = leg_eval(f, g, state, leg, fx, fy, 1.0)
+                            else:
+                                fc = evaluate(f, g, state, _child(state, leg, fx, fy, kc), rule,
+                                              1.0)
+                            old = get(kc)
+                            if old is None:
+                                nodes[kc] = [fc, gc, _child(state, leg, fx, fy, kc), k, rule,
+                                             False, 1.0]
+                            elif fc < old[0] - min_improvement and \
+                                    not is_ancestor(nodes, kc, k):
+                                if old[5]:
+                                    reopened += 1
+                                old[:] = fc, gc, _child(state, leg, fx, fy, kc), k, rule, False, 1.0
+                            else:
+                                continue
+                            counter += 1
+                            push(heap, (fc, 1, counter, kc))
+        finally:
+            self.counter, self.expansions = counter, expansions
+            self.generated, self.reopened, self.last_f = generated, reopened, f
+            self.seconds += time.perf_counter() - t0
+        if reason in (FOUND, OPEN_EMPTY):
+            self.reason = reason
+        return reason
+
+    def result(self, reason: str | None = None) -> SearchResult:
+        """The :class:`SearchResult` so far (plan traced when found)."""
+        result = SearchResult(self.reason or reason or EXPANSION_BUDGET,
+                              expansions=self.expansions, generated=self.generated,
+                              reopened=self.reopened)
+        if self.goal_key is not None:
+            trace_plan(self.nodes, self.goal_key, result)
+        else:
+            result.frontier_f = frontier_min(self.nodes, self.heap)
+        result.seconds = self.seconds
+        return result
+
+
 def walk_best_first(problem: WalkProblem, evaluate: Evaluate, max_expansions: int = 1_000_000,
                     max_seconds: float = float("inf"), min_improvement: float = 1e-9
                     ) -> SearchResult:
     """:func:`evomotion.core.search.best_first` on a :class:`WalkProblem` (same results)."""
-    t0 = time.perf_counter()
-    is_goal, body_moves = problem.is_goal, problem.body_moves
-    leg_delta = getattr(evaluate, "leg_delta", None)
-    leg_eval = getattr(evaluate, "leg", None)
-    leg_options, parts = problem.leg_options, problem.parts
-    s0 = problem.start()
-    k0 = s0[11]
-    f0 = evaluate(None, None, None, s0, None, 0.0)
-    # node record: [f, g, state, parent_key, rule, closed, step_cost] (as in core.search)
-    nodes: dict[int, list] = {k0: [f0, 0.0, s0, None, None, False, 0.0]}
-    get = nodes.get
-    heap: list[tuple[float, int, int, int]] = [(f0, 0 if is_goal(s0) else 1, 0, k0)]
-    push, pop = heapq.heappush, heapq.heappop
-    counter = expansions = generated = reopened = 0
-    reason = OPEN_EMPTY
-    goal_key = None
-    while heap:
-        if expansions >= max_expansions:
-            reason = EXPANSION_BUDGET
-            break
-        if (expansions & 255) == 0 and time.perf_counter() - t0 > max_seconds:
-            reason = TIME_BUDGET
-            break
-        f, _, _, k = pop(heap)
-        rec = nodes[k]
-        if rec[5] or rec[0] != f:  # stale heap entry
-            continue
-        rec[5] = True
-        expansions += 1
-        state, g = rec[2], rec[1]
-        if is_goal(state):
-            reason, goal_key = FOUND, k
-            break
-        for rule, child, step_cost in body_moves(state):
-            generated += 1
-            fc = evaluate(f, g, state, child, rule, step_cost)
-            kc = child[11]
-            old = get(kc)
-            if old is None:
-                nodes[kc] = [fc, g + step_cost, child, k, rule, False, step_cost]
-            elif fc < old[0] - min_improvement and not is_ancestor(nodes, kc, k):
-                if old[5]:
-                    reopened += 1
-                old[:] = fc, g + step_cost, child, k, rule, False, step_cost
-            else:
-                continue
-            counter += 1
-            push(heap, (fc, 0 if is_goal(child) else 1, counter, kc))
-        # leg moves keep the body: never a goal here (the parent was not one); cost 1. The
-        # same children, in the same order, as problem.leg_targets(state), unrolled.
-        opts = leg_options(state)
-        if not opts:
-            continue
-        key, gc = state[11], g + 1.0
-        fl = None if leg_delta is None else f + leg_delta  # f of every leg child
-        for part in parts:
-            for leg, moves in opts:
-                generated += len(moves[part])
-                for rule, fx, fy, dk in moves[part]:
-                    kc = key + dk
-                    if fl is not None:
-                        fc = fl
-                    elif leg_eval is not None:
-                        fc = leg_eval(f, g, state, leg, fx, fy, 1.0)
-                    else:
-                        fc = evaluate(f, g, state, _child(state, leg, fx, fy, kc), rule, 1.0)
-                    old = get(kc)
-                    if old is None:
-                        nodes[kc] = [fc, gc, _child(state, leg, fx, fy, kc), k, rule, False, 1.0]
-                    elif fc < old[0] - min_improvement and not is_ancestor(nodes, kc, k):
-                        if old[5]:
-                            reopened += 1
-                        old[:] = fc, gc, _child(state, leg, fx, fy, kc), k, rule, False, 1.0
-                    else:
-                        continue
-                    counter += 1
-                    push(heap, (fc, 1, counter, kc))
-    result = SearchResult(reason, expansions=expansions, generated=generated, reopened=reopened)
-    if goal_key is not None:
-        trace_plan(nodes, goal_key, result)
-    else:
-        result.frontier_f = frontier_min(nodes, heap)
-    result.seconds = time.perf_counter() - t0
-    return result
+    search = WalkSearch(problem, evaluate, min_improvement)
+    reason = search.run(max_expansions, max_seconds)
+    return search.result(reason)
+
+
+def astar_evaluate(heuristic: Any, weight: float = 1.0) -> Evaluate:
+    """The (weighted) A* evaluation, with the leg shortcut when ``heuristic.after_leg`` exists:
+    ``after_leg(s, leg, fy)`` (h of ``s`` with foot ``leg`` at body y ``fy``) evaluates leg
+    children without building them."""
+    evaluate = astar_evaluation(heuristic, weight)
+    after_leg = getattr(heuristic, "after_leg", None)
+    if after_leg is not None:
+        def leg(pf: float, pg: float, ps: tuple, leg: int, fx: float, fy: float,
+                step_cost: float) -> float:
+            return pg + step_cost + weight * after_leg(ps, leg, fy)
+
+        evaluate.leg = leg  # type: ignore[attr-defined]
+    return evaluate
 
 
 def _child(s: tuple, leg: int, fx: float, fy: float, key: int) -> tuple:
@@ -137,16 +196,6 @@ def walk_astar(problem: WalkProblem, heuristic: Any, weight: float = 1.0,
                max_expansions: int = 1_000_000, max_seconds: float = float("inf")
                ) -> SearchResult:
     """:func:`evomotion.core.search.astar` on a :class:`WalkProblem` (same results, including
-    ``lower_bound``). A
-    ``heuristic.after_leg(s, leg, fy)`` (h of ``s`` with foot ``leg`` at body y ``fy``) lets
-    leg children be evaluated without building them."""
-    evaluate = astar_evaluation(heuristic, weight)
-    after_leg = getattr(heuristic, "after_leg", None)
-    if after_leg is not None:
-        def leg(pf: float, pg: float, ps: tuple, leg: int, fx: float, fy: float,
-                step_cost: float) -> float:
-            return pg + step_cost + weight * after_leg(ps, leg, fy)
-
-        evaluate.leg = leg  # type: ignore[attr-defined]
-    return with_lower_bound(walk_best_first(problem, evaluate, max_expansions, max_seconds),
-                            weight)
+    ``lower_bound``)."""
+    return with_lower_bound(walk_best_first(problem, astar_evaluate(heuristic, weight),
+                                            max_expansions, max_seconds), weight)

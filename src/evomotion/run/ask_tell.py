@@ -1,0 +1,91 @@
+"""The generic driver: any registered ask/tell optimizer on any problem.
+
+One step is one generation: ``ask`` -> evaluate -> ``tell``, repeated while the optimizer says
+its generation is not done (the cellular GA's asynchronous sweeps span several waves).
+A problem may supply its own initial population (``initial_population(n, rng)``) and its own
+mutation (``mutate(x, rng, rate)``, for example the validity-keeping path mutation of
+grid-path); both are passed to the optimizer, so no study needs a loop of its own.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from evomotion.core.algorithms import ALGORITHMS
+from evomotion.core.optimizer import Optimizer
+from evomotion.core.problem import Problem, to_cost
+from evomotion.core.registry import lookup
+from evomotion.run.driver import Driver, Evaluate, StepReport
+
+
+def make_optimizer(problem: Problem, algorithm_cfg: Any) -> Optimizer:
+    """The optimizer registered as ``algorithm_cfg.name``, with the problem's hooks."""
+    _, factory = lookup(ALGORITHMS, "algorithm", algorithm_cfg.name)
+    kwargs = {}
+    mutate = getattr(problem, "mutate", None)
+    if mutate is not None:
+        kwargs["mutate"] = mutate
+    return factory(problem.genome, algorithm_cfg, **kwargs)
+
+
+def scalar_metrics(ev_metrics: dict[str, np.ndarray], i: int) -> dict[str, float]:
+    """The scalar metrics of individual ``i`` (vector-valued metrics are left out)."""
+    out = {}
+    for k, v in ev_metrics.items():
+        vi = np.asarray(v[i])
+        if vi.ndim == 0 or vi.size == 1:
+            out[k] = float(vi.ravel()[0])
+    return out
+
+
+class AskTellDriver(Driver):
+    """Steps ``optimizer`` on ``problem``: one step per generation."""
+
+    def __init__(self, problem: Problem, optimizer: Optimizer) -> None:
+        self.problem = problem
+        self.opt = optimizer
+        self.sense = problem.sense
+        done = getattr(optimizer, "generation_done", None)
+        self._done = done if done is not None else getattr(optimizer, "end_of_generation",
+                                                           lambda _s: True)
+
+    def init(self, rng: np.random.Generator) -> Any:
+        make_pop = getattr(self.problem, "initial_population", None)
+        if make_pop is None:
+            return self.opt.init(rng)
+        n = getattr(self.opt.cfg, "pop_size", None)
+        return self.opt.init(rng, make_pop(n, rng))
+
+    def state_type(self) -> type:
+        return type(self.opt.init(np.random.default_rng(0)))
+
+    def step(self, state: Any, rng: np.random.Generator,
+             evaluate: Evaluate) -> tuple[Any, StepReport]:
+        n = nfail = 0
+        errors: list[str] = []
+        best_metrics = None
+        while True:
+            genomes, state = self.opt.ask(state, rng)
+            ev = evaluate(genomes)
+            cost = to_cost(ev.fitness, self.sense)
+            _, prev_best = self.opt.best(state)
+            state = self.opt.tell(state, genomes, cost, rng)
+            n += len(genomes)
+            if ev.failed is not None:
+                nfail += int(ev.failed.sum())
+            errors.extend(ev.errors)
+            i = int(np.argmin(cost))
+            if cost[i] < prev_best:
+                best_metrics = scalar_metrics(ev.metrics, i)
+            if self._done(state):
+                break
+        pop, pcost = self.opt.population(state)
+        return state, StepReport(n, np.asarray(pcost, float), pop, nfail, errors, best_metrics)
+
+    def best(self, state: Any) -> tuple[np.ndarray, float]:
+        return self.opt.best(state)
+
+    def stop(self, state: Any) -> str | None:
+        return self.opt.stop(state)
