@@ -12,7 +12,7 @@ def test_render_video_writes_moving_frames(tmp_path):
     q0 = nao.initial_data(model).qpos.copy()
     qpos = np.tile(q0, (30, 1))
     qpos[:, 0] = np.linspace(0, 0.3, 30)  # torso slides forward; the camera follows
-    qpos[:, 7 + nao.JOINTS.index("HeadYaw")] = np.linspace(-1, 1, 30)
+    qpos[:, nao.qpos_address(model, "HeadYaw")] = np.linspace(-1, 1, 30)
     try:
         out = render_video(qpos, 0.04, tmp_path / "v.mp4", fps=25, width=160, height=128)
     except RenderUnavailableError as exc:

@@ -10,7 +10,6 @@ lazily.
 
 from __future__ import annotations
 
-import dataclasses
 import importlib
 import multiprocessing
 import os
@@ -27,13 +26,15 @@ WORKER_ENV = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THRE
 
 
 def worker_config(problem_cfg: Any) -> Any:
-    """The problem config a one-core worker builds from: a ``threads`` field left at 0 (all
-    cores, e.g. ``mujoco.rollout`` threads) becomes 1, since the workers already fill every
-    core, one per core; an explicit thread count is kept."""
-    if (dataclasses.is_dataclass(problem_cfg) and hasattr(problem_cfg, "threads")
-            and problem_cfg.threads == 0):
-        return dataclasses.replace(problem_cfg, threads=1)
-    return problem_cfg
+    """The problem config a one-core worker builds from (process, Ray and Dask workers).
+
+    The workers already fill every core, one per core, so a problem that would otherwise use
+    several threads (e.g. ``mujoco.rollout`` threads left at 0 = all cores) says how to run on
+    one: a problem config with a ``for_worker()`` method returns the config a one-core worker
+    should build; any other config is used unchanged.
+    """
+    hook = getattr(problem_cfg, "for_worker", None)
+    return hook() if callable(hook) else problem_cfg
 
 
 def evaluate_safely(problem: Problem, genomes: np.ndarray) -> Evaluation:

@@ -4,12 +4,11 @@ from __future__ import annotations
 
 import mujoco
 import numpy as np
-import pytest
 
 from evomotion.sim import nao
 from evomotion.studies.biped_kick import scene
 from evomotion.studies.biped_kick.experiment import on_grid, run_experiment
-from evomotion.studies.biped_kick.keyframe import find_shoot, keyframe_kicks, kicking_foot
+from evomotion.studies.biped_kick.keyframe import keyframe_kicks, kicking_foot, shoot_motion
 from evomotion.studies.biped_kick.motion import (
     GENE_INDEX,
     GENES,
@@ -21,7 +20,6 @@ from evomotion.studies.biped_kick.motion import (
 )
 from evomotion.studies.biped_kick.problem import KickConfig, KickProblem, support_margin_batch
 from evomotion.studies.biped_kick.zmp import centre_of_pressure, floor_contacts
-from evomotion.studies.humanoid_step.motion import read_motion
 
 LO = np.array([g[1] for g in GENES])
 HI = np.array([g[2] for g in GENES])
@@ -93,18 +91,15 @@ def test_kick_problem_batch():
         assert again.fitness[0] == ev.fitness[i]
 
 
-def test_keyframe_baseline_runs():
-    path = find_shoot()
-    if not path.exists():
-        pytest.skip("shared/fixtures/webots-motions/Shoot.motion not found")
-    assert kicking_foot(read_motion(path)) in ("l", "r")
-    r = keyframe_kicks(np.zeros((1, 2)), path)
+def test_keyframe_baseline_runs(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # the shipped Shoot.motion, wherever the run starts
+    assert kicking_foot(shoot_motion()) in ("l", "r")
+    r = keyframe_kicks(np.zeros((1, 2)))
     assert np.isfinite(r["distance_m"][0]) and r["exec_time_s"][0] > 1.0
 
 
-def test_tiny_experiment(tmp_path):
-    if not find_shoot().exists():
-        pytest.skip("Shoot.motion not found")
+def test_tiny_experiment(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
     res = run_experiment(tmp_path, seeds=1, budget=12, kicks=2, variants=["cmaes"],
                          log=lambda s: None)
     for f in ("curves.npz", "convergence.png", "results.json", "table.md"):

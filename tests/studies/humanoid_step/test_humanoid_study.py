@@ -7,10 +7,10 @@ from typer.testing import CliRunner
 from evomotion.run.config import resolve_config
 from evomotion.run.runner import run_study
 from evomotion.sim import nao
+from evomotion.sim.nao.motion import format_motion, read_motion
+from evomotion.sim.nao.replay import replay
 from evomotion.studies import get_study
 from evomotion.studies.humanoid_step.artifacts import genome_motion
-from evomotion.studies.humanoid_step.motion import format_motion, read_motion
-from evomotion.studies.humanoid_step.replay import replay
 from evomotion.studies.humanoid_step.study import cli
 
 FIXTURES = Path(__file__).resolve().parents[4] / "shared" / "fixtures" / "webots-motions"

@@ -1,11 +1,12 @@
 """Keyframe-kick baseline (the approach seed 002 attributes to HTWK): Webots' ``Shoot.motion``
 replayed open loop in the kick scene, measured like the optimised kick.
 
-The motion is played as Webots' motion player does (linear interpolation of the key poses,
-:func:`evomotion.studies.humanoid_step.replay.motion_targets`). The kicking foot is the one whose
-ankle (leg FK in the torso frame) reaches furthest forward during the motion; the ball is placed
-``gap_m`` in front of that foot's toe in the motion's first pose, plus the given offsets.
-Execution time is the motion's duration.
+The motion ships with evomotion (:func:`evomotion.sim.nao.motion.shipped_motion`; Webots,
+Apache-2.0) and is played as Webots' motion player does (linear interpolation of the key poses,
+:func:`evomotion.sim.nao.replay.motion_targets`). The kicking foot is the one whose ankle (leg FK
+in the torso frame) reaches furthest forward during the motion; the ball is placed ``gap_m`` in
+front of that foot's toe in the motion's first pose, plus the given offsets. Execution time is
+the motion's duration.
 """
 
 from __future__ import annotations
@@ -14,32 +15,24 @@ from pathlib import Path
 
 import numpy as np
 
+from evomotion.sim import nao
+from evomotion.sim.nao.leg_ik import leg_fk
+from evomotion.sim.nao.motion import Motion, read_motion, shipped_motion
+from evomotion.sim.nao.replay import motion_targets
 from evomotion.sim.rollout import BatchSimulator, fall_step, torso_track
 from evomotion.studies.biped_kick import scene
-from evomotion.studies.biped_kick.leg_ik import leg_fk
-from evomotion.studies.biped_kick.motion import LEFT, RIGHT
 from evomotion.studies.biped_kick.problem import KickConfig
-from evomotion.studies.humanoid_step.motion import Motion, read_motion
-from evomotion.studies.humanoid_step.replay import motion_targets
-
-SHOOT = Path("shared/fixtures/webots-motions/Shoot.motion")
 
 
-def find_shoot(explicit: str | Path | None = None) -> Path:
-    """``Shoot.motion``: the given path, else ``shared/`` next to or above the working dir."""
-    if explicit is not None:
-        return Path(explicit)
-    for base in (Path.cwd(), *Path.cwd().parents):
-        p = base / SHOOT
-        if p.exists():
-            return p
-    return SHOOT
+def shoot_motion(path: str | Path | None = None) -> Motion:
+    """The keyframe kick: the ``.motion`` at ``path``, else the shipped Webots ``Shoot``."""
+    return shipped_motion("Shoot") if path is None else read_motion(path)
 
 
 def kicking_foot(motion: Motion) -> str:
     """``"l"`` or ``"r"``: the foot whose ankle goes furthest forward (torso frame)."""
     reach = {}
-    for side, names, left in (("l", LEFT, True), ("r", RIGHT, False)):
+    for side, names, left in (("l", nao.LEFT_LEG, True), ("r", nao.RIGHT_LEG, False)):
         q = np.stack([np.nan_to_num(motion.column(n)) for n in names], axis=1)
         reach[side] = float(leg_fk(q, left)[0][:, 0].max())
     return max(reach, key=reach.get)
@@ -48,22 +41,21 @@ def kicking_foot(motion: Motion) -> str:
 def keyframe_kicks(offsets_m: np.ndarray, path: str | Path | None = None,
                    cfg: KickConfig = KickConfig(), hold_s: float = 0.8) -> dict[str, np.ndarray]:
     """Replay the motion once per ball offset ``[n, 2]``: distance, lateral, fell, time."""
-    motion = read_motion(find_shoot(path))
+    motion = shoot_motion(path)
     model = scene.load_scene(cfg.rolling_m)
     dt = float(model.opt.timestep)
     nstep = int(np.ceil((motion.duration_s + hold_s) / dt))
     first, ctrl = motion_targets(motion, dt, nstep)
     foot = kicking_foot(motion)
     ball0 = scene.default_ball_xy(model, pose=first, foot=foot)
-    iq, iv, nq = scene.ball_qpos_index(model), scene.ball_qvel_index(model), model.nq
     decel = scene.measured_deceleration(cfg.rolling_m)
     out = {k: [] for k in ("distance_m", "lateral_m", "fell", "exec_time_s")}
     with BatchSimulator(model, cfg.nthread) as sim:
         for off in np.atleast_2d(offsets_m):
             ball = ball0 + off
             states = sim.run(scene.initial_scene_state(model, ball, first), ctrl[None])
-            qb = states[0, -1, 1 + iq:1 + iq + 2]
-            vb = states[0, -1, 1 + nq + iv:1 + nq + iv + 2]
+            qb = nao.state_qpos(model, states[0, -1], scene.BALL_JOINT, 2)
+            vb = nao.state_qvel(model, states[0, -1], scene.BALL_JOINT, 2)
             travel = qb + vb * np.linalg.norm(vb) / (2 * decel) - ball
             fell = fall_step(torso_track(states), cfg.fall_height_m, cfg.fall_tilt_rad)[0]
             out["distance_m"].append(travel[0])

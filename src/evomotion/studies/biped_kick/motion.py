@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from evomotion.sim import nao
-from evomotion.studies.biped_kick.leg_ik import leg_fk, leg_ik, rot_y
+from evomotion.sim.nao.leg_ik import leg_fk, leg_ik, rot_y
 
 #: (name, lower, upper) of the 15 genes.
 GENES: tuple[tuple[str, float, float], ...] = (
@@ -37,14 +37,13 @@ GENES: tuple[tuple[str, float, float], ...] = (
 GENE_INDEX = {name: i for i, (name, _, _) in enumerate(GENES)}
 SETTLE_S = 0.3
 
-LEFT = ("LHipYawPitch", "LHipRoll", "LHipPitch", "LKneePitch", "LAnklePitch", "LAnkleRoll")
-RIGHT = ("RHipYawPitch", "RHipRoll", "RHipPitch", "RKneePitch", "RAnklePitch", "RAnkleRoll")
+LEFT, RIGHT = nao.LEFT_LEG, nao.RIGHT_LEG
 
 
 def rest_pose() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Initial 22 targets and the left/right ankle positions (torso frame) of the crouch."""
     q = nao.pose_vector()
-    idx = [nao.JOINTS.index(n) for n in LEFT], [nao.JOINTS.index(n) for n in RIGHT]
+    idx = nao.joint_columns(LEFT), nao.joint_columns(RIGHT)
     return q, leg_fk(q[idx[0]], True)[0], leg_fk(q[idx[1]], False)[0]
 
 
@@ -119,8 +118,8 @@ def joint_targets(genomes: np.ndarray, times_s: np.ndarray) -> np.ndarray:
     ql = leg_ik(feet["left"], np.eye(3), left=True)
     qr = leg_ik(feet["right"], rot_y(feet["pitch"]), left=False)
     ctrl = np.broadcast_to(q_rest, (len(g), len(times_s), len(q_rest))).copy()
-    ctrl[..., [nao.JOINTS.index(n) for n in LEFT]] = ql
-    ctrl[..., [nao.JOINTS.index(n) for n in RIGHT]] = qr
+    ctrl[..., nao.joint_columns(LEFT)] = ql
+    ctrl[..., nao.joint_columns(RIGHT)] = qr
     ctrl[..., nao.JOINTS.index("RHipYawPitch")] = 0.0  # shared motor, feet have no yaw
     ctrl[..., nao.JOINTS.index("LHipYawPitch")] = 0.0
     return ctrl

@@ -16,11 +16,13 @@ stance foot starts to tip. Steps without any sole contact count as violations.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 
 from evomotion.core.problem import Evaluation, GenomeSpec
+from evomotion.sim import nao
 from evomotion.sim.rollout import BatchSimulator, fall_step, torso_track
 from evomotion.studies.biped_kick import scene
 from evomotion.studies.biped_kick.motion import GENES, SETTLE_S, execution_time_s, joint_targets
@@ -43,9 +45,14 @@ class KickConfig:
     zmp_penalty_m: float = 2.0
     zmp_margin_m: float = 0.005
     roll_after_s: float = 0.8
-    fall_height_m: float = 0.2
-    fall_tilt_rad: float = 0.8
-    nthread: int = 0
+    fall_height_m: float = nao.FALL_HEIGHT_M
+    fall_tilt_rad: float = nao.FALL_TILT_RAD
+    nthread: int = 0  # mujoco.rollout threads; 0 = all cores
+
+    def for_worker(self) -> KickConfig:
+        """The config of a one-core evaluator worker: ``nthread`` 0 (all cores) becomes 1;
+        an explicit thread count is kept."""
+        return dataclasses.replace(self, nthread=1) if self.nthread == 0 else self
 
 
 def support_margin_batch(sensors: np.ndarray, sl: dict[str, slice]) -> np.ndarray:
@@ -87,7 +94,6 @@ class KickProblem:
         self.model = scene.load_scene(cfg.rolling_m)
         self.dt = float(self.model.opt.timestep)
         self.sl = scene.sensor_slices(self.model)
-        self.iq, self.iv = scene.ball_qpos_index(self.model), scene.ball_qvel_index(self.model)
         self.decel = scene.measured_deceleration(cfg.rolling_m)
         self.sim = BatchSimulator(self.model, cfg.nthread)
 
@@ -108,9 +114,8 @@ class KickProblem:
         state0 = scene.initial_scene_state(self.model, ball0)
         states, sensors = self.sim.run_with_sensors(state0, ctrl)
         last = states[np.arange(len(g)), end - 1]
-        nq = self.model.nq
-        qb = last[:, 1 + self.iq:1 + self.iq + 2]
-        vb = last[:, 1 + nq + self.iv:1 + nq + self.iv + 2]
+        qb = nao.state_qpos(self.model, last, scene.BALL_JOINT, 2)
+        vb = nao.state_qvel(self.model, last, scene.BALL_JOINT, 2)
         final = qb + vb * np.linalg.norm(vb, axis=1, keepdims=True) / (2 * self.decel)
         travel = final - ball0
         fell = fall_step(torso_track(states), self.cfg.fall_height_m,

@@ -7,9 +7,8 @@ Rolling friction ``rolling_m`` (a length: rolling torque = rolling_m * normal fo
 carpet; for a solid ball the rolling deceleration is ``a = rolling_m g / (1.4 r)``: 0.005 m gives
 0.70 m/s^2, so a 3 m/s kick rolls about 6.4 m (a plausible SPL carpet; our assumption).
 
-The scene adds (without editing the NAO files) the ball body and sensors: per sole the
-``contact`` sensor with the floor reduced to the net force (``found, force[3], pos[3]``) and the
-sole site's ``framexaxis``. The sensor order is fixed in :data:`SENSOR_LAYOUT`.
+The scene is built with :func:`evomotion.sim.nao.scene.scene_xml` (without editing the NAO
+files): the ball body and the sole sensors :data:`evomotion.sim.nao.scene.SOLE_SENSORS`.
 """
 
 from __future__ import annotations
@@ -20,53 +19,40 @@ import mujoco
 import numpy as np
 
 from evomotion.sim import nao
+from evomotion.sim.nao.scene import SOLE_SENSORS, scene_xml, sensor_slices
+
+__all__ = ["BALL_MASS_KG", "BALL_RADIUS_M", "SOLE_HALF_M", "ball_qpos_index", "ball_qvel_index",
+           "default_ball_xy", "initial_scene_state", "kick_scene_xml", "load_scene",
+           "measured_deceleration", "rolling_deceleration", "sensor_slices"]
 
 BALL_RADIUS_M = 0.05
 BALL_MASS_KG = 0.045
-SOLE_HALF_M = (0.08, 0.0444)  # half length and half width of the sole box in the NAO MJCF
+SOLE_HALF_M = nao.SOLE_HALF_M
+BALL_JOINT = "ball"
 
 _BALL = """<body name="ball" pos="{x} {y} {z}"><freejoint name="ball"/>
 <geom name="ball" type="sphere" size="{r}" mass="{m}" condim="6" contype="2" conaffinity="2"
  friction="0.7 0.005 {roll}" rgba="0.95 0.95 0.95 1"/></body>
-</worldbody>"""
-_SENSORS = """<sensor>
-<contact name="l_contact" geom1="l_sole" geom2="floor" data="found force pos" reduce="netforce"/>
-<contact name="r_contact" geom1="r_sole" geom2="floor" data="found force pos" reduce="netforce"/>
-<framexaxis name="l_xaxis" objtype="site" objname="l_sole_site"/>
-<framexaxis name="r_xaxis" objtype="site" objname="r_sole_site"/>
-</sensor>
-</mujoco>"""
+"""
 
 
-def scene_xml(ball_xy: tuple[float, float] = (0.2, -0.05), rolling_m: float = 0.005) -> str:
-    xml = nao._model_xml()
+def kick_scene_xml(ball_xy: tuple[float, float] = (0.2, -0.05), rolling_m: float = 0.005) -> str:
     ball = _BALL.format(x=ball_xy[0], y=ball_xy[1], z=BALL_RADIUS_M + 1e-4, r=BALL_RADIUS_M,
                         m=BALL_MASS_KG, roll=rolling_m)
-    xml = xml.replace("</worldbody>", ball, 1)
-    end = xml.rindex("</mujoco>")
-    return xml[:end] + _SENSORS
+    return scene_xml(bodies=ball, sensors=SOLE_SENSORS)
 
 
 @lru_cache(maxsize=4)
 def load_scene(rolling_m: float = 0.005) -> mujoco.MjModel:
-    return mujoco.MjModel.from_xml_string(scene_xml(rolling_m=rolling_m))
-
-
-def sensor_slices(model: mujoco.MjModel) -> dict[str, slice]:
-    """Slices of ``sensordata`` by sensor name."""
-    out = {}
-    for i in range(model.nsensor):
-        adr, dim = model.sensor_adr[i], model.sensor_dim[i]
-        out[model.sensor(i).name] = slice(int(adr), int(adr + dim))
-    return out
+    return mujoco.MjModel.from_xml_string(kick_scene_xml(rolling_m=rolling_m))
 
 
 def ball_qpos_index(model: mujoco.MjModel) -> int:
-    return int(model.jnt_qposadr[model.joint("ball").id])
+    return nao.qpos_address(model, BALL_JOINT)
 
 
 def ball_qvel_index(model: mujoco.MjModel) -> int:
-    return int(model.jnt_dofadr[model.joint("ball").id])
+    return nao.qvel_address(model, BALL_JOINT)
 
 
 def initial_scene_state(model: mujoco.MjModel, ball_xy: np.ndarray,
@@ -78,9 +64,7 @@ def initial_scene_state(model: mujoco.MjModel, ball_xy: np.ndarray,
     data.qpos[i:i + 3] = [ball_xy[0], ball_xy[1], BALL_RADIUS_M + 1e-4]
     data.qpos[i + 3:i + 7] = [1, 0, 0, 0]
     mujoco.mj_forward(model, data)
-    state = np.empty(mujoco.mj_stateSize(model, nao.STATE_SPEC))
-    mujoco.mj_getState(model, data, state, nao.STATE_SPEC)
-    return state
+    return nao.get_state(model, data)
 
 
 def default_ball_xy(model: mujoco.MjModel, gap_m: float = 0.02, pose: np.ndarray | None = None,

@@ -10,7 +10,7 @@ import numpy as np
 from evomotion.run.context import RunContext
 from evomotion.run.folder import atomic_write_text
 from evomotion.sim import nao
-from evomotion.studies.humanoid_step.motion import Motion, format_motion
+from evomotion.sim.nao.motion import Motion, format_motion
 from evomotion.studies.humanoid_step.problem import HumanoidStepProblem
 
 POSE_MS = 40  # Webots motions (and the seed's Motion.save) sample a pose every 40 ms
@@ -38,7 +38,7 @@ def on_checkpoint(ctx: RunContext) -> None:
 def finalize(ctx: RunContext) -> None:
     """best.motion, its replay summary (best_replay.json), best.mp4 and fitness.png."""
     from evomotion.run.plots import plot_fitness
-    from evomotion.studies.humanoid_step.replay import replay
+    from evomotion.sim.nao.replay import replay
 
     stats = ctx.out_dir / "stats.csv"
     if stats.exists():

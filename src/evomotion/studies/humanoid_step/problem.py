@@ -9,7 +9,7 @@ the recorded torso states:
 (maximised; seconds, with ``distance_weight`` = 10 s/m and ``forward_cap_m`` = 0.2 m by default)
 
 - ``time_to_fall_s``: time of the first fallen state (torso origin below ``fall_height_m`` or
-  its up axis tilted more than ``fall_tilt_deg``), or the full ``motion_s + hold_s`` when the
+  its up axis tilted more than ``fall_tilt_rad``), or the full ``motion_s + hold_s`` when the
   robot stays up (seed: "time from the start of the motion until the fall");
 - ``forward_m``: displacement along +x (the robot's initial heading) of the midpoint of the
   two sole centres, at the end or at the moment of the fall. Measuring the feet, not the
@@ -26,6 +26,7 @@ run when nearly every individual falls.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -33,6 +34,7 @@ import numpy as np
 from evomotion.core.problem import Evaluation, GenomeSpec
 from evomotion.errors import InputError
 from evomotion.sim import nao
+from evomotion.sim.nao.scene import sensor_slices
 from evomotion.sim.rollout import BatchSimulator, fall_step, torso_track
 from evomotion.studies.humanoid_step.encoding import ServoEncoding
 
@@ -57,12 +59,17 @@ class HumanoidStepConfig:
     hold_s: float = 1.0  # initial pose held after the motion (s)
     distance_weight: float = 10.0  # fitness per metre forward (s/m)
     forward_cap_m: float = 0.2  # forward distance credited at most (m)
-    fall_height_m: float = 0.20
-    fall_tilt_deg: float = 45.0
+    fall_height_m: float = nao.FALL_HEIGHT_M
+    fall_tilt_rad: float = nao.FALL_TILT_RAD  # 45 degrees
     step_min_m: float = 0.05
     bounds_scale: float = 1.0  # 1 = seed Table 1 (intersected with the model ranges)
     threads: int = 0  # mujoco.rollout threads; 0 = all cores
     segment_s: float = 0.2  # fallen robots stop being simulated at these boundaries (s)
+
+    def for_worker(self) -> HumanoidStepConfig:
+        """The config of a one-core evaluator worker: ``threads`` 0 (all cores) becomes 1;
+        an explicit thread count is kept."""
+        return dataclasses.replace(self, threads=1) if self.threads == 0 else self
 
 
 def servo_bounds(model, scale: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
@@ -76,8 +83,7 @@ def servo_bounds(model, scale: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
 
 
 def leg_initial_pose() -> np.ndarray:
-    full = nao.pose_vector()
-    return np.array([full[nao.JOINTS.index(n)] for n in nao.LEG_SERVOS])
+    return nao.pose_vector()[nao.joint_columns(nao.LEG_SERVOS)]
 
 
 def validate(cfg: HumanoidStepConfig) -> None:
@@ -111,11 +117,12 @@ class HumanoidStepProblem:
         self.genome: GenomeSpec = self.encoding.genome(nao.LEG_SERVOS)
         self.nstep = int(round((cfg.motion_s + cfg.hold_s) / self.dt))
         self.t_step = self.dt * np.arange(self.nstep)  # target applied during step i
-        self.leg_columns = np.array([nao.JOINTS.index(n) for n in nao.LEG_SERVOS])
+        self.leg_columns = np.array(nao.joint_columns(nao.LEG_SERVOS))
         self.base = nao.pose_vector()
         self.state0 = nao.initial_state(self.model)
         data0 = nao.initial_data(self.model)
         self.sole0 = 0.5 * (data0.site("l_sole_site").xpos + data0.site("r_sole_site").xpos)
+        self.sole_columns = [sensor_slices(self.model)[s] for s in ("l_sole", "r_sole")]
         self.segment_steps = max(1, int(round(cfg.segment_s / self.dt)))
         self.sim = BatchSimulator(self.model, cfg.threads)
 
@@ -130,7 +137,7 @@ class HumanoidStepProblem:
     def _fallen(self, states: np.ndarray) -> np.ndarray:
         c = self.cfg
         return fall_step(torso_track(states), c.fall_height_m,
-                         np.radians(c.fall_tilt_deg)) < states.shape[1]
+                         c.fall_tilt_rad) < states.shape[1]
 
     def simulate(self, genomes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Recorded (states, sole positions) of a batch, fallen robots stopped early."""
@@ -141,12 +148,13 @@ class HumanoidStepProblem:
         """Fitness and metrics from recorded states ``[pop, nstep, nstate]`` and sensors."""
         c = self.cfg
         track = torso_track(states)
-        fall = fall_step(track, c.fall_height_m, np.radians(c.fall_tilt_deg))
+        fall = fall_step(track, c.fall_height_m, c.fall_tilt_rad)
         fell = fall < self.nstep
         last = np.minimum(fall, self.nstep - 1)
         rows = np.arange(states.shape[0])
         soles = sensors[rows, last]
-        end = 0.5 * (soles[:, 0:2] + soles[:, 3:5])
+        left, right = (soles[:, cols][:, :2] for cols in self.sole_columns)
+        end = 0.5 * (left + right)
         t_fall = np.where(fell, (fall + 1) * self.dt, self.nstep * self.dt)
         forward, lateral = end[:, 0] - self.sole0[0], end[:, 1] - self.sole0[1]
         credit = np.clip(forward, -c.forward_cap_m, c.forward_cap_m)

@@ -19,7 +19,7 @@ def replay_cmd(path: Path = typer.Argument(..., exists=True, dir_okay=False),
                json_out: bool = typer.Option(False, "--json", help="print JSON only"),
                video: Path | None = typer.Option(None, "--video", help="write an MP4")) -> None:
     """Replay a Webots .motion file on the NAO model."""
-    from evomotion.studies.humanoid_step.replay import replay_command
+    from evomotion.sim.nao.replay import replay_command
 
     replay_command(path, json_out=json_out, video=video)
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from evomotion.sim import nao
-from evomotion.studies.biped_kick.leg_ik import leg_fk, leg_ik, rot_y
+from evomotion.sim.nao.leg_ik import leg_fk, leg_ik, rot_y
 
 LEG = {True: ("LHipYawPitch", "LHipRoll", "LHipPitch", "LKneePitch", "LAnklePitch",
               "LAnkleRoll"),

@@ -10,12 +10,17 @@ Format (Webots ``src/controller/c/motion.c``, the parser the robot controller us
 - tokens are separated by commas (``strtok(",\\n\\r")``: CRLF is fine, empty fields collapse).
 
 Bad input raises :class:`~evomotion.errors.FileFormatError` naming the file and line.
+
+Webots' own NAO motions that the studies need ship as package data in ``motions/`` (Webots is
+Apache-2.0, Copyright Cyberbotics Ltd.; see ``motions/NOTICE.txt``), read with
+:func:`shipped_motion` through :mod:`importlib.resources`.
 """
 
 from __future__ import annotations
 
 import re
 from dataclasses import dataclass, field
+from importlib import resources
 from pathlib import Path
 
 import numpy as np
@@ -87,6 +92,24 @@ def read_motion(path: str | Path) -> Motion:
         text = path.read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError) as exc:
         raise FileFormatError(path, None, f"cannot read motion file ({exc})") from None
+    return parse_motion(text, path)
+
+
+#: The Webots motions shipped in ``motions/`` (package data).
+SHIPPED_MOTIONS: tuple[str, ...] = ("Shoot",)
+
+
+def shipped_motion(name: str) -> Motion:
+    """A Webots NAO motion shipped with evomotion (``name`` in :data:`SHIPPED_MOTIONS`)."""
+    if name not in SHIPPED_MOTIONS:
+        raise ValueError(f"no shipped motion {name!r}; available: {', '.join(SHIPPED_MOTIONS)}")
+    res = resources.files(__package__).joinpath("motions", f"{name}.motion")
+    return parse_motion(res.read_text(encoding="utf-8-sig"), Path(str(res)))
+
+
+def parse_motion(text: str, path: str | Path = "<motion>") -> Motion:
+    """Parse the text of a ``.motion`` file; ``path`` names it in error messages."""
+    path = Path(path)
     lines = text.splitlines()
     if not lines:
         raise FileFormatError(path, 1, f"expected '{MAGIC},{VERSION}' header, got empty file")

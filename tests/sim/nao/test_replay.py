@@ -3,7 +3,7 @@ from pathlib import Path
 
 import pytest
 
-from evomotion.studies.humanoid_step.replay import replay, replay_command
+from evomotion.sim.nao.replay import replay, replay_command
 
 FIXTURES = Path(__file__).resolve().parents[4] / "shared" / "fixtures" / "webots-motions"
 
@@ -46,8 +46,8 @@ def test_motion_targets_interpolate_and_skip_unset_values():
     import numpy as np
 
     from evomotion.sim import nao
-    from evomotion.studies.humanoid_step.motion import Motion
-    from evomotion.studies.humanoid_step.replay import motion_targets
+    from evomotion.sim.nao.motion import Motion
+    from evomotion.sim.nao.replay import motion_targets
 
     m = Motion(("HeadYaw", "LWristYaw"), [0, 100, 200],
                np.array([[0.0, 1.0], [np.nan, 1.0], [0.4, 1.0]]))

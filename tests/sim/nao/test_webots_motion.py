@@ -6,7 +6,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from evomotion.errors import FileFormatError
-from evomotion.studies.humanoid_step.motion import (
+from evomotion.sim.nao.motion import (
     Motion,
     format_motion,
     format_time_ms,
@@ -119,3 +119,20 @@ def test_fixture_round_trip(tmp_path):
     back = read_motion(tmp_path / "s.motion")
     np.testing.assert_array_equal(back.values, m.values)
     assert back.pose_names == m.pose_names
+
+
+def test_shipped_shoot_is_the_webots_fixture():
+    from importlib import resources
+
+    from evomotion.sim.nao.motion import SHIPPED_MOTIONS, shipped_motion
+
+    assert "Shoot" in SHIPPED_MOTIONS
+    shipped = resources.files("evomotion.sim.nao").joinpath("motions", "Shoot.motion")
+    assert shipped.read_bytes() == (FIXTURES / "Shoot.motion").read_bytes()
+    assert "Cyberbotics" in resources.files("evomotion.sim.nao").joinpath(
+        "motions", "NOTICE.txt").read_text()
+    m, ref = shipped_motion("Shoot"), read_motion(FIXTURES / "Shoot.motion")
+    assert m.joints == ref.joints and m.pose_names == ref.pose_names
+    np.testing.assert_array_equal(m.values, ref.values)
+    with pytest.raises(ValueError, match="no shipped motion"):
+        shipped_motion("Moonwalk")

@@ -1,10 +1,11 @@
 """Closed-form NAO leg kinematics (seed 002, section 3.3), vectorised over poses.
 
-Chain (NAO H25 published geometry, torso frame, metres): hip joint centre at
-``H = (0, ±0.050, -0.085)``; hip yaw-pitch about the axis ``(0, 1/√2, ∓1/√2)`` (upper sign left),
-i.e. ``R_axis(q0) = Rx(∓π/4) Ry(q0) Rx(±π/4)``; hip roll (x), hip pitch (y); thigh ``L1 = 0.100``
-down; knee pitch; tibia ``L2 = 0.1029`` down; ankle pitch, ankle roll. The foot pose is the
-ankle-joint position ``p`` and the foot orientation ``R`` in the torso frame.
+Chain (NAO H25 published geometry, :mod:`evomotion.sim.nao.constants`, torso frame, metres):
+hip joint centre at ``H = (0, ±0.050, -0.085)``; hip yaw-pitch about the axis
+``(0, 1/√2, ∓1/√2)`` (upper sign left), i.e. ``R_axis(q0) = Rx(∓π/4) Ry(q0) Rx(±π/4)``; hip roll
+(x), hip pitch (y); thigh ``L1 = 0.100`` down; knee pitch; tibia ``L2 = 0.1029`` down; ankle
+pitch, ankle roll. The foot pose is the ankle-joint position ``p`` and the foot orientation
+``R`` in the torso frame.
 
 Inverse kinematics follows the standard geometric construction used for the NAO (Graf, Härtl,
 Röfer, Laue, "A Robust Closed-Loop Gait for the Standard Platform League Humanoid", 2009; the
@@ -19,10 +20,9 @@ from __future__ import annotations
 
 import numpy as np
 
-THIGH_M = 0.100
-TIBIA_M = 0.1029
-HIP_Y_M = 0.050
-HIP_Z_M = -0.085
+from evomotion.sim.nao.constants import HIP_OFFSET_Y_M, HIP_OFFSET_Z_M, THIGH_M, TIBIA_M
+
+__all__ = ["THIGH_M", "TIBIA_M", "hip_position", "leg_fk", "leg_ik", "rot_x", "rot_y", "rot_z"]
 
 
 def rot_x(a: np.ndarray | float) -> np.ndarray:
@@ -53,7 +53,8 @@ def rot_z(a: np.ndarray | float) -> np.ndarray:
 
 
 def hip_position(left: bool) -> np.ndarray:
-    return np.array([0.0, HIP_Y_M if left else -HIP_Y_M, HIP_Z_M])
+    """Hip joint centre ``[3]`` in the torso frame (m)."""
+    return np.array([0.0, HIP_OFFSET_Y_M if left else -HIP_OFFSET_Y_M, -HIP_OFFSET_Z_M])
 
 
 def leg_fk(q: np.ndarray, left: bool = True) -> tuple[np.ndarray, np.ndarray]:

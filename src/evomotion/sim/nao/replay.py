@@ -6,7 +6,9 @@ last: the last pose). Here the same targets are precomputed for every physics st
 motion is played open loop with :mod:`mujoco.rollout`. The robot starts at rest in the
 motion's first pose (joints the motion does not name hold :data:`~evomotion.sim.nao.INITIAL_POSE`),
 feet on the floor, facing +x. ``*`` values are skipped: a joint is interpolated between its
-defined poses only. After the motion the last pose is held for ``hold_s`` seconds.
+defined poses only. After the motion the last pose is held for ``hold_s`` seconds. Falls use
+the thresholds of :mod:`evomotion.sim.nao.constants`. :func:`replay_command` is the body of
+``evomotion replay``.
 """
 
 from __future__ import annotations
@@ -18,11 +20,8 @@ from pathlib import Path
 import numpy as np
 
 from evomotion.sim import nao
+from evomotion.sim.nao.motion import Motion, read_motion
 from evomotion.sim.rollout import BatchSimulator, fall_step, torso_track
-from evomotion.studies.humanoid_step.motion import Motion, read_motion
-
-FALL_HEIGHT_M = 0.20  # torso origin below this height: fallen (crouch stands at ~0.305 m)
-FALL_TILT_RAD = np.pi / 4  # torso up axis tilted more than 45 degrees: fallen
 
 
 def motion_targets(motion: Motion, dt: float, nstep: int) -> tuple[np.ndarray, np.ndarray]:
@@ -53,15 +52,16 @@ def simulate_motion(motion: Motion, hold_s: float = 1.0, nthread: int = 1) -> di
     with BatchSimulator(model, nthread) as sim:
         states = sim.run(nao.initial_state(model, first), ctrl[None])
     track = torso_track(states)
-    fall = int(fall_step(track, FALL_HEIGHT_M, FALL_TILT_RAD)[0])
-    d = track.xyz[0, -1, :2] - states[0, 0, 1:3]
+    fall = int(fall_step(track, nao.FALL_HEIGHT_M, nao.FALL_TILT_RAD)[0])
+    d = track.xyz[0, -1, :2] - nao.state_qpos(model, states[0, 0], nao.ROOT_JOINT, 2)
     summary = {
         "displacement_m": [float(d[0]), float(d[1])],
         "heading_change_rad": float(track.yaw_rad[0, -1] - track.yaw_rad[0, 0]),
         "fell": fall < nstep,
         "fall_time_s": float((fall + 1) * dt) if fall < nstep else None,
     }
-    return {"summary": summary, "qpos": states[0, :, 1:1 + model.nq], "dt": dt, "model": model}
+    return {"summary": summary, "qpos": nao.state_qpos_all(model, states[0]), "dt": dt,
+            "model": model}
 
 
 def replay(path: str | Path, video: str | Path | None = None, hold_s: float = 1.0) -> dict:
