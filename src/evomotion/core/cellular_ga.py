@@ -40,7 +40,7 @@ the mutation (and a registry crossover other than one-point) draws per wave.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -51,6 +51,7 @@ from evomotion.core.operators.crossover import one_point
 from evomotion.core.operators.mutation import clip_to_bounds
 from evomotion.core.optimizer import MutateFn, Optimizer, check_rates
 from evomotion.core.problem import GenomeSpec
+from evomotion.core.state import replaced as replace
 from evomotion.core.registry import lookup
 
 UPDATE_POLICIES: tuple[str, ...] = (
@@ -110,6 +111,8 @@ class CGAState:
     evaluated: bool = False
     #: this generation's uniforms, ``[5, len(sequence)]`` in wave order (see module doc)
     draws: np.ndarray = field(default_factory=lambda: np.empty((5, 0)))
+    #: the sweep's one-point masks ``[L, dim]`` (True: the mate's gene), from ``draws``
+    masks: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), bool))
 
 
 def update_waves(sequence: np.ndarray, table: np.ndarray) -> np.ndarray:
@@ -215,8 +218,11 @@ class CellularGA(Optimizer):
             waves = update_waves(seq, self.table(sweep))
         order = np.argsort(waves, kind="stable")  # sequence order within a wave
         starts = np.r_[0, np.cumsum(np.bincount(waves))]
+        draws = rng.random((5, len(seq)))
+        masks = one_point_masks(draws, self.genome.dim, self.cfg.crossover_rate) \
+            if self._fast_one_point and self.genome.dim >= 2 else state.masks
         return replace(state, sequence=np.asarray(seq), waves=waves, wave_cells=seq[order],
-                       wave_starts=starts, draws=rng.random((5, len(seq))))
+                       wave_starts=starts, draws=draws, masks=masks)
 
     def _wave(self, state: CGAState) -> tuple[np.ndarray, slice]:
         """Cells of the current wave and their columns (slice of the sweep, wave order)."""
@@ -245,7 +251,7 @@ class CellularGA(Optimizer):
         a, b = state.pop[cells], state.pop[mates]
         if self._fast_one_point and g.dim >= 2:
             # one_point fused with the pick of a child and the crossover test
-            child = np.where(one_point_masks(u, g.dim, c.crossover_rate), b, a)
+            child = np.where(state.masks[part], b, a)
         else:
             kids = self._xo(a, b, rng, **c.crossover_params)
             child = np.where(u[3, :, None] < 0.5, kids[0], kids[1])

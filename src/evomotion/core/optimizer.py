@@ -24,12 +24,12 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from collections.abc import Callable
-from dataclasses import replace
 from typing import Any
 
 import numpy as np
 
 from evomotion.core.problem import GenomeSpec
+from evomotion.core.state import replaced as replace
 
 #: ``mutate(x[n, d], rng, rate) -> x'``: a problem-supplied mutation replacing the registry one
 MutateFn = Callable[[np.ndarray, np.random.Generator, float], np.ndarray]
@@ -82,7 +82,8 @@ class Optimizer(ABC):
             raise ValueError(f"{self.name}: tell got genomes of shape {genomes.shape}")
         if cost.shape != (genomes.shape[0],):
             raise ValueError(f"{self.name}: {cost.shape} costs for {genomes.shape[0]} genomes")
-        cost = np.where(np.isfinite(cost), cost, np.inf)
+        if not np.isfinite(cost).all():
+            cost = np.where(np.isfinite(cost), cost, np.inf)
         new = self._tell(state, genomes, cost, rng)
         if cost.size:
             i = int(np.argmin(cost))  # the first of equal minima

@@ -99,7 +99,9 @@ def to_cost(fitness: np.ndarray, sense: Sense) -> np.ndarray:
     """Fitness in the problem's sense -> cost to minimise (non-finite -> +inf)."""
     f = np.asarray(fitness, dtype=float)
     cost = -f if sense == "max" else f.copy()
-    cost[~np.isfinite(cost)] = np.inf
+    bad = ~np.isfinite(cost)
+    if bad.any():
+        cost[bad] = np.inf
     return cost
 
 
@@ -111,8 +113,10 @@ def sanitize(ev: Evaluation, sense: Sense, n: int) -> Evaluation:
     bad = ~np.isfinite(fit)
     if ev.failed is not None:
         bad |= np.asarray(ev.failed, dtype=bool)
-    fit = np.where(bad, worst_fitness(sense), fit)
-    metrics = {k: np.asarray(v).reshape(n, *np.shape(v)[1:]) for k, v in ev.metrics.items()}
+    if bad.any():
+        fit = np.where(bad, worst_fitness(sense), fit)
+    metrics = {k: v if isinstance(v, np.ndarray) and v.shape[:1] == (n,)
+               else np.asarray(v).reshape(n, *np.shape(v)[1:]) for k, v in ev.metrics.items()}
     return Evaluation(fit, metrics, bad, list(ev.errors))
 
 

@@ -72,3 +72,17 @@ def rng_from_state(state: dict[str, Any]) -> np.random.Generator:
     bitgen = getattr(np.random, state["bit_generator"])()
     bitgen.state = state
     return np.random.Generator(bitgen)
+
+
+def replaced(state: Any, **changes: Any) -> Any:
+    """A shallow copy of the state dataclass ``state`` with ``changes`` (what
+    ``dataclasses.replace`` does for a plain, non-frozen state without ``__post_init__``, at
+    a fraction of its cost: the cellular GA replaces its state once per wave)."""
+    cls = type(state)
+    if not hasattr(state, "__dict__") or hasattr(cls, "__post_init__") or \
+            cls.__dataclass_params__.frozen:
+        return dataclasses.replace(state, **changes)
+    new = object.__new__(cls)
+    new.__dict__.update(state.__dict__)
+    new.__dict__.update(changes)
+    return new

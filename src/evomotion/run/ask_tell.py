@@ -73,9 +73,10 @@ class AskTellDriver(Driver):
             _, prev_best = self.opt.best(state)
             state = self.opt.tell(state, genomes, cost, rng)
             n += len(genomes)
-            if ev.failed is not None:
+            if ev.failed is not None and ev.failed.any():
                 nfail += int(ev.failed.sum())
-            errors.extend(ev.errors)
+            if ev.errors:
+                errors.extend(ev.errors)
             i = int(np.argmin(cost))
             if cost[i] < prev_best:
                 best_metrics = scalar_metrics(ev.metrics, i)
