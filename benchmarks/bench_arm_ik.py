@@ -22,9 +22,9 @@ import time
 
 import numpy as np
 
+from evomotion.studies.arm_ik.outcome import evolve, split_overrides
 from evomotion.studies.arm_ik.problem import ArmIKConfig, ArmIKProblem
 from evomotion.studies.arm_ik.scenario import bundled_names
-from evomotion.studies.arm_ik.outcome import evolve, split_overrides
 from evomotion.studies.arm_ik.schedule import ScheduleConfig
 from evomotion.studies.arm_ik.success import success_table
 

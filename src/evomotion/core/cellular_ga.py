@@ -51,8 +51,8 @@ from evomotion.core.operators.crossover import one_point
 from evomotion.core.operators.mutation import clip_to_bounds
 from evomotion.core.optimizer import MutateFn, Optimizer, check_rates
 from evomotion.core.problem import GenomeSpec
-from evomotion.core.state import replaced as replace
 from evomotion.core.registry import lookup
+from evomotion.core.state import replaced as replace
 
 UPDATE_POLICIES: tuple[str, ...] = (
     "synchronous", "line_sweep", "fixed_random_sweep", "new_random_sweep", "uniform_choice")

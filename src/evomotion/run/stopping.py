@@ -20,8 +20,8 @@ def stop_reason(driver: Any, state: Any, config: Config, c: dict, best_cost: flo
         c["hist_best"] = (c["hist_best"] + [best_cost])[-(n + 1):]
         c["hist_mean"] = (c["hist_mean"] + [mean_cost])[-(n + 1):]
         if len(c["hist_best"]) == n + 1:
-            db = c["hist_best"][0] - c["hist_best"][-1]
-            dm = c["hist_mean"][0] - c["hist_mean"][-1]
+            db = _gain(c["hist_best"][0], c["hist_best"][-1])
+            dm = _gain(c["hist_mean"][0], c["hist_mean"][-1])
             if db < rc.stagnation_eps and dm < rc.stagnation_eps:
                 return "stagnation"
     return driver.stop(state)
@@ -39,3 +39,8 @@ def limit_reached(config: Config, c: dict, best_cost: float, sgn: float) -> str 
     if rc.wall_seconds and c["wall_s"] >= rc.wall_seconds:
         return "wall_seconds"
     return None
+
+
+def _gain(before: float, after: float) -> float:
+    """Improvement of a minimised value (0 when nothing changed, also for inf -> inf)."""
+    return 0.0 if before == after else before - after

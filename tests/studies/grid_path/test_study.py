@@ -14,9 +14,9 @@ from evomotion.core.ga import GAConfig
 from evomotion.run.config import resolve_config
 from evomotion.run.runner import run_study
 from evomotion.studies import get_study
-from evomotion.studies.grid_path.outcome import evolve
 from evomotion.studies.grid_path.experiments import algorithm_for, beyond_table, seed_table
 from evomotion.studies.grid_path.maps import read_map
+from evomotion.studies.grid_path.outcome import evolve
 from evomotion.studies.grid_path.problem import GridPathConfig, GridPathProblem
 from evomotion.studies.grid_path.solvers import all_optima
 

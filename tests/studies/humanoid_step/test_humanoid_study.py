@@ -2,7 +2,6 @@ import json
 from pathlib import Path
 
 import numpy as np
-from typer.testing import CliRunner
 
 from evomotion.run.config import resolve_config
 from evomotion.run.runner import run_study
@@ -48,12 +47,10 @@ def test_tiny_run_writes_artifacts(tmp_path):
     assert summary == replay(tmp_path / "best.motion", hold_s=0.2)
 
 
-def test_cli_replay_json():
-    result = CliRunner().invoke(
-        cli, ["replay", str(FIXTURES / "TurnLeft40.motion"), "--json"])
-    assert result.exit_code == 0, result.output
-    data = json.loads(result.stdout)
-    assert data["heading_change_rad"] > 0.5 and data["fell"] is False
+def test_replay_lives_in_one_place():
+    """``evomotion replay`` is the only replay command (no study-level copy)."""
+    names = {c.name for c in cli.registered_commands}
+    assert "replay" not in names and "study" in names
 
 
 def test_quick_experiment_writes_table(tmp_path):

@@ -124,7 +124,6 @@ def test_unreachable_goal_and_zero_budget_exit_non_zero(tmp_path: Path) -> None:
 
 def test_study_descriptor_and_runner_entry(tmp_path: Path) -> None:
     from evomotion.run.config import resolve_config
-
     from evomotion.run.runner import run_study
 
     assert STUDY.name == "quadruped-plan" and "search" in STUDY.algorithms

@@ -18,7 +18,6 @@ from evomotion.studies.arm_ik.scenario import bundled_names, load_scenario
 from evomotion.studies.arm_ik.schedule import ScheduleConfig, make_driver
 from evomotion.studies.base import Study
 
-
 cli = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="Arm + fingers inverse kinematics among obstacles (seed 001).")
 

@@ -17,10 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
-from evomotion.core.cmaes import CMAES, CMAESConfig
-from evomotion.core.ga import GA, GAConfig
-from evomotion.core.optimizer import Optimizer
-from evomotion.core.problem import to_cost
+from evomotion.core.cmaes import CMAESConfig
+from evomotion.core.ga import GAConfig
 from evomotion.studies.biped_kick.keyframe import keyframe_kicks
 from evomotion.studies.biped_kick.motion import GENES
 from evomotion.studies.biped_kick.problem import KickConfig, KickProblem
@@ -38,28 +36,19 @@ VARIANTS: dict[str, object] = {
 }
 
 
-def make_optimizer(problem: KickProblem, cfg: object) -> Optimizer:
-    if isinstance(cfg, CMAESConfig):
-        return CMAES(problem.genome, cfg)
-    return GA(problem.genome, cfg)
-
-
 def optimise(problem: KickProblem, cfg: object, seed: int,
              budget: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
-    """(evaluations after each generation, best fitness so far, best genome, best fitness)."""
-    opt = make_optimizer(problem, cfg)
-    rng = np.random.default_rng(seed)
-    state = opt.init(rng)
-    evals, best, n = [], [], 0
-    while n < budget:
-        genomes, state = opt.ask(state, rng)
-        ev = problem.evaluate(genomes)
-        state = opt.tell(state, genomes, to_cost(ev.fitness, "max"), rng)
-        n += len(genomes)
-        evals.append(n)
-        best.append(-opt.best(state)[1])
-    x, c = opt.best(state)
-    return np.array(evals), np.array(best), np.asarray(x), -float(c)
+    """(evaluations after each generation, best fitness so far, best genome, best fitness):
+    one run through the run loop (no folder) stopped after ``budget`` evaluations."""
+    from evomotion.run.config import Config, RunSection
+    from evomotion.run.runner import run_study
+    from evomotion.studies.biped_kick.study import STUDY
+
+    run = RunSection(seed=seed, generations=10**9, max_evaluations=budget, checkpoint_every=0)
+    res = run_study(STUDY, Config("biped-kick", run, cfg, problem.cfg), None, problem=problem)
+    evals = np.array([r["evaluations"] for r in res.rows])
+    best = np.array([r["best_so_far"] for r in res.rows])
+    return evals, best, np.asarray(res.best_genome), float(res.best_fitness)
 
 
 def on_grid(evals: np.ndarray, best: np.ndarray, grid: np.ndarray) -> np.ndarray:

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from evomotion.core.algorithms import ALGORITHMS
-from evomotion.core.problem import to_cost
+from evomotion.run.evaluators import SerialEvaluator
 from evomotion.studies.humanoid_step.problem import HumanoidStepConfig, HumanoidStepProblem
 
 CROSSOVERS: dict[str, dict] = {  # label -> engine crossover + params
@@ -37,30 +37,41 @@ ALGO = {"mutation": "perturb_k", "mutation_rate": 0.3, "mutation_params": {"k": 
         "selection": "roulette", "elitism": 0.1}
 
 
+class _Recorder(SerialEvaluator):
+    """The run's serial evaluator, keeping per batch (steps made, highest fitness)."""
+
+    def __init__(self, problem: HumanoidStepProblem) -> None:
+        super().__init__(lambda _cfg: problem, None)
+        self.batches: list[tuple[int, float]] = []
+
+    def __call__(self, genomes: np.ndarray):
+        ev = super().__call__(genomes)
+        self.batches.append((int(ev.metrics["stepped"].sum()), float(ev.fitness.max())))
+        return ev
+
+
 def run_one(label: str, seed: int, pop: int, generations: int,
             problem_cfg: HumanoidStepConfig) -> dict:
-    """One GA run; returns its curve and the first generation with a step (or None)."""
-    cfg_cls, factory = ALGORITHMS["ga"]
+    """One GA run (through the run loop, no folder); returns its curve and the first
+    generation with a step (or None)."""
+    from evomotion.run.config import Config, RunSection
+    from evomotion.run.runner import run_study
+    from evomotion.studies.humanoid_step.study import STUDY
+
+    cfg_cls, _ = ALGORITHMS["ga"]
     algo = cfg_cls(pop_size=pop, **ALGO, **CROSSOVERS[label])
     problem = HumanoidStepProblem(problem_cfg)
-    opt = factory(problem.genome, algo)
-    rng = np.random.default_rng(seed)
-    state = opt.init(rng)
+    rec = _Recorder(problem)
+    cfg = Config("humanoid-step", RunSection(seed=seed, generations=generations,
+                                             checkpoint_every=0), algo, problem_cfg)
+    res = run_study(STUDY, cfg, None, problem=problem, evaluator=rec)
     full = problem_cfg.motion_s + problem_cfg.hold_s + \
         problem_cfg.distance_weight * problem_cfg.forward_cap_m  # the highest fitness
-    curve, first_step, first_full = [], None, None
-    for gen in range(generations + 1):
-        genomes, state = opt.ask(state, rng)
-        ev = problem.evaluate(genomes)
-        state = opt.tell(state, genomes, to_cost(ev.fitness, "max"), rng)
-        if first_step is None and ev.metrics["stepped"].any():
-            first_step = gen
-        _, pcost = opt.population(state)
-        fit = -np.asarray(pcost)
-        fit = fit[np.isfinite(fit)]
-        if first_full is None and ev.fitness.max() >= full - 1e-9:
-            first_full = gen
-        curve.append((gen, fit.max(), fit.mean(), fit.min(), int(ev.metrics["stepped"].sum())))
+    stepped = [n for n, _ in rec.batches]
+    first_step = next((g for g, n in enumerate(stepped) if n), None)
+    first_full = next((g for g, (_, f) in enumerate(rec.batches) if f >= full - 1e-9), None)
+    curve = [(int(r["generation"]), r["max"], r["mean"], r["min"], n)
+             for r, n in zip(res.rows, stepped, strict=True)]
     problem.sim.close()
     return {"crossover": label, "seed": seed, "first_step_generation": first_step,
             "first_full_generation": first_full, "final_best": float(curve[-1][1]),

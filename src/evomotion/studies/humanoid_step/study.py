@@ -14,16 +14,6 @@ cli = typer.Typer(help="Seed 000: a forward step of the NAO, evolved by a GA.",
                   no_args_is_help=True)
 
 
-@cli.command("replay")
-def replay_cmd(path: Path = typer.Argument(..., exists=True, dir_okay=False),
-               json_out: bool = typer.Option(False, "--json", help="print JSON only"),
-               video: Path | None = typer.Option(None, "--video", help="write an MP4")) -> None:
-    """Replay a Webots .motion file on the NAO model."""
-    from evomotion.sim.nao.replay import replay_command
-
-    replay_command(path, json_out=json_out, video=video)
-
-
 @cli.command("study")
 def study_cmd(out: Path | None = typer.Option(None, "--out",
                                              help="folder (default runs/humanoid-step-study-*)"),
@@ -58,6 +48,11 @@ STUDY = Study(
         "run": {"generations": 40, "checkpoint_every": 10},
         "problem": {"intervals": 10, "bounds_scale": 0.25},
     },
+    presets={"seed": {"problem": {"intervals": 20, "bounds_scale": 1.0},
+                      "run": {"generations": 100}}},
+    preset_notes={"seed": "the seed's literal setting: K = 20 intervals over Table 1's whole "
+                          "ranges, population 100 x 100 generations"},
+    core_algorithms=("ga", "cmaes"),
     on_checkpoint=on_checkpoint,
     finalize=finalize,
     cli=cli,
