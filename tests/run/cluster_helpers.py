@@ -1,4 +1,4 @@
-"""Test helpers shared by the Ray and Dask evaluator tests.
+"""Test helpers for the Ray and Dask evaluator tests (``test_cluster_evaluators.py``).
 
 ``CrashProblem`` kills its worker process (as a simulator segfault would) whenever a chunk
 holds a genome with ``x[0] > crash_above``; workers import it from this folder.

@@ -21,9 +21,10 @@ def plot_fitness(stats_csv: Path, out_stem: Path, title: str = "") -> list[Path]
         raise InputError(f"{stats_csv}: no generations recorded")
     fig, ax = plt.subplots(figsize=(6.4, 4.0))
     g = s["generation"]
-    ax.plot(g, s["max"], label="max", color="tab:green")
-    ax.plot(g, s["mean"], label="mean", color="tab:blue")
-    ax.plot(g, s["min"], label="min", color="tab:red")
+    mark = "o" if len(g) <= 30 else None  # a short run (a few search batches) stays visible
+    ax.plot(g, s["max"], label="max", color="tab:green", marker=mark)
+    ax.plot(g, s["mean"], label="mean", color="tab:blue", marker=mark)
+    ax.plot(g, s["min"], label="min", color="tab:red", marker=mark)
     ax.set_xlabel("generation")
     ax.set_ylabel("fitness")
     ax.set_title(title or Path(stats_csv).parent.name)

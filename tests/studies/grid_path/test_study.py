@@ -85,7 +85,9 @@ def test_cli_make_map_and_study(tmp_path):
     r = cli("grid-path", "study", "--seeds", "1", "--map", "seed10a", "--row", "cga-L5-sync",
             "--generations", "2", cwd=tmp_path)
     assert r.returncode == 0, r.stderr
-    assert r.stdout.splitlines()[0].startswith("| map |") and "cga-L5-sync" in r.stdout
+    lines = r.stdout.splitlines()
+    assert lines[0].startswith("rows: --preset seed") and "literal rates" in lines[0]
+    assert lines[1].startswith("| map |") and "cga-L5-sync" in r.stdout
 
 
 @pytest.mark.parametrize(("args", "msg"), [

@@ -101,6 +101,16 @@ def study(
 
     if seeds < 1:
         raise InputError("--seeds: expected >= 1")
+    literal = " (the seed's literal rates)" if (pc, pm) == (0.05, 0.01) else ""
+    if experiment == "seed":
+        typer.echo(f"rows: --preset seed (discrete encoding, the seed's m, population and "
+                   f"generations per map) with pc {pc:g}, pm {pm:g}{literal}; each row sets "
+                   "the neighbourhood and update policy (ga: the panmictic GA)")
+    else:
+        typer.echo(f"rows: cGA L5 {update}, population {pop}, pc {pc:g}, pm {pm:g}{literal}; "
+                   "'seed-encoding' is --preset seed's discrete encoding, the others the "
+                   "default's continuous encoding (the default setting is "
+                   "'continuous+repair-r5' with --update sync)")
     typer.echo(ex.HEADER)
     if experiment == "seed":
         for name in maps or []:

@@ -37,7 +37,7 @@ class SearchConfig:
     """``[algorithm]`` of quadruped-plan."""
 
     name: str = "search"
-    batch_expansions: int = 20_000  # expansions per step (a stats row, a checkpoint unit)
+    batch_expansions: int = 2_000  # expansions per step (a stats row, a checkpoint unit)
 
     def validate(self) -> None:
         if self.batch_expansions < 1:

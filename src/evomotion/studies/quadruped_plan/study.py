@@ -132,7 +132,7 @@ STUDY = Study(
     problem_config=QuadrupedPlanConfig,
     make_problem=make_problem,
     # steps are batches of expansions; the search's own budgets ([problem]) end it
-    defaults={"run": {"generations": 1_000_000, "checkpoint_every": 5}},
+    defaults={"run": {"generations": 1_000_000, "checkpoint_every": 10}},
     presets={"seed": {"problem": {"method": "best-first", "function": 1, "rule_set": "A"}}},
     preset_notes={"seed": "the seed's first experiment: best-first with its function (1), "
                           "rule set A (the default is function (3), rule set B)"},
