@@ -14,6 +14,11 @@ from evomotion.studies import STUDIES, all_studies, get_study
 app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
                   help="Evolve and search robot motions: gaits, steps, kicks, reaches, plans.")
 
+#: the [run] keys a resume may change: limits, checkpointing and the evaluator
+RESUME_KEYS = frozenset(f"run.{k}" for k in (
+    "generations", "max_evaluations", "target", "stagnation_generations", "stagnation_eps",
+    "wall_seconds", "checkpoint_every", "evaluator", "workers", "chunks_per_worker", "address"))
+
 SetOpt = Annotated[list[str] | None, typer.Option("--set", help="Override, e.g. run.seed=3")]
 
 
@@ -42,6 +47,8 @@ def run_cmd(
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No console output")] = False,
     preset: Annotated[str | None, typer.Option(
         help="Named setting, e.g. 'seed' (the paper's literal one); default: best known")] = None,
+    overwrite: Annotated[bool, typer.Option(
+        "--overwrite", help="Empty --out first if it already holds a run")] = False,
 ) -> None:
     """Run STUDY and write a run folder (config, stats, checkpoints, plots, artifacts)."""
     from evomotion.run.config import resolve_config
@@ -54,11 +61,17 @@ def run_cmd(
         if val is not None:
             overrides.append(f"run.{key}={val!r}" if isinstance(val, str) else f"run.{key}={val}")
     cfg = resolve_config(s, config, overrides, preset=preset)
-    out_dir = make_run_dir(s.name, out)
-    _finish(run_study(s, cfg, out_dir, quiet=quiet), quiet)
+    out_dir = make_run_dir(s.name, out, overwrite=overwrite)
+    _finish(run_study(s, cfg, out_dir, quiet=quiet, overwrite=overwrite), quiet)
 
 
 def _finish(res, quiet: bool) -> None:
+    from evomotion.run.runner import EXIT_NO_FINITE
+
+    if res.exit_code == EXIT_NO_FINITE:
+        typer.echo(f"error: no individual got a finite fitness; best.json holds null "
+                   f"(see {res.out_dir}/log.txt)", err=True)
+        raise typer.Exit(res.exit_code)
     if not quiet:
         typer.echo(f"{res.stop_reason}: best fitness {res.best_fitness:.6g} after "
                    f"{res.generation} generations -> {res.out_dir}", err=True)
@@ -92,8 +105,11 @@ def resume_cmd(
         if val is not None:
             raw["run"][key] = val
     for item in sets or []:
-        if not item.startswith("run."):
-            raise InputError(f"resume only changes [run] keys (limits, evaluator); got {item!r}")
+        key = item.partition("=")[0].strip()
+        if key not in RESUME_KEYS:
+            raise InputError(f"--set {key}: resume only changes the limits and the evaluator "
+                             f"({', '.join(sorted(RESUME_KEYS))}); other keys would make the "
+                             "results differ from an uninterrupted run")
         raw = apply_override(raw, item)
     cfg = config_from_dict(s, raw)
     if sets:

@@ -85,6 +85,22 @@ class AskTellDriver(Driver):
         pop, pcost = self.opt.population(state)
         return state, StepReport(n, np.asarray(pcost, float), pop, nfail, errors, best_metrics)
 
+    def check_state(self, state: Any) -> None:
+        d = self.problem.genome.dim
+        pop, cost = self.opt.population(state)
+        pop, cost = np.asarray(pop), np.asarray(cost)
+        n = getattr(self.opt.cfg, "pop_size", None)
+        if pop.ndim != 2 or pop.shape[1] != d or (n is not None and pop.shape[0] != n):
+            raise ValueError(f"population of shape {pop.shape}, expected "
+                             f"({n if n is not None else 'n'}, {d})")
+        if cost.shape != (pop.shape[0],):
+            raise ValueError(f"{cost.shape} costs for {pop.shape[0]} genomes")
+        if not np.isfinite(pop).all():
+            raise ValueError("non-finite genes in the population")
+        bx, _ = self.opt.best(state)
+        if np.shape(bx) != (d,):
+            raise ValueError(f"best genome of shape {np.shape(bx)}, expected ({d},)")
+
     def best(self, state: Any) -> tuple[np.ndarray, float]:
         return self.opt.best(state)
 

@@ -1,14 +1,24 @@
-"""Atomic checkpoints as ``npz`` (arrays) + JSON (scalars, RNG state, logger offsets).
+"""Atomic, checked checkpoints as ``npz`` (arrays) + JSON (scalars, RNG state, logger offsets).
 
-A checkpoint is written to ``checkpoints/gen-XXXXXX.{npz,json}``; the JSON is written last
-and names its npz, so a crash between the two writes leaves the previous checkpoint as the
-latest complete one. ``latest.json`` points at the newest. No pickle is used.
+A checkpoint is written to ``checkpoints/gen-XXXXXX.{npz,json}``; the JSON is written last and
+names its npz, so a crash between the two writes leaves the previous checkpoint as the latest
+complete one. ``latest.json`` points at the newest. No pickle is used.
+
+Reading trusts nothing: every field of the JSON is checked against a schema (types, finite
+numbers, ranges), the npz name must be a checkpoint of this folder (no path), the offsets must
+fit the run's ``stats.csv`` and ``log.txt`` at line boundaries, and the caller's ``accept``
+(restoring the driver state and checking it against the run's config) must succeed. A damaged
+checkpoint is skipped for the newest valid one before it; :func:`load_checkpoint` says which.
 """
 
 from __future__ import annotations
 
 import io
 import json
+import math
+import re
+import zipfile
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -16,6 +26,14 @@ import numpy as np
 
 from evomotion.errors import InputError
 from evomotion.run.folder import atomic_write_bytes, atomic_write_text
+
+NAME = re.compile(r"gen-(\d{6,})\.json")
+ARRAYS = re.compile(r"gen-(\d{6,})\.npz")
+MAX_META_BYTES = 256 * 1024 * 1024
+
+
+class CheckpointError(ValueError):
+    """One checkpoint is unusable (the message says why); older ones may still be."""
 
 
 def save_checkpoint(run_dir: Path, generation: int, arrays: dict[str, np.ndarray],
@@ -27,7 +45,7 @@ def save_checkpoint(run_dir: Path, generation: int, arrays: dict[str, np.ndarray
     np.savez(buf, **arrays)
     atomic_write_bytes(ck / f"{stem}.npz", buf.getvalue())
     meta = dict(meta, arrays_file=f"{stem}.npz", generation=generation)
-    atomic_write_text(ck / f"{stem}.json", json.dumps(meta))
+    atomic_write_text(ck / f"{stem}.json", json.dumps(meta, allow_nan=True))
     atomic_write_text(ck / "latest.json", json.dumps({"checkpoint": f"{stem}.json"}))
     old = sorted(ck.glob("gen-*.json"))[:-keep] if keep > 0 else []
     for j in old:
@@ -36,13 +54,124 @@ def save_checkpoint(run_dir: Path, generation: int, arrays: dict[str, np.ndarray
     return ck / f"{stem}.json"
 
 
-def load_checkpoint(run_dir: Path) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+def candidates(run_dir: Path) -> list[str]:
+    """Checkpoint JSON names, the one ``latest.json`` points at first, then newest first."""
     ck = Path(run_dir) / "checkpoints"
-    latest = ck / "latest.json"
-    if not latest.exists():
-        raise InputError(f"{run_dir}: no checkpoint to resume from (checkpoints/latest.json)")
-    name = json.loads(latest.read_text())["checkpoint"]
-    meta = json.loads((ck / name).read_text())
-    with np.load(ck / meta["arrays_file"], allow_pickle=False) as z:
-        arrays = {k: z[k] for k in z.files}
+    names = sorted((p.name for p in ck.glob("gen-*.json") if NAME.fullmatch(p.name)),
+                   key=lambda n: int(NAME.fullmatch(n)[1]), reverse=True)
+    try:
+        latest = json.loads((ck / "latest.json").read_text(encoding="utf-8"))["checkpoint"]
+    except (OSError, ValueError, KeyError, TypeError):
+        latest = None
+    if isinstance(latest, str) and latest in names:
+        names.remove(latest)
+        names.insert(0, latest)
+    return names
+
+
+def load_checkpoint(run_dir: Path, accept: Callable[[dict, dict], Any] | None = None
+                    ) -> tuple[dict[str, np.ndarray], dict[str, Any], Any, list[str]]:
+    """The newest valid checkpoint: ``(arrays, meta, accepted, notes)``; ``accepted`` is what
+    ``accept(arrays, meta)`` returned, ``notes`` one line per damaged checkpoint skipped."""
+    run_dir = Path(run_dir)
+    names = candidates(run_dir)
+    if not names:
+        raise InputError(f"{run_dir}: no checkpoint to resume from (checkpoints/ is empty)")
+    notes = []
+    for name in names:
+        try:
+            arrays, meta = read_checkpoint(run_dir, name)
+            accepted = accept(arrays, meta) if accept is not None else None
+        except CheckpointError as e:
+            notes.append(f"checkpoints/{name}: {e}")
+            continue
+        return arrays, meta, accepted, notes
+    raise InputError(f"{run_dir}: no valid checkpoint to resume from ({'; '.join(notes)})")
+
+
+def read_checkpoint(run_dir: Path, name: str) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+    ck = run_dir / "checkpoints"
+    path = ck / name
+    try:
+        if path.stat().st_size > MAX_META_BYTES:
+            raise CheckpointError("larger than any checkpoint this program writes")
+        meta = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError, RecursionError) as e:
+        raise CheckpointError(f"unreadable ({type(e).__name__})") from None
+    check_meta(meta, run_dir)
+    npz = ck / meta["arrays_file"]
+    try:
+        with np.load(npz, allow_pickle=False) as z:
+            arrays = {k: z[k] for k in z.files}
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile, KeyError) as e:
+        raise CheckpointError(f"{meta['arrays_file']} is unreadable ({type(e).__name__})") \
+            from None
     return arrays, meta
+
+
+def check_meta(meta: Any, run_dir: Path) -> None:
+    """Raise :class:`CheckpointError` unless ``meta`` has the shape this program writes."""
+    if not isinstance(meta, dict):
+        raise CheckpointError("expected a JSON object")
+    name = meta.get("arrays_file")
+    if not isinstance(name, str) or not ARRAYS.fullmatch(name):
+        raise CheckpointError(f"arrays_file: expected gen-NNNNNN.npz in checkpoints/, "
+                              f"got {name!r}")
+    rng = meta.get("rng")
+    if not (isinstance(rng, dict) and isinstance(rng.get("bit_generator"), str)
+            and rng["bit_generator"] in ("PCG64", "PCG64DXSM", "Philox", "SFC64", "MT19937")
+            and isinstance(rng.get("state"), dict)):
+        raise CheckpointError("rng: expected a numpy bit generator state")
+    c = meta.get("counters")
+    if not isinstance(c, dict):
+        raise CheckpointError("counters: expected an object")
+    _int(c, "generation", -1)
+    _int(c, "evaluations", 0)
+    _int(c, "failed_total", 0)
+    _number(c, "wall_s")
+    for k in ("hist_best", "hist_mean"):
+        v = c.get(k)
+        if not isinstance(v, list) or not all(_is_num(x, allow_inf=True) for x in v):
+            raise CheckpointError(f"counters.{k}: expected a list of numbers")
+    bm = c.get("best_metrics")
+    if not isinstance(bm, dict) or not all(isinstance(k, str) and (
+            v is None or _is_num(v, allow_inf=True, allow_nan=True)) for k, v in bm.items()):
+        raise CheckpointError("counters.best_metrics: expected names and numbers")
+    if c.get("stop_reason") is not None and not isinstance(c["stop_reason"], str):
+        raise CheckpointError("counters.stop_reason: expected a string or null")
+    if meta.get("generation") != max(c["generation"], 0):
+        raise CheckpointError("generation: does not match counters.generation")
+    for key, file in (("stats_offset", "stats.csv"), ("log_offset", "log.txt")):
+        off = _int(c, key, 0)
+        path = run_dir / file
+        size = path.stat().st_size if path.exists() else 0
+        if off > size:
+            raise CheckpointError(f"counters.{key}: {off} is past the end of {file} "
+                                  f"({size} bytes)")
+        if off > 0:
+            with open(path, "rb") as fh:
+                fh.seek(off - 1)
+                if fh.read(1) != b"\n":
+                    raise CheckpointError(f"counters.{key}: {off} is not a line end of {file}")
+
+
+def _is_num(v: Any, allow_inf: bool = False, allow_nan: bool = False) -> bool:
+    if isinstance(v, bool) or not isinstance(v, int | float):
+        return False
+    if isinstance(v, float) and math.isnan(v):
+        return allow_nan
+    return allow_inf or math.isfinite(v)
+
+
+def _int(c: dict, key: str, low: int) -> int:
+    v = c.get(key)
+    if isinstance(v, bool) or not isinstance(v, int) or v < low:
+        raise CheckpointError(f"counters.{key}: expected an integer >= {low}, got {v!r}")
+    return v
+
+
+def _number(c: dict, key: str) -> float:
+    v = c.get(key)
+    if not _is_num(v) or v < 0:
+        raise CheckpointError(f"counters.{key}: expected a finite number >= 0, got {v!r}")
+    return float(v)

@@ -94,5 +94,9 @@ class Driver(ABC):
         """Inverse of :meth:`state_arrays`."""
         return state_from_arrays(self.state_type(), arrays, meta)
 
+    def check_state(self, state: Any) -> None:
+        """Raise ``ValueError`` naming what is wrong when a restored ``state`` cannot belong
+        to this driver's run (shapes against the config, non-finite genomes, ...)."""
+
     def close(self) -> None:
         """Release resources (called once at the end of a run)."""

@@ -11,9 +11,23 @@ from typing import Any
 
 import numpy as np
 
+from evomotion.errors import InputError
 
-def make_run_dir(study: str, out: Path | str | None = None, root: Path | str = "runs") -> Path:
-    """``out`` if given (created), else ``runs/<study>-<YYYYmmdd-HHMMSS>[-N]``."""
+RUN_MARKERS = ("config.toml", "stats.csv", "checkpoints")
+
+
+def holds_run(path: Path) -> bool:
+    """Whether ``path`` already holds (part of) a run folder."""
+    return any((path / m).exists() for m in RUN_MARKERS)
+
+
+def make_run_dir(study: str, out: Path | str | None = None, root: Path | str = "runs",
+                 overwrite: bool = False) -> Path:
+    """``out`` if given (created), else ``runs/<study>-<YYYYmmdd-HHMMSS>[-N]``.
+
+    A folder that already holds a run is refused unless ``overwrite`` (the run loop empties it
+    once it holds the folder's lock); every problem creating it is one :class:`InputError`
+    line."""
     if out is not None:
         path = Path(out)
     else:
@@ -23,8 +37,46 @@ def make_run_dir(study: str, out: Path | str | None = None, root: Path | str = "
         while path.exists():
             n += 1
             path = Path(root) / f"{study}-{stamp}-{n}"
-    path.mkdir(parents=True, exist_ok=True)
+    if path.exists() and not path.is_dir():
+        raise InputError(f"--out {path}: expected a folder, found a file")
+    if path.is_dir() and holds_run(path) and not overwrite:
+        raise InputError(f"--out {path}: the folder already holds a run; continue it with "
+                         f"'evomotion resume {path}' or start it again with --overwrite")
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        probe = path / f".write-test-{os.getpid()}"
+        probe.touch()
+        probe.unlink()
+    except OSError as e:
+        raise InputError(f"--out {path}: cannot create the run folder "
+                         f"({e.strerror or type(e).__name__})") from None
     return path
+
+
+def empty_run_dir(path: Path, keep: tuple[str, ...] = ("run.lock",)) -> None:
+    """Remove everything in the run folder ``path`` but ``keep`` (``--overwrite``)."""
+    import shutil
+
+    if not holds_run(path):
+        raise InputError(f"{path}: not a run folder; --overwrite only empties run folders")
+    for child in path.iterdir():
+        if child.name in keep:
+            continue
+        if child.is_dir() and not child.is_symlink():
+            shutil.rmtree(child)
+        else:
+            child.unlink()
+
+
+def clean_temporaries(run_dir: Path) -> int:
+    """Remove the temporary files an interrupted atomic write left behind; their number."""
+    n = 0
+    for d in (run_dir, run_dir / "checkpoints"):
+        if d.is_dir():
+            for tmp in d.glob(".*.tmp"):
+                tmp.unlink(missing_ok=True)
+                n += 1
+    return n
 
 
 def atomic_write_bytes(path: Path | str, data: bytes) -> None:
@@ -41,6 +93,21 @@ def atomic_write_bytes(path: Path | str, data: bytes) -> None:
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
+    _fsync_dir(path.parent)
+
+
+def _fsync_dir(folder: Path) -> None:
+    """Make a rename in ``folder`` durable (POSIX; a no-op where folders cannot be opened)."""
+    try:
+        fd = os.open(folder, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
 
 
 def atomic_write_text(path: Path | str, text: str) -> None:
@@ -49,7 +116,7 @@ def atomic_write_text(path: Path | str, text: str) -> None:
 
 def _jsonable(obj: Any) -> Any:
     if isinstance(obj, np.ndarray):
-        return obj.tolist()
+        return _clean(obj.tolist())
     if isinstance(obj, np.generic):
         return obj.item()
     if isinstance(obj, float) and not np.isfinite(obj):
@@ -59,7 +126,8 @@ def _jsonable(obj: Any) -> Any:
 
 def write_json(path: Path | str, obj: Any) -> None:
     """Atomic JSON write; numpy arrays become lists, non-finite floats ``null``."""
-    atomic_write_text(path, json.dumps(_clean(obj), indent=2, default=_jsonable) + "\n")
+    text = json.dumps(_clean(obj), indent=2, default=_jsonable, allow_nan=False)
+    atomic_write_text(path, text + "\n")
 
 
 def _clean(obj: Any) -> Any:

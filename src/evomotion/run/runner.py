@@ -20,22 +20,31 @@ from typing import Any
 
 import numpy as np
 
-from evomotion.core.state import rng_from_state, rng_state
+from evomotion.core.state import rng_state
 from evomotion.errors import InputError
 from evomotion.run.ask_tell import AskTellDriver, make_optimizer
-from evomotion.run.checkpoint import load_checkpoint, save_checkpoint
+from evomotion.run.checkpoint import save_checkpoint
 from evomotion.run.config import Config, config_to_toml
 from evomotion.run.console import Reporter
 from evomotion.run.context import RunContext
 from evomotion.run.driver import Driver
 from evomotion.run.evaluators import SerialEvaluator, make_evaluator
-from evomotion.run.folder import atomic_write_text, write_json
+from evomotion.run.folder import (
+    atomic_write_text,
+    clean_temporaries,
+    empty_run_dir,
+    holds_run,
+    write_json,
+)
+from evomotion.run.lock import RunLock
 from evomotion.run.plots import plot_fitness
+from evomotion.run.resume import config_record, restore
 from evomotion.run.runlog import RunLog, sigterm_as_interrupt
 from evomotion.run.stats import COLUMNS, MemoryStats, StatsWriter, diversity, population_stats
 from evomotion.run.stopping import limit_reached, stop_reason
 
 EXIT_INTERRUPTED = 130
+EXIT_NO_FINITE = 5  # the run ended without any finite fitness
 
 
 @dataclass
@@ -63,25 +72,43 @@ def build_driver(study: Any, config: Config, problem: Any) -> Driver:
 
 def run_study(study: Any, config: Config, out_dir: Path | str | None = None,
               quiet: bool = False, resume: bool = False, problem: Any = None,
-              evaluator: Any = None) -> RunResult:
+              evaluator: Any = None, overwrite: bool = False) -> RunResult:
     """Run (or resume, when ``resume``) ``study`` with ``config`` in ``out_dir``.
 
     ``problem`` (default: built from ``config.problem``) and ``evaluator`` (default: the one
     ``run.evaluator`` names; a given one is not closed here) serve callers that run many
-    short runs on one problem."""
-    out_dir = Path(out_dir) if out_dir is not None else None
+    short runs on one problem. The run folder is locked while the run writes to it; a new run
+    into a folder that already holds one is refused unless ``overwrite``."""
     if out_dir is None:
-        quiet = True
         if resume:
             raise InputError("resume needs a run folder")
+        return _run(study, config, None, True, False, problem, evaluator)
+    out_dir = Path(out_dir)
+    if not resume and holds_run(out_dir) and not overwrite:
+        raise InputError(f"{out_dir}: the folder already holds a run; continue it with "
+                         f"'evomotion resume {out_dir}' or start it again with --overwrite")
+    if resume and not (out_dir / "checkpoints").is_dir():
+        raise InputError(f"{out_dir}: no checkpoint to resume from (no checkpoints/ folder)")
+    out_dir.mkdir(parents=True, exist_ok=True)
+    with RunLock(out_dir) as lock:
+        if not resume and overwrite and holds_run(out_dir):
+            empty_run_dir(out_dir)
+        return _run(study, config, out_dir, quiet, resume, problem, evaluator,
+                    stale_owner=lock.stale_owner)
+
+
+def _run(study: Any, config: Config, out_dir: Path | None, quiet: bool, resume: bool,
+         problem: Any, evaluator: Any, stale_owner: str | None = None) -> RunResult:
     rc = config.run
     problem = problem if problem is not None else study.make_problem(config.problem)
     driver = build_driver(study, config, problem)
     if rc.evaluator != "serial" and not driver.uses_evaluator:
         raise InputError(f"run.evaluator: study {study.name!r} has no batch evaluation to "
                          f"distribute; use 'serial', got {rc.evaluator!r}")
-    if out_dir is not None and not resume:
-        atomic_write_text(out_dir / "config.toml", config_to_toml(config))
+    if out_dir is not None:
+        cleaned = clean_temporaries(out_dir)
+        if not resume:
+            atomic_write_text(out_dir / "config.toml", config_to_toml(config))
     sense = driver.sense
     sgn = -1.0 if sense == "max" else 1.0  # fitness = sgn * cost
     reporter = Reporter(rc.generations, quiet=quiet, label=study.name)
@@ -91,11 +118,7 @@ def run_study(study: Any, config: Config, out_dir: Path | str | None = None,
         else MemoryStats(columns)
 
     if resume:
-        arrays, meta = load_checkpoint(out_dir)
-        state = driver.restore({k[6:]: v for k, v in arrays.items() if k.startswith("state.")},
-                               {k[6:]: v for k, v in meta.items() if k.startswith("state.")})
-        rng = rng_from_state(meta["rng"])
-        c = meta["counters"]
+        state, rng, c, notes = restore(out_dir, driver, config)
         done = c.get("stop_reason")
         if done not in (None, "interrupted") and limit_reached(
                 config, c, driver.best(state)[1], sgn) and driver.stop(state) is None:
@@ -107,6 +130,8 @@ def run_study(study: Any, config: Config, out_dir: Path | str | None = None,
         c["stop_reason"] = None
         stats.truncate(c["stats_offset"])
         log.truncate(c["log_offset"])
+        for line in notes:
+            log(line)
         log(f"resumed at generation {c['generation']} with evaluator {rc.evaluator}")
     else:
         rng = np.random.default_rng(rc.seed)
@@ -115,6 +140,11 @@ def run_study(study: Any, config: Config, out_dir: Path | str | None = None,
              "hist_best": [], "hist_mean": [], "best_metrics": {},
              "stats_offset": stats.offset, "log_offset": log.offset}
         log(f"run {study.name} seed {rc.seed} evaluator {rc.evaluator} -> {out_dir or '-'}")
+    if stale_owner:
+        log(f"note: took over the run folder's lock from {stale_owner}, which is no longer "
+            "running")
+    if out_dir is not None and cleaned:
+        log(f"note: removed {cleaned} temporary file(s) left by an interrupted write")
 
     own_evaluator = evaluator is None
     if evaluator is not None:
@@ -129,7 +159,8 @@ def run_study(study: Any, config: Config, out_dir: Path | str | None = None,
         a, m = driver.state_arrays(state)
         meta = {"state." + k: v for k, v in m.items()}
         meta.update(rng=rng_state(rng), counters=dict(c, stats_offset=stats.offset,
-                                                       log_offset=log.offset))
+                                                       log_offset=log.offset),
+                    config=record)
         return {"state." + k: v for k, v in a.items()}, meta
 
     def context(reason: str | None = None) -> RunContext:
@@ -140,6 +171,7 @@ def run_study(study: Any, config: Config, out_dir: Path | str | None = None,
                           stop_reason=reason, log=log, driver=driver, state=state)
 
     save = out_dir is not None
+    record = config_record(config)
     snap = snapshot() if save else None  # Ctrl-C in the first step still leaves a checkpoint
     t_start = time.perf_counter() - c["wall_s"]
     reason = None
@@ -207,12 +239,17 @@ def run_study(study: Any, config: Config, out_dir: Path | str | None = None,
         f"evaluations")
     ctx = context(reason)
     code = EXIT_INTERRUPTED if reason == "interrupted" else 0
+    if code == 0 and driver.uses_evaluator and not np.isfinite(driver.best(state)[1]):
+        log("no individual got a finite fitness (every evaluation failed or was NaN/inf); "
+            "best.json holds null")
+        code = EXIT_NO_FINITE
     if save:
         _write_best(study, ctx, sense, rc.seed, log)
         if c["generation"] >= 0:
             plot_fitness(out_dir / "stats.csv", out_dir / "plots" / "fitness", title=study.name)
-        _hook(study.on_checkpoint, ctx, log)
-        if reason != "interrupted":  # a second Ctrl-C should not wait for videos
+        if code != EXIT_NO_FINITE:
+            _hook(study.on_checkpoint, ctx, log)
+        if code == 0:  # a second Ctrl-C should not wait for videos
             code = _hook(study.finalize, ctx, log) or 0
     driver.close()
     return RunResult(out_dir, reason, c["generation"], c["evaluations"], ctx.best_fitness,
