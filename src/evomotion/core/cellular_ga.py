@@ -45,14 +45,17 @@ from typing import Any
 
 import numpy as np
 
+from evomotion.core.checks import MAX_POP_SIZE, check_fields, check_number
 from evomotion.core.neighbourhoods import NEIGHBOURHOODS, grid_shape, neighbour_table
 from evomotion.core.operators import CROSSOVERS, MUTATIONS
 from evomotion.core.operators.crossover import one_point
 from evomotion.core.operators.mutation import clip_to_bounds
+from evomotion.core.operators.params import check_genome_params, check_operator_params
 from evomotion.core.optimizer import MutateFn, Optimizer, check_rates
 from evomotion.core.problem import GenomeSpec
 from evomotion.core.registry import lookup
 from evomotion.core.state import replaced as replace
+from evomotion.errors import InputError
 
 UPDATE_POLICIES: tuple[str, ...] = (
     "synchronous", "line_sweep", "fixed_random_sweep", "new_random_sweep", "uniform_choice")
@@ -82,14 +85,24 @@ class CGAConfig:
     replacement: str = "if_better"
 
     def validate(self) -> None:
-        grid_shape(self.pop_size, self.rows)
+        """One-line errors for impossible settings, operator parameters included."""
+        check_fields(self, "algorithm")
+        check_number("algorithm.pop_size", self.pop_size, lo=1, hi=MAX_POP_SIZE, integer=True)
+        check_number("algorithm.rows", self.rows, lo=0, hi=self.pop_size, integer=True)
+        rows, cols = grid_shape(self.pop_size, self.rows)
         check_rates(self, "crossover_rate", "mutation_rate")
         lookup(dict.fromkeys(NEIGHBOURHOODS), "neighbourhood", self.neighbourhood)
+        if self.neighbourhood == "Margolus" and (rows < 2 or cols < 2):
+            raise InputError(f"algorithm.neighbourhood: Margolus needs a grid of at least "
+                             f"2x2, got {rows}x{cols} (pop_size {self.pop_size})")
         lookup(dict.fromkeys(UPDATE_POLICIES), "update policy", self.update)
         lookup(dict.fromkeys(MATE_SELECTIONS), "mate selection", self.mate_selection)
         lookup(dict.fromkeys(REPLACEMENTS), "replacement", self.replacement)
-        lookup(CROSSOVERS, "crossover", self.crossover)
-        lookup(MUTATIONS, "mutation", self.mutation)
+        check_operator_params("algorithm.crossover_params", "crossover", self.crossover,
+                              lookup(CROSSOVERS, "crossover", self.crossover),
+                              self.crossover_params)
+        check_operator_params("algorithm.mutation_params", "mutation", self.mutation,
+                              lookup(MUTATIONS, "mutation", self.mutation), self.mutation_params)
 
 
 @dataclass
@@ -111,6 +124,8 @@ class CGAState:
     evaluated: bool = False
     #: this generation's uniforms, ``[5, len(sequence)]`` in wave order (see module doc)
     draws: np.ndarray = field(default_factory=lambda: np.empty((5, 0)))
+    #: neighbours (without the cell itself) of the sweep's cells, in wave order
+    wave_nbr: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), np.int64))
     #: the sweep's one-point masks ``[L, dim]`` (True: the mate's gene), from ``draws``
     masks: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), bool))
 
@@ -173,6 +188,7 @@ class CellularGA(Optimizer):
                  mutate: MutateFn | None = None) -> None:
         super().__init__(genome, mutate=mutate)
         cfg.validate()
+        check_genome_params(cfg, genome)
         self.cfg = cfg
         self.rows, self.cols = grid_shape(cfg.pop_size, cfg.rows)
         self._xo = CROSSOVERS[cfg.crossover]
@@ -221,8 +237,10 @@ class CellularGA(Optimizer):
         draws = rng.random((5, len(seq)))
         masks = one_point_masks(draws, self.genome.dim, self.cfg.crossover_rate) \
             if self._fast_one_point and self.genome.dim >= 2 else state.masks
-        return replace(state, sequence=np.asarray(seq), waves=waves, wave_cells=seq[order],
-                       wave_starts=starts, draws=draws, masks=masks)
+        cells = seq[order]
+        return replace(state, sequence=np.asarray(seq), waves=waves, wave_cells=cells,
+                       wave_starts=starts, draws=draws, masks=masks,
+                       wave_nbr=self.table(sweep)[cells, 1:])
 
     def _wave(self, state: CGAState) -> tuple[np.ndarray, slice]:
         """Cells of the current wave and their columns (slice of the sweep, wave order)."""
@@ -236,7 +254,7 @@ class CellularGA(Optimizer):
             state = self._schedule(state, rng)
         c, g = self.cfg, self.genome
         cells, part = self._wave(state)
-        nbr = self.table(state.generation - 1)[cells, 1:]
+        nbr = state.wave_nbr[part]
         rows = np.arange(len(cells))
         u = state.draws[:, part]
         ncost = state.cost[nbr]

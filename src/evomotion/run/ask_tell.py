@@ -47,6 +47,7 @@ class AskTellDriver(Driver):
         self.problem = problem
         self.opt = optimizer
         self.sense = problem.sense
+        self._maximise = problem.sense == "max"
         done = getattr(optimizer, "generation_done", None)
         self._done = done if done is not None else getattr(optimizer, "end_of_generation",
                                                            lambda _s: True)
@@ -68,8 +69,8 @@ class AskTellDriver(Driver):
         best_metrics = None
         while True:
             genomes, state = self.opt.ask(state, rng)
-            ev = evaluate(genomes)
-            cost = to_cost(ev.fitness, self.sense)
+            ev = evaluate(genomes)  # sanitized: non-finite fitness is already the worst
+            cost = -ev.fitness if self._maximise else to_cost(ev.fitness, "min")
             _, prev_best = self.opt.best(state)
             state = self.opt.tell(state, genomes, cost, rng)
             n += len(genomes)
@@ -77,9 +78,8 @@ class AskTellDriver(Driver):
                 nfail += int(ev.failed.sum())
             if ev.errors:
                 errors.extend(ev.errors)
-            i = int(np.argmin(cost))
-            if cost[i] < prev_best:
-                best_metrics = scalar_metrics(ev.metrics, i)
+            if cost.min() < prev_best:
+                best_metrics = scalar_metrics(ev.metrics, int(np.argmin(cost)))
             if self._done(state):
                 break
         pop, pcost = self.opt.population(state)
