@@ -86,6 +86,7 @@ class DaskEvaluator:
             else:
                 self.cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1,
                                             threads_per_worker=1, processes=True,
+                                            host="127.0.0.1",  # scheduler and workers
                                             # a free localhost port (None still binds 8787)
                                             dashboard_address="127.0.0.1:0",
                                             silence_logs=logging.WARNING)

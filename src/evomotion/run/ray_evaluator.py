@@ -97,10 +97,13 @@ class RayEvaluator:
         if self._own_ray:
             try:
                 # "local": always a fresh local cluster, never one found in /tmp/ray
+                # a local cluster started here listens on 127.0.0.1 only (docs/cluster.md
+                # says how to open one up with token authentication)
+                local = {} if address else {"_node_ip_address": "127.0.0.1"}
                 ray.init(address=address or "local",
                          num_cpus=None if address else (workers or None),
                          include_dashboard=False, logging_level="WARNING",
-                         log_to_driver=False, runtime_env={"env_vars": WORKER_ENV})
+                         log_to_driver=False, runtime_env={"env_vars": WORKER_ENV}, **local)
             except ConnectionError as e:
                 raise ClusterError(f"cannot reach the Ray cluster at {address}: {e}") from e
         cpus = int(ray.cluster_resources().get("CPU", 0))
