@@ -64,6 +64,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from evomotion.core.chaos import validate_tent
+from evomotion.core.checks import MAX_POP_SIZE, check_fields, check_number
 from evomotion.core.cmaes_extras import chaos_due, chaos_jump, levy_candidates, tent_start
 from evomotion.core.cmaes_params import StrategyParams, strategy_params
 from evomotion.core.cmaes_restarts import fresh_distribution, initial_lambda, restart
@@ -80,6 +81,7 @@ from evomotion.core.cmaes_update import (
 from evomotion.core.levy import mantegna_sigma_u
 from evomotion.core.optimizer import MutateFn, Optimizer
 from evomotion.core.problem import GenomeSpec
+from evomotion.errors import InputError
 
 
 @dataclass(frozen=True)
@@ -107,10 +109,16 @@ class CMAESConfig:
     levy_fraction: float = 0.2
 
     def validate(self) -> None:
+        check_fields(self, "algorithm")
         if self.pop_size != 0 and self.pop_size < 2:
             raise ValueError(f"algorithm.pop_size must be 0 (default) or >= 2, got {self.pop_size}")
+        check_number("algorithm.pop_size", self.pop_size, hi=MAX_POP_SIZE, integer=True)
         if self.sigma0 <= 0:
             raise ValueError(f"algorithm.sigma0 must be > 0, got {self.sigma0}")
+        for key in ("max_restarts", "chaos_patience", "chaos_max_jumps"):
+            check_number(f"algorithm.{key}", getattr(self, key), lo=0, integer=True)
+        for key in ("tolfun", "tolx"):
+            check_number(f"algorithm.{key}", getattr(self, key), lo=0.0)
         choices = {"x0": ("uniform", "center"), "bound_handling": ("reinject", "none"),
                    "restarts": ("none", "ipop", "bipop")}
         for key, allowed in choices.items():
@@ -119,16 +127,25 @@ class CMAESConfig:
                                  f"{getattr(self, key)!r}")
         if self.inc_popsize <= 1:
             raise ValueError(f"algorithm.inc_popsize must be > 1, got {self.inc_popsize}")
-        if self.chaos:
+        lam0 = self.pop_size or 4  # the smallest default lambda
+        if self.restarts != "none" and (math.log(lam0) + self.max_restarts
+                                        * math.log(self.inc_popsize)) > math.log(MAX_POP_SIZE):
+            raise InputError(f"algorithm.inc_popsize={self.inc_popsize}, algorithm.max_restarts="
+                             f"{self.max_restarts}: the last restart's population would exceed "
+                             f"{MAX_POP_SIZE}")
+        # the Tent and Levy settings are checked even when their option is off
+        try:
             validate_tent(self.chaos_mu, 0.3)
-            if not 0 < self.chaos_strength <= 1 or self.chaos_patience < 0:
-                raise ValueError("algorithm.chaos_strength must be in (0, 1] and "
-                                 "algorithm.chaos_patience >= 0")
-        if self.levy:
             mantegna_sigma_u(self.levy_beta)
-            if self.levy_alpha <= 0 or not 0 < self.levy_fraction <= 1:
-                raise ValueError("algorithm.levy_alpha must be > 0 and "
-                                 "algorithm.levy_fraction in (0, 1]")
+        except ValueError as e:
+            key = "chaos_mu" if "Tent" in str(e) else "levy_beta"
+            raise InputError(f"algorithm.{key}: {e}") from None
+        if not 0 < self.chaos_strength <= 1 or self.chaos_patience < 0:
+            raise ValueError("algorithm.chaos_strength must be in (0, 1] and "
+                             "algorithm.chaos_patience >= 0")
+        if self.levy_alpha <= 0 or not 0 < self.levy_fraction <= 1:
+            raise ValueError("algorithm.levy_alpha must be > 0 and "
+                             "algorithm.levy_fraction in (0, 1]")
 
 
 @dataclass

@@ -25,8 +25,10 @@ from typing import Any
 
 import numpy as np
 
+from evomotion.core.checks import MAX_POP_SIZE, check_fields, check_number
 from evomotion.core.operators import CROSSOVERS, MUTATIONS, REPLACEMENTS, SELECTIONS
 from evomotion.core.operators.mutation import clip_to_bounds
+from evomotion.core.operators.params import check_genome_params, check_operator_params
 from evomotion.core.optimizer import MutateFn, Optimizer, check_rates
 from evomotion.core.problem import GenomeSpec
 from evomotion.core.registry import lookup
@@ -50,15 +52,24 @@ class GAConfig:
     replacement: str = "generational"
 
     def validate(self) -> None:
+        """One-line errors for impossible settings, operator parameters included (their
+        keys against the operator's signature, their values against its range)."""
+        check_fields(self, "algorithm")
         if self.pop_size < 2:
             raise ValueError(f"algorithm.pop_size must be >= 2, got {self.pop_size}")
+        check_number("algorithm.pop_size", self.pop_size, hi=MAX_POP_SIZE, integer=True)
         check_rates(self, "crossover_rate", "mutation_rate")
         if self.elitism < 0 or (self.elitism >= 1 and self.elitism > self.pop_size):
             raise ValueError(f"algorithm.elitism must be a fraction in [0, 1) or a count "
                              f"<= pop_size, got {self.elitism}")
-        lookup(CROSSOVERS, "crossover", self.crossover)
-        lookup(MUTATIONS, "mutation", self.mutation)
-        lookup(SELECTIONS, "selection", self.selection)
+        check_operator_params("algorithm.crossover_params", "crossover", self.crossover,
+                              lookup(CROSSOVERS, "crossover", self.crossover),
+                              self.crossover_params)
+        check_operator_params("algorithm.mutation_params", "mutation", self.mutation,
+                              lookup(MUTATIONS, "mutation", self.mutation), self.mutation_params)
+        check_operator_params("algorithm.selection_params", "selection", self.selection,
+                              lookup(SELECTIONS, "selection", self.selection),
+                              self.selection_params, limits={"k": {"hi": self.pop_size}})
         lookup(REPLACEMENTS, "replacement", self.replacement)
 
     @property
@@ -87,6 +98,7 @@ class GA(Optimizer):
                  mutate: MutateFn | None = None) -> None:
         super().__init__(genome, mutate=mutate)
         cfg.validate()
+        check_genome_params(cfg, genome)
         self.cfg = cfg
         self._xo = CROSSOVERS[cfg.crossover]
         self._mut = MUTATIONS[cfg.mutation]

@@ -4,6 +4,13 @@ The top level has three sections: ``[run]`` (:class:`RunSection`), ``[algorithm]
 dataclass registered for ``algorithm.name`` in :data:`evomotion.core.algorithms.ALGORITHMS`)
 and ``[problem]`` (the study's ``problem_config``). Unknown keys and wrong types raise
 :class:`~evomotion.errors.InputError` naming the key and listing the valid ones.
+
+Nothing a user writes gets past as a traceback: the file is decoded as UTF-8 with a
+``FILE:LINE`` error; every ``float`` field must be finite unless its field metadata documents
+what ``inf`` means (:func:`evomotion.core.checks.inf_ok`), every ``int`` is 64-bit and never a
+``bool``; each section's ``validate()`` checks its ranges (operator parameters against the
+operator's signature); and :func:`evomotion.run.limits.check_memory` refuses a population
+that cannot fit in the available memory before any array is allocated.
 """
 
 from __future__ import annotations
@@ -20,8 +27,15 @@ from typing import Any
 import tomli_w
 
 from evomotion.core.algorithms import ALGORITHMS
+from evomotion.core.checks import ALLOW_INF, check_fields, check_number, check_text
 from evomotion.core.registry import lookup
 from evomotion.errors import FileFormatError, InputError
+
+#: a config file is refused above this size (it is a handful of keys)
+MAX_CONFIG_BYTES = 1 << 20
+#: ``run.workers`` and ``run.chunks_per_worker`` at most (process pools, cluster chunks)
+MAX_WORKERS = 4096
+MAX_CHUNKS_PER_WORKER = 1 << 16
 
 
 @dataclass(frozen=True)
@@ -42,6 +56,7 @@ class RunSection:
     address: str = ""
 
     def validate(self) -> None:
+        check_fields(self, "run")
         for k in ("generations", "max_evaluations", "stagnation_generations", "workers",
                   "checkpoint_every"):
             if getattr(self, k) < 0:
@@ -50,6 +65,11 @@ class RunSection:
             raise InputError(f"run.chunks_per_worker must be >= 1, got {self.chunks_per_worker}")
         if self.wall_seconds < 0:
             raise InputError(f"run.wall_seconds must be >= 0, got {self.wall_seconds}")
+        check_number("run.seed", self.seed, lo=0, integer=True)  # numpy seeds are >= 0
+        check_number("run.stagnation_eps", self.stagnation_eps, lo=0.0)
+        check_number("run.workers", self.workers, lo=0, hi=MAX_WORKERS, integer=True)
+        check_number("run.chunks_per_worker", self.chunks_per_worker, lo=1,
+                     hi=MAX_CHUNKS_PER_WORKER, integer=True)
         from evomotion.run.evaluators import EVALUATORS
 
         lookup(EVALUATORS, "evaluator", self.evaluator)
@@ -65,20 +85,47 @@ class Config:
 
 
 def parse_value(text: str) -> Any:
-    """A ``--set`` value: a TOML literal (``3``, ``0.5``, ``true``, ``[1, 2]``) or a bare string."""
+    """A ``--set`` value: a TOML literal (``3``, ``0.5``, ``true``, ``[1, 2]``, ``nan``,
+    ``inf``; the field checks refuse the non-finite ones) or a bare string."""
     if text.strip().lower() == "none":
         return None
+    if "\n" in text or "\r" in text:  # one value, not a TOML document
+        return text
     try:
         return tomllib.loads(f"v = {text}")["v"]
-    except tomllib.TOMLDecodeError:
+    except (tomllib.TOMLDecodeError, RecursionError):
         return text
 
 
-def load_toml(path: Path) -> dict[str, Any]:
+def _decode(path: Path, data: bytes) -> str:
+    """``data`` as UTF-8 (a BOM is dropped), or ``FILE:LINE: expected UTF-8 text``."""
     try:
-        text = Path(path).read_text()
+        return data.decode("utf-8").removeprefix("\ufeff")
+    except UnicodeDecodeError as e:
+        start = data.rfind(b"\n", 0, e.start) + 1
+        line = data.count(b"\n", 0, e.start) + 1
+        column = len(data[start:e.start].decode("utf-8", errors="replace")) + 1
+        raise FileFormatError(path, line, f"expected UTF-8 text (byte 0x{data[e.start]:02x} "
+                                          f"at column {column})") from None
+
+
+def load_toml(path: Path) -> dict[str, Any]:
+    """The TOML document at ``path``; every problem with it is a one-line :class:`InputError`
+    (unreadable, a directory, too large, not UTF-8, not TOML: ``FILE:LINE: ...``)."""
+    path, is_dir = Path(path), False
+    try:
+        is_dir = path.is_dir()
+        with path.open("rb") as fh:
+            data = fh.read(MAX_CONFIG_BYTES + 1)
     except OSError as e:
-        raise InputError(f"{path}: cannot read config ({e.strerror})") from None
+        if is_dir:
+            raise InputError(f"{path}: expected a TOML file, got a directory") from None
+        raise InputError(f"{path}: cannot read config ({e.strerror or e})") from None
+    except ValueError as e:  # e.g. an embedded NUL in the path
+        raise InputError(f"{str(path)!r}: cannot read config ({e})") from None
+    if len(data) > MAX_CONFIG_BYTES:
+        raise InputError(f"{path}: expected a config of at most {MAX_CONFIG_BYTES} bytes")
+    text = _decode(path, data)
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
@@ -86,6 +133,9 @@ def load_toml(path: Path) -> dict[str, Any]:
         if m:
             raise FileFormatError(path, int(m[2]), f"column {m[3]}: invalid TOML: {m[1]}") from None
         raise FileFormatError(path, None, f"invalid TOML: {e}") from None
+    except RecursionError:
+        raise FileFormatError(path, None, "invalid TOML: arrays or tables nested too "
+                                          "deeply") from None
 
 
 def _merge(base: dict, extra: dict) -> dict:
@@ -111,7 +161,11 @@ def apply_override(raw: dict, item: str) -> dict:
     return _merge(raw, node)
 
 
-def _check_type(value: Any, tp: Any, key: str) -> Any:
+def _check_type(value: Any, tp: Any, key: str, allow_inf: bool = False) -> Any:
+    """``value`` converted to type ``tp`` (ints to floats), or a one-line error naming ``key``.
+
+    Floats must be finite unless ``allow_inf`` (the field's :func:`~evomotion.core.checks.inf_ok`
+    metadata), ints are 64-bit and never bools, strings have no NUL characters."""
     origin = typing.get_origin(tp)
     if tp is Any:
         return value
@@ -124,23 +178,27 @@ def _check_type(value: Any, tp: Any, key: str) -> Any:
             if a is type(None):
                 continue
             try:
-                return _check_type(value, a, key)
+                return _check_type(value, a, key, allow_inf)
             except InputError as e:
                 errors.append(e)
         raise errors[0]
     if tp is float and isinstance(value, int | float) and not isinstance(value, bool):
+        check_number(key, value, allow_inf=allow_inf)
         return float(value)
     if tp is int and isinstance(value, int) and not isinstance(value, bool):
+        check_number(key, value, integer=True)
         return value
     if tp is bool and isinstance(value, bool):
         return value
     if tp is str and isinstance(value, str):
+        check_text(key, value)
         return value
     if (origin is dict or tp is dict) and isinstance(value, dict):
         return dict(value)
     if (origin in (tuple, list) or tp in (tuple, list)) and isinstance(value, list | tuple):
         args = [a for a in typing.get_args(tp) if a is not Ellipsis]
-        items = [_check_type(v, args[0], key) for v in value] if args else list(value)
+        items = [_check_type(v, args[0], f"{key}[{i}]", allow_inf)
+                 for i, v in enumerate(value)] if args else list(value)
         return tuple(items) if (origin is tuple or tp is tuple) else items
     name = getattr(tp, "__name__", str(tp))
     raise InputError(f"{key}: expected {name}, got {type(value).__name__} {value!r}")
@@ -155,7 +213,7 @@ def build_section(cls: type, values: dict[str, Any], section: str) -> Any:
         if k not in fields:
             raise InputError(f"unknown key '{section}.{k}'; valid keys: "
                              + ", ".join(sorted(fields)))
-        kwargs[k] = _check_type(v, hints[k], f"{section}.{k}")
+        kwargs[k] = _check_type(v, hints[k], f"{section}.{k}", ALLOW_INF in fields[k].metadata)
     try:
         obj = cls(**kwargs)
     except (TypeError, ValueError) as e:
@@ -165,8 +223,10 @@ def build_section(cls: type, values: dict[str, Any], section: str) -> Any:
             obj.validate()
         except InputError:
             raise
-        except (ValueError, KeyError) as e:
-            raise InputError(str(e).strip("'\"")) from None
+        except (ValueError, KeyError, TypeError, ArithmeticError) as e:
+            msg = str(e).strip("'\"")
+            raise InputError(msg if msg.startswith(f"{section}.") else f"[{section}]: {msg}") \
+                from None
     return obj
 
 
@@ -183,6 +243,20 @@ def default_algorithm(study: Any) -> str:
     """The method a study runs when ``algorithm.name`` is not given."""
     name = study.defaults.get("algorithm", {}).get("name")
     return name or next(iter(study_algorithms(study)))
+
+
+def _drop_other_operator_params(study: Any, defaults: dict, user_alg: dict,
+                                default_alg: str) -> None:
+    """A user who picks another crossover/mutation/selection than the defaults' drops the
+    defaults' parameters of the replaced operator (they belong to it)."""
+    alg = defaults.get("algorithm")
+    cls = study_algorithms(study).get(default_alg)
+    if not isinstance(alg, dict) or cls is None:
+        return
+    field_defaults = {f.name: f.default for f in dataclasses.fields(cls)}
+    for op in ("crossover", "mutation", "selection"):
+        if op in user_alg and user_alg[op] != alg.get(op, field_defaults.get(op)):
+            alg.pop(f"{op}_params", None)
 
 
 def resolve_config(study: Any, file: Path | None = None,
@@ -208,6 +282,7 @@ def resolve_config(study: Any, file: Path | None = None,
     user_alg = user.get("algorithm", {}) if isinstance(user.get("algorithm"), dict) else {}
     if user_alg.get("name", default_alg) != default_alg:
         defaults.pop("algorithm", None)  # the study's tuning is for its own algorithm
+    _drop_other_operator_params(study, defaults, user_alg, default_alg)
     raw: dict[str, Any] = {"run": {}, "algorithm": {"name": default_alg}, "problem": {}}
     raw = _merge(_merge(raw, defaults), user)
     cfg = config_from_dict(study, raw)
@@ -231,8 +306,12 @@ def config_from_dict(study: Any, raw: dict[str, Any]) -> Config:
     algorithm = build_section(alg_cls, alg_raw, "algorithm")
     problem = build_section(study.problem_config, raw.get("problem", {}), "problem")
     preset = raw.get("preset")
-    return Config(study=study.name, run=run, algorithm=algorithm, problem=problem,
-                  preset=preset if isinstance(preset, str) else None)
+    cfg = Config(study=study.name, run=run, algorithm=algorithm, problem=problem,
+                 preset=preset if isinstance(preset, str) else None)
+    from evomotion.run.limits import check_memory
+
+    check_memory(study, cfg)  # what the config alone tells (the run loop checks again)
+    return cfg
 
 
 def _strip_none(obj: Any) -> Any:
@@ -257,6 +336,6 @@ def config_from_run_dir(run_dir: Path) -> tuple[str, dict[str, Any]]:
     if not path.exists():
         raise InputError(f"{run_dir}: not a run folder (no config.toml)")
     raw = load_toml(path)
-    if "study" not in raw:
-        raise FileFormatError(path, None, "expected a top-level 'study' key")
+    if not isinstance(raw.get("study"), str):
+        raise FileFormatError(path, None, "expected a top-level 'study' key naming the study")
     return raw["study"], raw

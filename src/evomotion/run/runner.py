@@ -36,6 +36,7 @@ from evomotion.run.folder import (
     holds_run,
     write_json,
 )
+from evomotion.run.limits import check_memory
 from evomotion.run.lock import RunLock
 from evomotion.run.plots import plot_fitness
 from evomotion.run.resume import config_record, restore
@@ -101,6 +102,7 @@ def _run(study: Any, config: Config, out_dir: Path | None, quiet: bool, resume: 
          problem: Any, evaluator: Any, stale_owner: str | None = None) -> RunResult:
     rc = config.run
     problem = problem if problem is not None else study.make_problem(config.problem)
+    check_memory(study, config, problem)  # before any population array is allocated
     driver = build_driver(study, config, problem)
     if rc.evaluator != "serial" and not driver.uses_evaluator:
         raise InputError(f"run.evaluator: study {study.name!r} has no batch evaluation to "

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from evomotion.core.checks import check_fields, check_number, check_text
 from evomotion.core.problem import Evaluation, GenomeSpec
 from evomotion.errors import InputError
 from evomotion.studies.arm_ik.geometry import segment_hits
@@ -24,6 +25,10 @@ from evomotion.studies.arm_ik.objective import (
 )
 from evomotion.studies.arm_ik.scenario import Scenario, load_scenario
 from evomotion.studies.arm_ik.visibility import VisibilityGraph
+
+#: ``problem.gif_frames`` at most; heuristic-map cells along the board's diagonal at most
+MAX_GIF_FRAMES = 1000
+MAX_CELLS_PER_SIDE = 3000
 
 
 @dataclass(frozen=True)
@@ -43,6 +48,11 @@ class ArmIKConfig:
     gif_frames: int = 30
 
     def validate(self) -> None:
+        check_fields(self, "problem")
+        check_text("problem.scenario", self.scenario, empty=False)
+        check_number("problem.cell_size", self.cell_size, lo=0.0)
+        check_number("problem.tolerance", self.tolerance, lo=0.0, hi=1.0, lo_open=True)
+        check_number("problem.gif_frames", self.gif_frames, lo=1, hi=MAX_GIF_FRAMES, integer=True)
         if self.matching not in MATCHINGS:
             raise InputError(f"problem.matching: expected one of {', '.join(MATCHINGS)}, "
                              f"got {self.matching!r}")
@@ -83,6 +93,10 @@ class ArmIKProblem:
         cfg.validate()
         self.cfg = cfg
         self.scn = scenario if scenario is not None else load_scenario(cfg.scenario)
+        if cfg.cell_size > 0 and self.scn.diagonal / cfg.cell_size > MAX_CELLS_PER_SIDE:
+            raise InputError(f"problem.cell_size: expected >= {self.scn.diagonal:g} / "
+                             f"{MAX_CELLS_PER_SIDE} (the board's diagonal / the most cells "
+                             f"per side) for scenario {self.scn.name!r}, got {cfg.cell_size}")
         self.layout = Layout.of(self.scn, with_keys=cfg.matching == "chromosome")
         self.genome = GenomeSpec(self.layout.lower, self.layout.upper)
         self.obstacles = self.scn.obstacle_segments()

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from evomotion.core.checks import MAX_POP_SIZE, check_fields, check_number
 from evomotion.errors import InputError
 from evomotion.run.driver import Driver, Evaluate, StepReport
 from evomotion.studies.arm_ik.evolution import crossover, mutate, parents, rank_order, survivors
@@ -54,6 +55,11 @@ class ScheduleConfig:
     stop_when_solved: bool = True
 
     def validate(self) -> None:
+        check_fields(self, "algorithm")
+        check_number("algorithm.pop_size", self.pop_size, hi=MAX_POP_SIZE, integer=True)
+        for key in ("blend_prob", "mutation_rate"):
+            check_number(f"algorithm.{key}", getattr(self, key), lo=0.0, hi=1.0)
+        check_number("algorithm.mutation_max_deg", self.mutation_max_deg, hi=360.0)
         if self.survival not in ("pairwise", "tournament"):
             raise InputError(f"algorithm.survival: expected pairwise or tournament, "
                              f"got {self.survival!r}")
@@ -68,6 +74,8 @@ class ScheduleConfig:
                   "restart_after", "tournament_k"):
             if getattr(self, k) < 0:
                 raise InputError(f"algorithm.{k}: expected >= 0, got {getattr(self, k)}")
+        check_number("algorithm.tournament_k", self.tournament_k, lo=1, hi=self.pop_size,
+                     integer=True)
 
 
 def phase_objective(a: Assessment, mode: str) -> tuple[np.ndarray, np.ndarray]:
@@ -125,6 +133,17 @@ class ScheduleDriver(Driver):
         if state.generation < 0:
             return state.best_x, float("inf")
         return state.best_x, float(self.problem.fitness(state.best_a)[0])
+
+    def check_state(self, state: ScheduleState) -> None:
+        d, n = self.problem.genome.dim, self.cfg.pop_size
+        if state.generation >= 0 and (state.pop.shape != (n, d)
+                                      or len(state.assessment.distance) != n
+                                      or state.history.shape != (state.generation + 1, d)):
+            raise ValueError(f"population {state.pop.shape} / history {state.history.shape} "
+                             f"do not fit pop_size {n}, {d} genes, generation "
+                             f"{state.generation}")
+        if state.phase not in ("arm", "fingers", "whole"):
+            raise ValueError(f"unknown phase {state.phase!r}")
 
     def stop(self, state: ScheduleState) -> str | None:
         if state.generation < 0:

@@ -17,10 +17,12 @@ stance foot starts to tip. Steps without any sole contact count as violations.
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from evomotion.core.checks import check_fields, check_number
 from evomotion.core.problem import Evaluation, GenomeSpec
 from evomotion.sim import nao
 from evomotion.sim.rollout import BatchSimulator, fall_step, torso_track
@@ -31,6 +33,18 @@ METRICS = ("distance_m", "lateral_m", "fell", "zmp_violation", "min_margin_m",
            "exec_time_s")
 DIRECTIONS = np.stack([np.cos(np.arange(32) * np.pi / 16), np.sin(np.arange(32) * np.pi / 16)],
                       axis=1)
+
+
+#: ``problem.nthread`` at most (one MjData per thread); ``rolling_m`` at most (m, a rolling
+#: friction length); the ball's offset from its default place at most (m)
+MAX_THREADS = 1024
+MAX_ROLLING_M = 0.1
+MAX_BALL_OFFSET_M = 1.0
+#: the kick scene's physics step, for estimates before it is loaded
+KICK_TIMESTEP_S = 0.004
+#: doubles per individual and physics step: state (71), sensors (26), controls (22), the
+#: support-polygon analysis, rounded up
+ROLLOUT_DOUBLES_PER_STEP = 200
 
 
 @dataclass(frozen=True)
@@ -53,6 +67,33 @@ class KickConfig:
         """The config of a one-core evaluator worker: ``nthread`` 0 (all cores) becomes 1;
         an explicit thread count is kept."""
         return dataclasses.replace(self, nthread=1) if self.nthread == 0 else self
+
+    def validate(self) -> None:
+        """One-line :class:`InputError` for impossible settings (every float finite)."""
+        check_fields(self, "problem")
+        check_number("problem.rolling_m", self.rolling_m, lo=0.0, hi=MAX_ROLLING_M, lo_open=True)
+        for key in ("ball_dx_m", "ball_dy_m"):
+            check_number(f"problem.{key}", getattr(self, key), lo=-MAX_BALL_OFFSET_M,
+                         hi=MAX_BALL_OFFSET_M)
+        for key in ("w_lateral", "fall_penalty_m", "zmp_penalty_m", "roll_after_s"):
+            check_number(f"problem.{key}", getattr(self, key), lo=0.0)
+        check_number("problem.fall_height_m", self.fall_height_m, lo=0.0, lo_open=True)
+        check_number("problem.fall_tilt_rad", self.fall_tilt_rad, lo=0.0, hi=math.pi,
+                     lo_open=True)
+        check_number("problem.nthread", self.nthread, lo=0, hi=MAX_THREADS, integer=True)
+
+    def genome_dim(self) -> int:
+        """The genome's length (for the memory check before the problem is built)."""
+        return len(GENES)
+
+    memory_keys = ("roll_after_s",)  # what memory_bytes depends on (for its message)
+
+    def memory_bytes(self, pop_size: int) -> int:
+        """Bytes of one batch's rollout at the longest kick: recorded states, sensors,
+        controls and support-polygon temporaries (doubles) per physics step, twice."""
+        longest = SETTLE_S + execution_time_s(np.array([[g[2] for g in GENES]]))[0]
+        steps = math.ceil((longest + self.roll_after_s) / KICK_TIMESTEP_S)
+        return 2 * 8 * pop_size * steps * ROLLOUT_DOUBLES_PER_STEP
 
 
 def support_margin_batch(sensors: np.ndarray, sl: dict[str, slice]) -> np.ndarray:

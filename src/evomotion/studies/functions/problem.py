@@ -11,8 +11,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from evomotion.core.checks import check_fields, check_number
 from evomotion.core.problem import Evaluation, GenomeSpec
 from evomotion.core.registry import lookup
+from evomotion.errors import InputError
 
 
 def sphere(x: np.ndarray) -> np.ndarray:
@@ -42,22 +44,39 @@ FUNCTIONS = {  # name -> (function, default half-width of the domain)
 }
 
 
+#: the largest ``problem.dim`` (a benchmark genome; refused before any array is built)
+MAX_DIM = 1_000_000
+#: the largest ``problem.half_width`` (squares and sums of genes stay finite)
+MAX_HALF_WIDTH = 1e100
+
+
 @dataclass(frozen=True)
 class FunctionsConfig:
-    """``[problem]`` of the functions study. ``half_width = 0`` uses the function's domain."""
+    """``[problem]`` of the functions study. ``half_width = 0`` uses the function's domain.
+
+    ``dim`` is in ``[1, MAX_DIM]`` (``[2, MAX_DIM]`` for Rosenbrock), ``half_width`` a finite
+    value in ``[0, MAX_HALF_WIDTH]``."""
 
     name: str = "sphere"
     dim: int = 30
     half_width: float = 0.0
 
     def validate(self) -> None:
+        check_fields(self, "problem")
         lookup(FUNCTIONS, "function", self.name)
         if self.dim < 1:
             raise ValueError(f"problem.dim must be >= 1, got {self.dim}")
         if self.name == "rosenbrock" and self.dim < 2:
             raise ValueError("problem.dim must be >= 2 for rosenbrock")
+        if self.dim > MAX_DIM:
+            raise InputError(f"problem.dim: expected at most {MAX_DIM} genes, got {self.dim}")
         if self.half_width < 0:
             raise ValueError(f"problem.half_width must be >= 0, got {self.half_width}")
+        check_number("problem.half_width", self.half_width, lo=0.0, hi=MAX_HALF_WIDTH)
+
+    def genome_dim(self) -> int:
+        """The genome's length (for the memory check before the problem is built)."""
+        return self.dim
 
 
 class FunctionProblem:

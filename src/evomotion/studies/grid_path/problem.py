@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from evomotion.core.checks import check_choice, check_fields, check_number, check_text
 from evomotion.core.problem import Evaluation, GenomeSpec
 from evomotion.errors import InputError
 from evomotion.studies.grid_path.encoding import PerpendicularEncoding, parts_from_m
@@ -31,6 +32,14 @@ from evomotion.studies.grid_path.operators import PathOperators
 from evomotion.studies.grid_path.tables import SegmentTables
 
 BUNDLED = ("seed10a", "seed10b", "seed15", "seed20")
+
+
+#: ``problem.n_parts`` (and the parts ``m`` gives) at most; ``retries``, ``repair_paths`` at
+#: most; the side of a ``random:`` map at most
+MAX_PARTS = 10_000
+MAX_RETRIES = 100_000
+MAX_REPAIR_PATHS = 10_000
+MAX_RANDOM_MAP_SIZE = 4096
 
 
 @dataclass(frozen=True)
@@ -49,6 +58,39 @@ class GridPathConfig:
     repair: bool = False  # make the final best paths taut in their corridor (see repair.py)
     repair_radius: float = 2.0  # corridor half-width, cells
     repair_paths: int = 30  # how many of the best distinct final paths are repaired
+
+    def validate(self) -> None:
+        """One-line :class:`InputError` for impossible settings (the map file is read, and
+        its own errors raised, when the problem is built)."""
+        check_fields(self, "problem")
+        check_text("problem.map", self.map, empty=False)
+        if self.map.startswith("random:"):
+            _check_random_spec(self.map)
+        _cell(self.start, "start")
+        _cell(self.goal, "goal")
+        check_choice("problem.mode", self.mode, ("discrete", "continuous"))
+        check_choice("problem.rule", self.rule, ("", *RULES))
+        check_number("problem.m", self.m, lo=0.0, lo_open=True)
+        check_number("problem.n_parts", self.n_parts, lo=0, hi=MAX_PARTS, integer=True)
+        check_number("problem.penalty", self.penalty, lo=0.0)
+        check_number("problem.retries", self.retries, lo=0, hi=MAX_RETRIES, integer=True)
+        check_number("problem.repair_radius", self.repair_radius, lo=0.0, lo_open=True)
+        check_number("problem.repair_paths", self.repair_paths, lo=0, hi=MAX_REPAIR_PATHS,
+                     integer=True)
+
+
+def _check_random_spec(spec: str) -> None:
+    parts = spec.split(":")
+    try:
+        if len(parts) != 4:
+            raise ValueError
+        size, density, seed = int(parts[1]), float(parts[2]), int(parts[3])
+    except ValueError:
+        raise InputError(f"problem.map: expected 'random:SIZE:DENSITY:SEED', "
+                         f"got {spec!r}") from None
+    check_number("problem.map SIZE", size, lo=2, hi=MAX_RANDOM_MAP_SIZE, integer=True)
+    check_number("problem.map DENSITY", density, lo=0.0, hi=1.0, hi_open=True)
+    check_number("problem.map SEED", seed, lo=0, integer=True)
 
 
 def _cell(text: str, what: str) -> tuple[int, int] | None:
@@ -97,6 +139,9 @@ class GridPathProblem:
             raise InputError(f"problem.rule must be one of {', '.join(RULES)}, got {cfg.rule!r}")
         length = float(np.hypot(*(self.map.goal_xy - self.map.start_xy)))
         n = cfg.n_parts if cfg.n_parts > 0 else parts_from_m(length, cfg.m)
+        if n > MAX_PARTS:
+            raise InputError(f"problem.m: {cfg.m} divides this map's start-goal line into {n} "
+                             f"parts, more than {MAX_PARTS}; expected a larger m")
         self.enc = PerpendicularEncoding.build(self.map, n, cfg.mode)
         self.penalty = cfg.penalty or float(self.map.width + self.map.height)
         self.genome: GenomeSpec = self.enc.genome()

@@ -27,16 +27,18 @@ run when nearly every individual falls.
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from evomotion.core.checks import check_choice, check_fields, check_number
 from evomotion.core.problem import Evaluation, GenomeSpec
 from evomotion.errors import InputError
 from evomotion.sim import nao
 from evomotion.sim.nao.scene import sensor_slices
 from evomotion.sim.rollout import BatchSimulator, fall_step, torso_track
-from evomotion.studies.humanoid_step.encoding import ServoEncoding
+from evomotion.studies.humanoid_step.encoding import ENCODINGS, ServoEncoding
 
 #: Seed 000, Table 1: servo angle limits (rad) used as GA bounds.
 SEED_TABLE1: dict[str, tuple[float, float]] = {
@@ -47,6 +49,16 @@ SEED_TABLE1: dict[str, tuple[float, float]] = {
     "LHipPitch": (-1.7453, 0.4363), "RHipPitch": (-1.7453, 0.4363),
 }
 METRICS = ("time_to_fall_s", "forward_m", "lateral_m", "heading_change_rad", "fell", "stepped")
+
+
+#: ``problem.intervals`` at most; ``problem.threads`` at most (one MjData per thread)
+MAX_INTERVALS = 10_000
+MAX_THREADS = 1024
+#: the NAO model's physics step (``models/nao_h25.xml``), for estimates before it is loaded
+NAO_TIMESTEP_S = 0.004
+#: doubles recorded per individual and physics step: state (58), sensors, controls (22),
+#: leg targets, rounded up
+ROLLOUT_DOUBLES_PER_STEP = 100
 
 
 @dataclass(frozen=True)
@@ -71,6 +83,23 @@ class HumanoidStepConfig:
         an explicit thread count is kept."""
         return dataclasses.replace(self, threads=1) if self.threads == 0 else self
 
+    def validate(self) -> None:
+        """One-line :class:`InputError` for impossible settings (see :func:`validate`)."""
+        validate(self)
+
+    def genome_dim(self) -> int:
+        """The genome's length (for the memory check before the problem is built)."""
+        n = len(nao.LEG_SERVOS)
+        return 3 * n + 1 if self.encoding == "harmonic" else n * (self.intervals - 1)
+
+    memory_keys = ("motion_s", "hold_s")  # what memory_bytes depends on (for its message)
+
+    def memory_bytes(self, pop_size: int) -> int:
+        """Bytes of one batch's rollout: recorded states, sensors and controls (doubles) of
+        every physics step of the motion and the hold, twice (analysis temporaries)."""
+        steps = math.ceil((self.motion_s + self.hold_s) / NAO_TIMESTEP_S)
+        return 2 * 8 * pop_size * steps * ROLLOUT_DOUBLES_PER_STEP
+
 
 def servo_bounds(model, scale: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
     """Seed Table 1 intersected with the model's joint ranges for ``nao.LEG_SERVOS``; with
@@ -88,6 +117,13 @@ def leg_initial_pose() -> np.ndarray:
 
 def validate(cfg: HumanoidStepConfig) -> None:
     """One-line :class:`InputError` for impossible settings."""
+    check_fields(cfg, "problem")
+    check_choice("problem.encoding", cfg.encoding, ENCODINGS)
+    check_number("problem.intervals", cfg.intervals, lo=2, hi=MAX_INTERVALS, integer=True)
+    check_number("problem.threads", cfg.threads, lo=0, hi=MAX_THREADS, integer=True)
+    check_number("problem.fall_height_m", cfg.fall_height_m, lo=0.0, lo_open=True)
+    check_number("problem.fall_tilt_rad", cfg.fall_tilt_rad, lo=0.0, hi=math.pi, lo_open=True)
+    check_number("problem.step_min_m", cfg.step_min_m, lo=0.0)
     checks = [(cfg.intervals >= 2, "problem.intervals must be >= 2"),
               (cfg.motion_s > 0, "problem.motion_s must be > 0"),
               (cfg.hold_s >= 0, "problem.hold_s must be >= 0"),

@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from evomotion.core.checks import check_fields, check_number, inf_ok
 from evomotion.core.search import SearchResult
 from evomotion.errors import InputError
 from evomotion.studies.quadruped_plan.evaluation import (
@@ -30,6 +31,11 @@ from evomotion.studies.quadruped_plan.walk_search import walk_astar, walk_best_f
 METHODS = ("best-first", "astar", "weighted-astar")
 
 
+#: the largest magnitude of a coordinate, length or constant; ``gif_max_frames`` at most
+MAX_COORD = 1e6
+MAX_GIF_FRAMES = 10_000
+
+
 @dataclass(frozen=True)
 class QuadrupedPlanConfig:
     """The ``[problem]`` section. Lengths in the seed's units, angles in radians.
@@ -38,6 +44,8 @@ class QuadrupedPlanConfig:
     ``zone_radius`` > 0 adds an exclusion zone (body centre and feet stay out of it).
     ``sense``: walking direction, -1 = body -Y (default, see docs), +1 = +Y, 0 = either.
     ``pos_grid`` [units] / ``angle_grid`` [rad]: the duplicate-detection grids (docs).
+    ``max_seconds = inf``: no time limit (the only float that may be infinite); coordinates
+    are at most ``MAX_COORD`` in magnitude.
     """
 
     start_x: float = 0.0
@@ -57,7 +65,7 @@ class QuadrupedPlanConfig:
     pos_grid: float = POS_GRID
     angle_grid: float = ANGLE_GRID
     max_expansions: int = 200_000
-    max_seconds: float = 60.0
+    max_seconds: float = inf_ok(60.0, "no time limit")
     sense: int = -1
     a: float = 2.5
     b: float = 3.0
@@ -70,8 +78,26 @@ class QuadrupedPlanConfig:
     zone_radius: float = 0.0
     gif_max_frames: int = 150
 
+    def validate(self) -> None:
+        """One-line :class:`InputError` for impossible settings (see :func:`validate`)."""
+        validate(self)
+
 
 def validate(cfg: QuadrupedPlanConfig) -> None:
+    check_fields(cfg, "problem")
+    for key in ("start_x", "start_y", "start_phi", "goal_x", "goal_y", "zone_x", "zone_y",
+                "goal_tolerance", "zone_radius", "a", "b", "l_min", "l_max", "min_margin"):
+        check_number(f"problem.{key}", getattr(cfg, key), lo=-MAX_COORD, hi=MAX_COORD)
+    for key in ("k1", "k2", "k3"):  # < 0: the seed's constant
+        check_number(f"problem.{key}", getattr(cfg, key), hi=MAX_COORD)
+    check_number("problem.weight", cfg.weight, lo=1.0, hi=MAX_COORD)
+    check_number("problem.zone_radius", cfg.zone_radius, lo=0.0)
+    check_number("problem.min_margin", cfg.min_margin, lo=0.0)
+    check_number("problem.gif_max_frames", cfg.gif_max_frames, lo=1, hi=MAX_GIF_FRAMES,
+                 integer=True)
+    check_number("problem.max_seconds", cfg.max_seconds, lo=0.0, allow_inf=True)
+    if cfg.max_seconds == -math.inf:
+        raise InputError("problem.max_seconds: expected >= 0 (inf: no time limit), got -inf")
     if cfg.rule_set not in ("A", "B"):
         raise InputError(f"problem.rule_set: expected 'A' or 'B', got {cfg.rule_set!r}")
     if cfg.method not in METHODS:
@@ -90,6 +116,11 @@ def validate(cfg: QuadrupedPlanConfig) -> None:
                          f"got {cfg.heuristic_gain!r}")
     if cfg.pos_grid <= 0 or cfg.angle_grid <= 0:
         raise InputError("problem.pos_grid and problem.angle_grid: expected > 0")
+    try:
+        make_model(cfg)
+    except InputError as e:
+        raise InputError(f"{e} (problem.a, b, l_min, l_max, sector_half_width, "
+                         "min_margin)") from None
     if cfg.goal_tolerance <= 0:
         raise InputError("problem.goal_tolerance: expected > 0")
 

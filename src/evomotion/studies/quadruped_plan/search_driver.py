@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from evomotion.core.checks import check_fields
 from evomotion.core.search import FOUND, OPEN_EMPTY, SearchResult, with_lower_bound
 from evomotion.errors import InputError
 from evomotion.run.driver import Driver, Evaluate, StepReport
@@ -40,6 +41,7 @@ class SearchConfig:
     batch_expansions: int = 2_000  # expansions per step (a stats row, a checkpoint unit)
 
     def validate(self) -> None:
+        check_fields(self, "algorithm")
         if self.batch_expansions < 1:
             raise InputError(f"algorithm.batch_expansions: expected >= 1, "
                              f"got {self.batch_expansions}")
