@@ -92,3 +92,64 @@ def test_bundled_and_unknown_maps():
     assert load_map("random:12:0.2:1").width == 12
     with pytest.raises(InputError, match="random:SIZE"):
         load_map("random:12:x")
+
+
+def _bfs_connected(blocked, a, b):
+    """The previous breadth-first search over octile moves (reference for ``connected``)."""
+    from collections import deque
+
+    from evomotion.studies.grid_path.maps import octile_moves
+
+    seen = {tuple(a)}
+    todo = deque([tuple(a)])
+    while todo:
+        x, y = todo.popleft()
+        if (x, y) == tuple(b):
+            return True
+        for nx, ny, _ in octile_moves(blocked, x, y):
+            if (nx, ny) not in seen:
+                seen.add((nx, ny))
+                todo.append((nx, ny))
+    return False
+
+
+def test_connected_equals_octile_search():
+    from evomotion.studies.grid_path.maps import connected
+
+    rng = np.random.default_rng(5)
+    for _ in range(200):
+        h, w = rng.integers(1, 9, size=2)
+        blocked = rng.random((h, w)) < rng.uniform(0.1, 0.6)
+        a = (int(rng.integers(w)), int(rng.integers(h)))
+        b = (int(rng.integers(w)), int(rng.integers(h)))
+        assert connected(blocked, a, b) == _bfs_connected(blocked, a, b)
+
+
+def test_reader_is_vectorised_and_checks_the_size_first(tmp_path):
+    import time
+
+    from evomotion.studies.grid_path.maps import MAX_MAP_CELLS
+
+    rng = np.random.default_rng(1)
+    blocked = rng.random((1500, 1200)) < 0.2
+    blocked[0, 0] = blocked[-1, -1] = False
+    blocked[0, 1] = blocked[1, 0] = blocked[-1, -2] = blocked[-2, -1] = False
+    write_map(tmp_path / "big.map", blocked)
+    t = time.perf_counter()
+    try:
+        m = read_map(tmp_path / "big.map")
+        np.testing.assert_array_equal(m.blocked, blocked)
+    except InputError as e:  # a random map may be cut off; the grid was still read
+        assert "cut off" in str(e)
+    assert time.perf_counter() - t < 10  # the per-character reader took ~6 s here
+    (tmp_path / "huge.map").write_text("type octile\nheight 100000\nwidth 100000\nmap\n")
+    with pytest.raises(FileFormatError, match=f"at most {MAX_MAP_CELLS:,} cells"):
+        read_map(tmp_path / "huge.map")
+
+
+def test_crlf_blank_lines_and_01_separators(tmp_path):
+    p = tmp_path / "c.map"
+    p.write_bytes(MAI.replace("\n", "\r\n").encode() + b"\r\n\r\n")
+    assert read_map(p).blocked.sum() == 3
+    p.write_text("\n0,0,0\n\n0 1 0\n0\t0 0\n\n")
+    assert read_map(p).blocked.tolist() == [[False] * 3, [False, True, False], [False] * 3]

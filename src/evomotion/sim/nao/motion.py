@@ -9,7 +9,11 @@ Format (Webots ``src/controller/c/motion.c``, the parser the robot controller us
   (the joint is not commanded around that pose); an empty line ends the file;
 - tokens are separated by commas (``strtok(",\\n\\r")``: CRLF is fine, empty fields collapse).
 
-Bad input raises :class:`~evomotion.errors.FileFormatError` naming the file and line.
+Bad input raises :class:`~evomotion.errors.FileFormatError` naming the file and line: bytes
+that are not UTF-8, lines longer than :data:`MAX_LINE`, values that are not finite decimal
+numbers (``nan``, ``inf``, ``1e999``), time stamps beyond :data:`MAX_MOTION_MS` (a motion is at
+most 10 minutes long, so a replay never asks for more than that) and files larger than
+:data:`MAX_MOTION_BYTES`.
 
 Webots' own NAO motions that the studies need ship as package data in ``motions/`` (Webots is
 Apache-2.0, Copyright Cyberbotics Ltd.; see ``motions/NOTICE.txt``), read with
@@ -26,6 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from evomotion.errors import FileFormatError
+from evomotion.textio import decode_utf8, read_file_bytes, split_lines
 
 #: Every NAO device name a motion may drive (the 22 modelled joints + wrists and hands).
 NAO_JOINT_NAMES: frozenset[str] = frozenset((
@@ -37,7 +42,11 @@ NAO_JOINT_NAMES: frozenset[str] = frozenset((
 ))
 MAGIC, VERSION = "#WEBOTS_MOTION", "V1.0"
 MAX_LINE = 4095  # motion.c reads lines with fgets(buffer, 4096)
+MAX_MOTION_MS = 10 * 60 * 1000  # the longest motion read: 10 minutes
+MAX_MOTION_BYTES = 64 * 1024 * 1024
 _TIME = re.compile(r"^[0-9:]+$")
+#: What ``sscanf("%lf")`` reads as a whole token, restricted to finite decimal numbers.
+_NUMBER = re.compile(r"^[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?$")
 
 
 @dataclass
@@ -70,7 +79,7 @@ def parse_time_ms(token: str) -> int | None:
     parts = token.split(":")
     if len(parts) > 3 or any(p == "" for p in parts):
         return None
-    nums = [int(p) for p in parts]
+    nums = [int(p) if len(p) <= 18 else 10**18 for p in parts]  # huge: beyond any maximum
     weights = (60000, 1000, 1)[-len(nums):]
     return sum(n * w for n, w in zip(nums, weights, strict=True))
 
@@ -82,17 +91,25 @@ def format_time_ms(ms: int) -> str:
 
 
 def _tokens(line: str) -> list[str]:
-    return [t.strip() for t in line.split(",") if t.strip() != ""]
+    """``strtok(line, ",\\n\\r")``: empty fields collapse (blanks around a token are dropped)."""
+    return [t.strip() for t in re.split("[,\r]", line) if t.strip() != ""]
+
+
+def _value(token: str) -> float | None:
+    """A value token: ``*`` -> NaN, a finite decimal number -> float, else None."""
+    if token == "*":
+        return np.nan
+    if not _NUMBER.match(token):
+        return None
+    v = float(token)
+    return v if np.isfinite(v) else None
 
 
 def read_motion(path: str | Path) -> Motion:
     """Read a Webots ``.motion`` file (both header variants)."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise FileFormatError(path, None, f"cannot read motion file ({exc})") from None
-    return parse_motion(text, path)
+    data = read_file_bytes(path, "motion file", MAX_MOTION_BYTES)
+    return parse_motion(decode_utf8(data, path), path)
 
 
 #: The Webots motions shipped in ``motions/`` (package data).
@@ -110,7 +127,15 @@ def shipped_motion(name: str) -> Motion:
 def parse_motion(text: str, path: str | Path = "<motion>") -> Motion:
     """Parse the text of a ``.motion`` file; ``path`` names it in error messages."""
     path = Path(path)
-    lines = text.splitlines()
+    text = text.removeprefix("\ufeff")
+    lines = split_lines(text)
+    for lineno, line in enumerate(lines, start=1):
+        if line.strip() == "" and lineno > 1:
+            break  # an empty line ends the file: what follows is never read
+        n = len(line) if line.isascii() else len(line.encode("utf-8"))
+        if n > MAX_LINE:
+            raise FileFormatError(path, lineno, f"expected lines of at most {MAX_LINE} bytes "
+                                                f"(Webots reads 4096-byte lines), got {n}")
     if not lines:
         raise FileFormatError(path, 1, f"expected '{MAGIC},{VERSION}' header, got empty file")
     head = _tokens(lines[0])
@@ -136,6 +161,10 @@ def parse_motion(text: str, path: str | Path = "<motion>") -> Motion:
         if t is None:
             got = tok[0] if tok else line.strip()
             raise FileFormatError(path, lineno, f"bad time stamp {got!r}; expected MM:SS:mmm")
+        if t > MAX_MOTION_MS:
+            raise FileFormatError(path, lineno, f"expected a time stamp of at most "
+                                  f"{format_time_ms(MAX_MOTION_MS)} (the maximum motion "
+                                  f"duration, {MAX_MOTION_MS // 60000} minutes), got {tok[0]!r}")
         if times and t <= times[-1]:
             raise FileFormatError(path, lineno, "expected strictly increasing time stamps")
         if len(tok) - 2 != len(joints):
@@ -143,11 +172,11 @@ def parse_motion(text: str, path: str | Path = "<motion>") -> Motion:
                                   f"expected {len(joints)} values, got {max(len(tok) - 2, 0)}")
         row = []
         for value in tok[2:]:
-            try:
-                row.append(np.nan if value == "*" else float(value))
-            except ValueError:
-                raise FileFormatError(path, lineno,
-                                      f"bad value {value!r}; expected a number or '*'") from None
+            v = _value(value)
+            if v is None:
+                raise FileFormatError(path, lineno, f"bad value {value!r}; expected a finite "
+                                                    "number or '*'")
+            row.append(v)
         times.append(t)
         names.append(tok[1])
         rows.append(row)

@@ -10,19 +10,32 @@ through its points; it is closed when the last point repeats the first.
 Angles (degrees) are counter-clockwise rotations relative to the previous bone, 0 meaning
 straight on; the first arm bone is relative to +x, the first bone of every finger relative
 to the last arm bone. Limits satisfy ``0 <= min <= max <= 360``.
+
+Numbers are plain decimal numbers (no ``nan``/``inf``, no ``_``), of magnitude at most
+:data:`MAX_ABS`; counts are ASCII integers up to the maxima in :data:`MAX_COUNTS`; the file is
+UTF-8 of at most :data:`MAX_SCENARIO_BYTES`. Every violation is a
+:class:`~evomotion.errors.FileFormatError` naming the file and line.
 """
 
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from evomotion.errors import FileFormatError
+from evomotion.textio import decode_utf8, read_file_bytes, split_lines
 
 SCENARIO_DIR = Path(__file__).parent / "scenarios"
+MAX_SCENARIO_BYTES = 16 * 1024 * 1024
+MAX_ABS = 1e6  # [board units]: the largest coordinate, size or bone length read
+#: The largest counts read (the genome has one gene per bone; obstacles are tested per edge).
+MAX_COUNTS = {"targets": 64, "bones": 64, "obstacles": 10_000, "points": 100_000}
+_NUMBER = re.compile(r"^[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?$")
+_INTEGER = re.compile(r"^\+?[0-9]{1,9}$|^-[0-9]{1,9}$")
 
 
 @dataclass(frozen=True)
@@ -101,7 +114,7 @@ class _Lines:
         self.path = path
         self.rows: list[tuple[int, list[str]]] = []
         last = 0
-        for no, raw in enumerate(text.splitlines(), start=1):
+        for no, raw in enumerate(split_lines(text), start=1):
             last = no
             s = raw.strip()
             if s and not s.startswith("#"):
@@ -124,24 +137,27 @@ class _Lines:
             )
         vals = []
         for t in toks:
-            try:
-                v = float(t)
-            except ValueError:
+            if not _NUMBER.match(t):
                 raise FileFormatError(
-                    self.path, no, f"expected {what}, got non-numeric {t!r}") from None
-            if not math.isfinite(v):
-                raise FileFormatError(self.path, no, f"expected {what}, got {t!r}")
+                    self.path, no, f"expected {what}, got non-numeric {_short(t)!r}")
+            v = float(t)
+            if not (math.isfinite(v) and abs(v) <= MAX_ABS):
+                raise FileFormatError(self.path, no, f"expected {what} as finite numbers of "
+                                                     f"magnitude <= {MAX_ABS:g}, got {_short(t)!r}")
             vals.append(v)
         return no, vals
 
-    def count(self, what: str, minimum: int) -> int:
+    def count(self, what: str, minimum: int, kind: str) -> int:
         no, toks = self._next(what)
-        if len(toks) != 1 or not toks[0].lstrip("+-").isdigit():
-            got = " ".join(toks)
+        if len(toks) != 1 or not _INTEGER.match(toks[0]):
+            got = _short(" ".join(toks))
             raise FileFormatError(self.path, no, f"expected {what} (one integer), got {got!r}")
         v = int(toks[0])
         if v < minimum:
             raise FileFormatError(self.path, no, f"expected {what} >= {minimum}, got {v}")
+        if v > MAX_COUNTS[kind]:
+            raise FileFormatError(self.path, no, f"expected {what} <= {MAX_COUNTS[kind]} "
+                                                 f"(the maximum), got {v}")
         return v
 
     def positive(self, what: str) -> float:
@@ -160,7 +176,7 @@ class _Lines:
         return np.array([x, y])
 
     def chain(self, what: str) -> Chain:
-        k = self.count(f"number of bones of the {what}", 1)
+        k = self.count(f"number of bones of the {what}", 1, "bones")
         rows = []
         for b in range(k):
             label = f"{what} bone {b + 1} 'length min_deg max_deg'"
@@ -184,22 +200,23 @@ def parse_scenario_text(text: str, path: str = "<text>", name: str | None = None
     width = c.positive("board width")
     height = c.positive("board height")
     start = c.point("start point 'X Y'", width, height, inside=True)
-    n_targets = c.count("number of targets", 1)
+    n_targets = c.count("number of targets", 1, "targets")
     targets = np.stack(
         [c.point(f"target {t + 1} 'X Y'", width, height, inside=True) for t in range(n_targets)]
     )
     arm = c.chain("arm")
     fingers = tuple(c.chain(f"finger {j + 1}") for j in range(n_targets))
-    n_obst = c.count("number of obstacles", 0)
+    n_obst = c.count("number of obstacles", 0, "obstacles")
     obstacles = []
     for o in range(n_obst):
-        k = c.count(f"number of points of obstacle {o + 1}", 2)
+        k = c.count(f"number of points of obstacle {o + 1}", 2, "points")
         pts = [c.point(f"obstacle {o + 1} point {p + 1} 'X Y'", width, height, False)
                for p in range(k)]
         obstacles.append(np.stack(pts))
     if c.i < len(c.rows):
         no, toks = c.rows[c.i]
-        raise FileFormatError(path, no, f"expected end of file, got extra line {' '.join(toks)!r}")
+        raise FileFormatError(path, no,
+                              f"expected end of file, got extra line {_short(' '.join(toks))!r}")
     return Scenario(name or Path(path).stem, width, height, start, targets, arm, fingers,
                     tuple(obstacles))
 
@@ -207,7 +224,11 @@ def parse_scenario_text(text: str, path: str = "<text>", name: str | None = None
 def load_scenario(name_or_path: str | Path) -> Scenario:
     """A bundled scenario by name (``seed_example``) or a scenario file by path."""
     p = Path(name_or_path)
-    if not p.is_file():
+    try:
+        exists = p.exists()
+    except (OSError, ValueError):  # e.g. a NUL in the name
+        exists = False
+    if not exists:
         bundled = SCENARIO_DIR / f"{name_or_path}.scen"
         if bundled.is_file():
             p = bundled
@@ -215,11 +236,12 @@ def load_scenario(name_or_path: str | Path) -> Scenario:
             avail = ", ".join(bundled_names())
             raise FileFormatError(name_or_path, None,
                                   f"expected a scenario file or a bundled name ({avail})")
-    try:
-        text = p.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as e:
-        raise FileFormatError(p, None, f"expected a readable UTF-8 text file ({e})") from None
+    text = decode_utf8(read_file_bytes(p, "scenario file", MAX_SCENARIO_BYTES), p)
     return parse_scenario_text(text, str(p))
+
+
+def _short(text: str, n: int = 40) -> str:
+    return text if len(text) <= n else text[:n] + "..."
 
 
 def bundled_names() -> list[str]:

@@ -19,13 +19,13 @@ the bottom-left cell, left to right, then row by row upwards: see :func:`cell_nu
 
 from __future__ import annotations
 
-from collections import deque
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from evomotion.errors import FileFormatError, InputError
+from evomotion.textio import decode_utf8, read_file_bytes
 
 PASSABLE, BLOCKED = ".GS", "@OTW"
 
@@ -101,86 +101,186 @@ def octile_moves(blocked: np.ndarray, x: int, y: int) -> list[tuple[int, int, bo
 
 
 def connected(blocked: np.ndarray, a: tuple[int, int], b: tuple[int, int]) -> bool:
-    """Whether ``b`` is reachable from ``a`` by octile moves (breadth-first search)."""
-    seen = np.zeros_like(blocked, dtype=bool)
-    seen[a[1], a[0]] = True
-    todo = deque([a])
-    while todo:
-        x, y = todo.popleft()
-        if (x, y) == tuple(b):
-            return True
-        for nx, ny, _ in octile_moves(blocked, x, y):
-            if not seen[ny, nx]:
-                seen[ny, nx] = True
-                todo.append((nx, ny))
-    return False
+    """Whether ``b`` is reachable from ``a`` by octile moves.
+
+    A diagonal move needs both side cells free (no corner cutting), so it can always be
+    replaced by two straight moves: octile reachability is 4-connectivity of the free cells,
+    found with ``scipy.ndimage.label`` (C speed, 4 bytes per cell) instead of a search."""
+    from scipy import ndimage
+
+    if tuple(a) == tuple(b):
+        return True
+    if blocked[b[1], b[0]]:
+        return False
+    free = ~np.asarray(blocked, dtype=bool)
+    free[a[1], a[0]] = True  # the search starts from ``a`` whatever it is
+    labels, _ = ndimage.label(free)
+    return bool(labels[a[1], a[0]] == labels[b[1], b[0]])
 
 
-def _grid_from_rows(path: Path, rows: list[tuple[int, str]], alphabet: dict[str, bool],
-                    what: str) -> np.ndarray:
-    width = len(rows[0][1])
-    grid = np.zeros((len(rows), width), dtype=bool)
-    for i, (lineno, text) in enumerate(rows):
-        if len(text) != width:
-            raise FileFormatError(path, lineno, f"expected a row of {width} cells, "
-                                                f"got {len(text)}")
-        for j, ch in enumerate(text):
-            if ch not in alphabet:
-                raise FileFormatError(path, lineno, f"expected only {what}, got {ch!r} at "
-                                                    f"column {j + 1}")
-            grid[i, j] = alphabet[ch]
-    return grid[::-1].copy()  # files list the top row first
+#: Largest map read: 64 Mi cells (e.g. 8,192 x 8,192; 7,100 x 7,100 is 50.4 M). Reading
+#: peaks at about 10.5 bytes per cell (file bytes, their lookup, masks, the grid flipped into
+#: place, then :func:`connected`'s 4-byte labels): 530 MiB and 0.8 s for 7,100 x 7,100
+#: (benchmarks/bench_map_read.py); the map itself keeps 1 byte per cell.
+MAX_MAP_CELLS = 64 * 2**20
+#: Largest map file: a 0/1 grid with a separator after every cell, plus line ends.
+MAX_MAP_BYTES = 3 * MAX_MAP_CELLS + 2**20
+#: Largest map the study's exact solvers (``solvers.all_optima``: Python A* with dicts, about
+#: 100 bytes and 15 us per expanded cell, then visibility graphs) and its validity-keeping
+#: initial population (seconds per path at 1,000 x 1,000) handle in reasonable time and
+#: memory: 4 Mi cells (2,048 x 2,048). A 7,100 x 7,100 map reads in about a second, but its
+#: A* alone would need about 5 GB; :func:`check_search_size` says so up front.
+MAX_SEARCH_CELLS = 4 * 2**20
+_FREE, _BLOCK, _SEP, _BAD, _EOL = 0, 1, 2, 3, 4
+
+
+def check_search_size(m: GridMap, max_cells: int = MAX_SEARCH_CELLS) -> None:
+    """Raise :class:`InputError` when ``m`` is larger than the study's searches handle."""
+    if m.width * m.height > max_cells:
+        raise InputError(f"{m.name}: a {m.width} x {m.height} map has {m.width * m.height:,} "
+                         f"cells; the grid-path solvers handle at most {max_cells:,} "
+                         "(MAX_SEARCH_CELLS)")
+
+
+def _lut(free: str, blocked: str, separators: str) -> np.ndarray:
+    lut = np.full(256, _BAD, dtype=np.uint8)
+    lut[np.frombuffer(free.encode(), np.uint8)] = _FREE
+    lut[np.frombuffer(blocked.encode(), np.uint8)] = _BLOCK
+    lut[np.frombuffer(separators.encode(), np.uint8)] = _SEP
+    lut[ord("\n")] = _EOL
+    return lut
+
+
+_MOVINGAI_LUT = _lut(PASSABLE, BLOCKED, "")
+_BINARY_LUT = _lut("0", "1", " ,\t")
+
+
+def _char_at(body: np.ndarray, k: int) -> str:
+    """The character starting at byte ``k`` (the text is valid UTF-8 by then)."""
+    return bytes(body[k:k + 4]).decode("utf-8", errors="ignore")[:1] or f"\\x{body[k]:02x}"
+
+
+def _cells_error(path: Path, line: int, h: int, w: int) -> FileFormatError:
+    return FileFormatError(path, line, f"expected a map of at most {MAX_MAP_CELLS:,} cells "
+                                       f"(the maximum map size), got {w} x {h} = {h * w:,}")
+
+
+def _grid(path: Path, body: np.ndarray, first_line: int, lut: np.ndarray, what: str,
+          shape: tuple[int, int] | None, map_line: int) -> np.ndarray:
+    """``blocked[height, width]`` (row 0 = bottom) from the grid's bytes, vectorised: a lookup
+    table from bytes to free / blocked / separator / bad / line end, cells per line by
+    ``np.add.reduceat``; blank lines are skipped. ``shape`` = the header's (H, W), if any."""
+    n = body.size
+    vals = lut[body]
+    nl = np.flatnonzero(vals == _EOL)
+    cr = nl[(nl > 0)]
+    cr = cr[body[cr - 1] == 13] - 1  # '\r' right before '\n' (CRLF) ...
+    vals[cr] = _SEP
+    if n and body[-1] == 13:  # ... or at the very end
+        vals[n - 1] = _SEP
+    bad = vals == _BAD
+    if bad.any():
+        k = int(np.argmax(bad))
+        i = int(np.searchsorted(nl, k))
+        col = k - (int(nl[i - 1]) + 1 if i else 0) + 1
+        raise FileFormatError(path, first_line + i, f"expected only {what}, got "
+                                                    f"{_char_at(body, k)!r} at column {col}")
+    del bad
+    starts = np.concatenate(([0], nl + 1))
+    if starts[-1] == n:
+        starts = starts[:-1]
+    cell = vals < _SEP
+    counts = np.add.reduceat(cell, starts, dtype=np.int64) if n else np.zeros(0, np.int64)
+    rows = np.flatnonzero(counts > 0)
+    lines = first_line + rows
+    if shape is None:
+        if rows.size == 0:
+            raise FileFormatError(path, None, "expected a map, got an empty file")
+        h, w = int(rows.size), int(counts[rows[0]])
+        if h * w > MAX_MAP_CELLS:
+            raise _cells_error(path, int(lines[-1]), h, w)
+    else:
+        h, w = shape
+        if rows.size != h:
+            where = int(lines[h]) if rows.size > h else int(lines[-1]) if rows.size else map_line
+            raise FileFormatError(path, where, f"expected {h} map rows, got {rows.size}")
+    wrong = np.flatnonzero(counts[rows] != w)
+    if wrong.size:
+        i = int(wrong[0])
+        raise FileFormatError(path, int(lines[i]), f"expected a row of {w} cells, "
+                                                   f"got {int(counts[rows[i]])}")
+    grid = vals[cell]
+    del vals, cell
+    return np.ascontiguousarray(grid.reshape(h, w)[::-1]).view(bool)  # top row first in files
 
 
 def read_map(path: str | Path, start: tuple[int, int] | None = None,
              goal: tuple[int, int] | None = None) -> GridMap:
     """Read a Moving AI ``.map`` or a 0/1 text grid; default endpoints are the bottom-left
-    and top-right cells. Raises :class:`FileFormatError` / :class:`InputError`."""
+    and top-right cells. Raises :class:`FileFormatError` / :class:`InputError`.
+
+    The file is read as bytes and decoded with numpy in time and memory proportional to its
+    size; its size (:data:`MAX_MAP_BYTES`) and the header's cell count
+    (:data:`MAX_MAP_CELLS`) are checked before anything big is allocated."""
     path = Path(path)
-    try:
-        lines = path.read_text().splitlines()
-    except OSError as e:
-        raise InputError(f"{path}: cannot read map ({e.strerror})") from None
-    numbered = [(i + 1, ln.strip()) for i, ln in enumerate(lines) if ln.strip()]
-    if not numbered:
+    data = read_file_bytes(path, "map file", MAX_MAP_BYTES)
+    arr = np.frombuffer(data, dtype=np.uint8)
+    if arr.size and int(arr.max()) >= 0x80:
+        decode_utf8(data, path)  # bad UTF-8 is reported as such; valid UTF-8 is a bad cell
+    lead = len(data) - len(data.lstrip())
+    if lead == len(data):
         raise FileFormatError(path, None, "expected a map, got an empty file")
-    if numbered[0][1].split()[0] == "type":
-        blocked = _read_movingai(path, numbered)
+    if data[lead:lead + 5].rstrip() == b"type":
+        blocked = _read_movingai(path, data, arr)
     else:
-        rows = [(n, t.replace(" ", "").replace(",", "")) for n, t in numbered]
-        blocked = _grid_from_rows(path, rows, {"0": False, "1": True}, "'0' and '1'")
+        blocked = _grid(path, arr, 1, _BINARY_LUT, "'0' and '1'", None, 1)
     h, w = blocked.shape
     m = GridMap(blocked, (0, 0), (w - 1, h - 1), path.name)
     return m.with_endpoints(start, goal)
 
 
-def _read_movingai(path: Path, numbered: list[tuple[int, str]]) -> np.ndarray:
-    head: dict[str, str] = {}
-    for k, (lineno, text) in enumerate(numbered):
-        if text == "map":
-            body = numbered[k + 1:]
+_HEADER = "expected 'type T', 'height H', 'width W' or 'map'"
+
+
+def _read_movingai(path: Path, data: bytes, arr: np.ndarray) -> np.ndarray:
+    """The header (``type octile``, ``height H``, ``width W``, ``map``; H, W >= 1) line by
+    line, then the grid vectorised."""
+    head: dict[str, tuple[int, str]] = {}
+    pos, lineno, last = 0, 0, 1
+    while True:
+        if pos >= len(data):
+            raise FileFormatError(path, last, "expected a 'map' line after the header")
+        end = data.find(b"\n", pos)
+        end = len(data) if end < 0 else end
+        raw, pos, lineno = data[pos:min(end, pos + 201)], end + 1, lineno + 1
+        parts = raw.decode("utf-8", errors="replace").split()
+        if not parts:
+            continue
+        last = lineno
+        if parts == ["map"]:
             break
-        parts = text.split()
-        if len(parts) != 2 or parts[0] not in ("type", "height", "width"):
-            raise FileFormatError(path, lineno, "expected 'type T', 'height H', 'width W' "
-                                                "or 'map'")
-        head[parts[0]] = parts[1]
-    else:
-        raise FileFormatError(path, numbered[-1][0], "expected a 'map' line after the header")
-    try:
-        h, w = int(head["height"]), int(head["width"])
-    except (KeyError, ValueError):
-        raise FileFormatError(path, numbered[0][0], "expected integer 'height' and 'width' "
-                                                    "in the header") from None
-    if len(body) != h:
-        where = body[-1][0] if body else numbered[-1][0]
-        raise FileFormatError(path, where, f"expected {h} map rows, got {len(body)}")
-    alphabet = {c: False for c in PASSABLE} | {c: True for c in BLOCKED}
-    grid = _grid_from_rows(path, body, alphabet, "'.GS' (free) and '@OTW' (blocked)")
-    if grid.shape[1] != w:
-        raise FileFormatError(path, body[0][0], f"expected rows of width {w}, "
-                                                f"got {grid.shape[1]}")
-    return grid
+        if len(raw) > 200 or len(parts) != 2 or parts[0] not in ("type", "height", "width"):
+            raise FileFormatError(path, lineno, _HEADER)
+        key, value = parts
+        if key in head:
+            raise FileFormatError(path, lineno, f"expected '{key}' once in the header "
+                                                f"(first on line {head[key][0]})")
+        head[key] = (lineno, value)
+        if key == "type" and value != "octile":
+            raise FileFormatError(path, lineno, f"expected 'type octile', got 'type "
+                                                f"{value[:20]}'")
+        if key in ("height", "width") and not (value.isascii() and value.isdigit()
+                                               and len(value) <= 9 and int(value) >= 1):
+            raise FileFormatError(path, lineno, f"expected '{key} N' with an integer N >= 1, "
+                                                f"got '{key} {value[:20]}'")
+    for key in ("type", "height", "width"):
+        if key not in head:
+            raise FileFormatError(path, lineno, f"expected a '{key}' line before 'map'")
+    h, w = int(head["height"][1]), int(head["width"][1])
+    if h * w > MAX_MAP_CELLS:
+        raise _cells_error(path, max(head["height"][0], head["width"][0]), h, w)
+    return _grid(path, arr[pos:], lineno + 1, _MOVINGAI_LUT,
+                 "'.GS' (free) and '@OTW' (blocked)", (h, w), lineno)
 
 
 def write_map(path: str | Path, blocked: np.ndarray) -> None:

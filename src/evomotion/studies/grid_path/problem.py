@@ -27,7 +27,7 @@ from evomotion.core.problem import Evaluation, GenomeSpec
 from evomotion.errors import InputError
 from evomotion.studies.grid_path.encoding import PerpendicularEncoding, parts_from_m
 from evomotion.studies.grid_path.geometry import RULES, polyline_segments_valid
-from evomotion.studies.grid_path.maps import GridMap, random_map, read_map
+from evomotion.studies.grid_path.maps import GridMap, check_search_size, random_map, read_map
 from evomotion.studies.grid_path.operators import PathOperators
 from evomotion.studies.grid_path.tables import SegmentTables
 
@@ -132,6 +132,7 @@ class GridPathProblem:
     def __init__(self, cfg: GridPathConfig) -> None:
         self.cfg = cfg
         self.map = load_map(cfg.map, _cell(cfg.start, "start"), _cell(cfg.goal, "goal"))
+        check_search_size(self.map)  # before the solvers' and tables' arrays are built
         if cfg.mode not in ("discrete", "continuous"):
             raise InputError(f"problem.mode must be 'discrete' or 'continuous', got {cfg.mode!r}")
         self.rule = cfg.rule or ("closed" if cfg.mode == "discrete" else "open")

@@ -31,6 +31,7 @@ from evomotion.studies.quadruped_plan.model import (
     world_feet,
 )
 from evomotion.studies.quadruped_plan.rules import ExclusionZone, rule_leg
+from evomotion.textio import decode_utf8, read_file_bytes
 
 FORMAT = "evomotion.quadruped-plan/1"
 LEG_NAMES = ("front-left", "rear-left", "rear-right", "front-right")
@@ -78,44 +79,130 @@ def write_plan(path: str | Path, doc: dict[str, Any]) -> None:
     tmp.replace(path)
 
 
-def _number(path: Path, x: Any, what: str) -> float:
-    if isinstance(x, bool) or not isinstance(x, int | float) or not math.isfinite(x):
-        raise FileFormatError(path, None, f"expected a finite number for {what}, got {x!r}")
-    return float(x)
+MAX_PLAN_BYTES = 64 * 1024 * 1024
+MAX_ABS = 1e6  # [units]: the largest coordinate or model length read
+MAX_STATES = 1_000_000
+
+
+def _got(x: Any) -> str:
+    try:
+        text = json.dumps(x, allow_nan=True)
+    except (TypeError, ValueError):
+        text = repr(x)
+    return text if len(text) <= 40 else text[:40] + "..."
+
+
+class _Checker:
+    """Field checks whose errors read ``FILE: KEY.PATH: expected ..., got VALUE``."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+
+    def fail(self, where: str, expected: str, x: Any = ...) -> FileFormatError:
+        got = "" if x is ... else f", got {_got(x)}"
+        return FileFormatError(self.path, None, f"{where}: expected {expected}{got}")
+
+    def get(self, obj: dict, key: str, where: str) -> Any:
+        if key not in obj:
+            raise FileFormatError(self.path, None, f"expected {where} key {key!r}")
+        return obj[key]
+
+    def number(self, x: Any, where: str, lo: float = -MAX_ABS, hi: float = MAX_ABS,
+               what: str = "a finite number") -> float:
+        if isinstance(x, bool) or not isinstance(x, int | float) or not math.isfinite(x) \
+                or not lo <= x <= hi:
+            raise self.fail(where, f"{what} in [{lo:g}, {hi:g}]", x)
+        return float(x)
+
+    def point(self, x: Any, where: str, n: int, text: str) -> None:
+        if not (isinstance(x, list) and len(x) == n):
+            raise self.fail(where, f"{text} numbers", x)
+        for k, v in enumerate(x):
+            if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v) \
+                    or abs(v) > MAX_ABS:
+                raise self.fail(f"{where}[{k}]", f"a finite number of magnitude <= {MAX_ABS:g}"
+                                f" (in {text})", v)
+
+    def obj(self, x: Any, where: str) -> dict:
+        if not isinstance(x, dict):
+            raise self.fail(where, "a JSON object", x)
+        return x
+
+
+def _check_document(path: Path, doc: Any) -> None:
+    c = _Checker(path)
+    if not isinstance(doc, dict):
+        raise FileFormatError(path, None, f"expected a JSON object, got {_got(doc)}")
+    if "format" in doc and doc["format"] != FORMAT:
+        raise c.fail("format", repr(FORMAT), doc["format"])
+    m = c.obj(c.get(doc, "model", "model"), "model")
+    a = c.number(c.get(m, "a", "model"), "model.a", 1e-9)
+    b = c.number(c.get(m, "b", "model"), "model.b", 1e-9)
+    lo = c.number(c.get(m, "l_min", "model"), "model.l_min", 0.0)
+    c.number(c.get(m, "l_max", "model"), "model.l_max", lo, what="a finite number >= l_min")
+    c.number(c.get(m, "sector_half_width", "model"), "model.sector_half_width", 0.0,
+             math.pi, "an angle [rad]")
+    if "min_margin" in m:
+        c.number(m["min_margin"], "model.min_margin", 0.0)
+    if "hips" in m:
+        hips = m["hips"]
+        if not (isinstance(hips, list) and len(hips) == 4):
+            raise c.fail("model.hips", "4 hips [x, y]", hips)
+        for k, h in enumerate(hips):
+            c.point(h, f"model.hips[{k}]", 2, "[x, y]")
+    if "legs" in m and not (isinstance(m["legs"], list) and len(m["legs"]) == 4
+                            and all(isinstance(n, str) for n in m["legs"])):
+        raise c.fail("model.legs", "4 leg names", m["legs"])
+    del a, b
+    c.point(c.get(doc, "goal", "plan"), "goal", 2, "[x, y]")
+    c.number(c.get(doc, "goal_tolerance", "plan"), "goal_tolerance", 0.0)
+    if "sense" in doc and (isinstance(doc["sense"], bool) or doc["sense"] not in (-1, 0, 1)):
+        raise c.fail("sense", "-1, 0 or 1", doc["sense"])
+    rule_set = c.get(doc, "rule_set", "plan")
+    if rule_set not in ("A", "B"):
+        raise c.fail("rule_set", "'A' or 'B'", rule_set)
+    zone = doc.get("zone")
+    if zone is not None:
+        c.obj(zone, "zone")
+        c.number(c.get(zone, "x", "zone"), "zone.x")
+        c.number(c.get(zone, "y", "zone"), "zone.y")
+        c.number(c.get(zone, "radius", "zone"), "zone.radius", 0.0)
+    if "search" in doc:
+        c.obj(doc["search"], "search")
+    states = c.get(doc, "states", "plan")
+    if not (isinstance(states, list) and 1 <= len(states) <= MAX_STATES):
+        raise c.fail("states", f"a list of 1 to {MAX_STATES:,} states", states)
+    for i, st in enumerate(states):
+        where = f"states[{i}]"
+        c.obj(st, where)
+        c.point(c.get(st, "body", where), f"{where}.body", 3, "[x, y, phi]")
+        feet = c.get(st, "feet", where)
+        if not (isinstance(feet, list) and len(feet) == 4):
+            raise c.fail(f"{where}.feet", "4 feet [x, y]", feet)
+        for k, f in enumerate(feet):
+            c.point(f, f"{where}.feet[{k}]", 2, "[x, y]")
+        rule = c.get(st, "rule", where)
+        if isinstance(rule, bool) or not isinstance(rule, int) or not 0 <= rule <= 1000:
+            raise c.fail(f"{where}.rule", "a rule number (an integer in [0, 1000])", rule)
+        c.number(c.get(st, "margin", where), f"{where}.margin")
 
 
 def read_plan(path: str | Path) -> dict[str, Any]:
-    """Load and shape-check a plan.json (values are checked by ``checker``)."""
+    """Load and check a plan.json: every field the checker and the views use, with the
+    field's path in the message (``plan.json: goal: expected [x, y] numbers, got "abc"``);
+    whether the plan obeys the model is ``checker``'s business."""
     path = Path(path)
+    text = decode_utf8(read_file_bytes(path, "plan.json file", MAX_PLAN_BYTES), path,
+                       bom=False)
     try:
-        doc = json.loads(path.read_text())
-    except FileNotFoundError:
-        raise FileFormatError(path, None, "expected an existing plan.json file") from None
+        doc = json.loads(text)
     except json.JSONDecodeError as e:
         raise FileFormatError(path, e.lineno, f"expected JSON ({e.msg})") from None
-    if not isinstance(doc, dict):
-        raise FileFormatError(path, None, "expected a JSON object")
-    for key in ("model", "goal", "goal_tolerance", "rule_set", "states"):
-        if key not in doc:
-            raise FileFormatError(path, None, f"expected key {key!r}")
-    m = doc["model"]
-    for key in ("a", "b", "l_min", "l_max", "sector_half_width"):
-        if not isinstance(m, dict) or key not in m:
-            raise FileFormatError(path, None, f"expected model key {key!r}")
-        _number(path, m[key], f"model.{key}")
-    if not isinstance(doc["states"], list) or not doc["states"]:
-        raise FileFormatError(path, None, "expected a non-empty list 'states'")
-    for i, st in enumerate(doc["states"]):
-        ok = (isinstance(st, dict) and isinstance(st.get("body"), list)
-              and len(st["body"]) == 3 and isinstance(st.get("feet"), list)
-              and len(st["feet"]) == 4 and all(isinstance(f, list) and len(f) == 2
-                                               for f in st["feet"])
-              and isinstance(st.get("rule"), int) and "margin" in st)
-        if not ok:
-            raise FileFormatError(path, None, f"expected state {i} as {{body: [x, y, phi], "
-                                  "feet: [[x, y] x 4], rule: int, margin: number}")
-        for v in (*st["body"], *(c for f in st["feet"] for c in f), st["margin"]):
-            _number(path, v, f"states[{i}]")
+    except RecursionError:
+        raise FileFormatError(path, None, "expected JSON nested less deeply") from None
+    except ValueError as e:  # e.g. an integer of more than 4,300 digits
+        raise FileFormatError(path, None, f"expected JSON numbers ({str(e)[:60]})") from None
+    _check_document(path, doc)
     return doc
 
 
