@@ -1,0 +1,202 @@
+"""Perturbed NAO worlds for stress-testing open-loop motions (domain randomisation).
+
+A :class:`World` is an edited copy of the NAO :class:`mujoco.MjModel` plus a servo latency and
+a push. :func:`make_world` applies fixed values, :func:`draw_worlds` draws ``k`` worlds from
+the :class:`Perturbation` ranges with a :class:`numpy.random.Generator` (same generator state,
+same worlds), and :func:`simulate_worlds` rolls them all out in one :mod:`mujoco.rollout` batch
+(one model per initial state; nothing per physics step in Python).
+
+What is edited, per world (compiled-model arrays; ``mj_setConst`` then recomputes the derived
+constants such as ``body_subtreemass``):
+
+- friction: every geom's friction coefficients (``geom_friction``, sliding, torsional and
+  rolling) times one scale. MuJoCo combines two geoms' friction with the maximum (equal
+  priorities), so the sole/floor contact friction is scaled by exactly that factor;
+- mass: each link's ``body_mass`` and ``body_inertia`` times its own scale (the same geometry
+  with another density); the torso's centre of mass ``body_ipos`` shifted by an offset (m);
+- motor strength: each position actuator's ``kp`` (``actuator_gainprm[:, 0]`` and
+  ``-actuator_biasprm[:, 1]``) and its ``actuator_forcerange`` times its own scale;
+- latency: the control sequence delayed by ``latency_steps`` physics steps (the first target is
+  held meanwhile): the servo acts on the target sent ``latency_steps * dt`` s earlier;
+- push: an impulse ``push_ns`` (N·s, world frame) given to the torso at ``push_time_s``, as
+  the force ``push_ns / dt`` on the torso's centre of mass (``xfrc_applied``) during the one
+  physics step starting then: the robot's linear momentum changes by ``push_ns``, i.e. its
+  velocity by ``push_ns / total mass`` (0.47 m/s for 2.5 N·s on the 5.3 kg NAO).
+
+Default ranges (U uniform, x scale; sources in ``/work/shared/reference/walking.md`` §5, the
+NAO in ``nao-h25.md``) are documented per field of :class:`Perturbation`.
+"""
+
+from __future__ import annotations
+
+import copy
+import os
+from dataclasses import dataclass, field
+
+import mujoco
+import numpy as np
+from mujoco import rollout as mj_rollout
+
+from evomotion.errors import InputError
+from evomotion.sim.nao.constants import STATE_SPEC
+
+TORSO = "torso"  # the body with the free joint: CoM offsets and pushes act on it
+
+
+def _check_range(name: str, lo_hi: tuple[float, float], low: float, low_ok: bool) -> None:
+    lo, hi = (float(v) for v in lo_hi)
+    if not (np.isfinite(lo) and np.isfinite(hi)) or lo > hi:
+        raise InputError(f"{name}: expected a finite range lo <= hi, got {lo_hi}")
+    if lo < low or (lo == low and not low_ok):
+        raise InputError(f"{name}: expected values {'>=' if low_ok else '>'} {low}, got {lo}")
+
+
+@dataclass(frozen=True)
+class Perturbation:
+    """Ranges of the perturbations, drawn uniformly (``(lo, hi)``; ``lo == hi`` pins a value).
+
+    Scales are dimensionless factors of the model's nominal values; the NAO model's floor and
+    sole friction is 0.7.
+    """
+
+    #: friction scale, x U(0.5, 1.4): the model's 0.7 becomes 0.35..0.98, about Playground
+    #: G1's mu U(0.4, 1) [S1] and inside the wider T1 ranges U(0.2, 0.6) [S1] / U(0.1, 2) [S2].
+    friction_scale: tuple[float, float] = (0.5, 1.4)
+    #: link mass (and inertia) scale, per link, x U(0.9, 1.1): Playground G1 [S1]; between
+    #: T1's x U(0.98, 1.02) [S1] and H1's x U(0.7, 1.3) [S4].
+    mass_scale: tuple[float, float] = (0.9, 1.1)
+    #: torso CoM offset (m), per axis U(-0.02, 0.02): the base CoM +-0.1 m of T1 [S2] and H1
+    #: [S4] (1.2-1.8 m tall robots) scaled to the 0.57 m NAO (~+-0.03 m), rounded down.
+    com_offset_m: tuple[float, float] = (-0.02, 0.02)
+    #: motor strength scale (kp and force range), per actuator, x U(0.9, 1.1): T1's kp
+    #: x U(0.9, 1.1) [S1]; booster_gym x U(0.95, 1.05) [S2], H1 x U(0.75, 1.25) [S4].
+    motor_scale: tuple[float, float] = (0.9, 1.1)
+    #: servo latency in physics steps (4 ms each), integer U{0..10} = 0-40 ms: H1 uses 1-3
+    #: control steps = 20-60 ms [S4]; NAO's DCM runs a 10 ms cycle, so 0-4 cycles.
+    latency_steps: tuple[int, int] = (0, 10)
+    #: lateral push impulse (N s, along +y: to the robot's left), U(-2.5, 2.5): at most
+    #: 2.5 N s on 5.3 kg = 0.47 m/s, H1's push <= 0.5 m/s [S4] (velocity pushes carry over
+    #: across robot sizes, walking.md §5 last line); T1 pushes 0.1-1 m/s [S1].
+    push_ns: tuple[float, float] = (-2.5, 2.5)
+    #: push time as a fraction of the motion's duration, U(0.25, 0.75) (one push per run; the
+    #: sources push every 5-10 s, longer than a motion).
+    push_at: tuple[float, float] = (0.25, 0.75)
+
+    def validate(self) -> None:
+        """One-line :class:`InputError` for a bad range."""
+        _check_range("friction_scale", self.friction_scale, 0.0, False)
+        _check_range("mass_scale", self.mass_scale, 0.0, False)
+        _check_range("com_offset_m", self.com_offset_m, -np.inf, True)
+        _check_range("motor_scale", self.motor_scale, 0.0, False)
+        _check_range("latency_steps", self.latency_steps, 0, True)
+        if any(int(v) != v for v in self.latency_steps):
+            raise InputError(f"latency_steps: expected integers, got {self.latency_steps}")
+        _check_range("push_ns", self.push_ns, -np.inf, True)
+        _check_range("push_at", self.push_at, 0.0, True)
+        if self.push_at[1] > 1.0:
+            raise InputError(f"push_at: expected fractions in [0, 1], got {self.push_at}")
+
+
+@dataclass(frozen=True)
+class World:
+    """One perturbed world: the edited model, the servo delay and the push."""
+
+    model: mujoco.MjModel
+    latency_steps: int = 0
+    push_ns: tuple[float, float, float] = (0.0, 0.0, 0.0)  # impulse on the torso, world frame
+    push_time_s: float = 0.0
+    params: dict = field(default_factory=dict)  # the drawn values, for reports
+
+
+def make_world(base: mujoco.MjModel, *, friction_scale: float = 1.0,
+               mass_scale: float | np.ndarray = 1.0,
+               com_offset_m: tuple[float, float, float] | np.ndarray = (0.0, 0.0, 0.0),
+               motor_scale: float | np.ndarray = 1.0, latency_steps: int = 0,
+               push_ns: tuple[float, float, float] | np.ndarray = (0.0, 0.0, 0.0),
+               push_time_s: float = 0.0) -> World:
+    """A copy of ``base`` with the given perturbations (``mass_scale``: one value or one per
+    body after the world body; ``motor_scale``: one value or one per actuator)."""
+    m = copy.copy(base)
+    m.geom_friction[:] = base.geom_friction * float(friction_scale)
+    scale = np.ones(base.nbody)
+    scale[1:] = np.broadcast_to(np.asarray(mass_scale, float), (base.nbody - 1,))
+    m.body_mass[:] = base.body_mass * scale
+    m.body_inertia[:] = base.body_inertia * scale[:, None]
+    m.body_ipos[m.body(TORSO).id] = base.body_ipos[base.body(TORSO).id] + np.asarray(com_offset_m)
+    ms = np.broadcast_to(np.asarray(motor_scale, float), (base.nu,))
+    m.actuator_gainprm[:, 0] = base.actuator_gainprm[:, 0] * ms
+    m.actuator_biasprm[:, 1] = base.actuator_biasprm[:, 1] * ms
+    m.actuator_forcerange[:] = base.actuator_forcerange * ms[:, None]
+    mujoco.mj_setConst(m, mujoco.MjData(m))
+    params = {"friction_scale": float(friction_scale),
+              "mass_scale_mean": float(scale[1:].mean()),
+              "com_offset_m": [float(v) for v in np.asarray(com_offset_m)],
+              "motor_scale_mean": float(ms.mean()), "latency_steps": int(latency_steps),
+              "push_ns": [float(v) for v in np.asarray(push_ns)],
+              "push_time_s": float(push_time_s)}
+    return World(m, int(latency_steps), tuple(float(v) for v in np.asarray(push_ns)),
+                 float(push_time_s), params)
+
+
+def draw_worlds(base: mujoco.MjModel, perturbation: Perturbation, k: int,
+                rng: np.random.Generator, duration_s: float) -> list[World]:
+    """``k`` worlds drawn from ``perturbation``'s ranges; pushes at a fraction ``push_at`` of
+    ``duration_s`` (s). Deterministic in ``rng``'s state; every range is drawn (pinned ones
+    too), so pinning one range does not change the others' draws."""
+    perturbation.validate()
+    p = perturbation
+    friction = rng.uniform(*p.friction_scale, size=k)
+    mass = rng.uniform(*p.mass_scale, size=(k, base.nbody - 1))
+    com = rng.uniform(*p.com_offset_m, size=(k, 3))
+    motor = rng.uniform(*p.motor_scale, size=(k, base.nu))
+    latency = rng.integers(int(p.latency_steps[0]), int(p.latency_steps[1]) + 1, size=k)
+    push = rng.uniform(*p.push_ns, size=k)
+    when = rng.uniform(*p.push_at, size=k) * float(duration_s)
+    return [make_world(base, friction_scale=friction[i], mass_scale=mass[i],
+                       com_offset_m=com[i], motor_scale=motor[i],
+                       latency_steps=int(latency[i]), push_ns=(0.0, push[i], 0.0),
+                       push_time_s=when[i]) for i in range(k)]
+
+
+def delayed_controls(controls: np.ndarray, latency_steps: np.ndarray) -> np.ndarray:
+    """``controls[nstep, nu]`` or ``[k, nstep, nu]`` delayed per world: ``out[w, t] =
+    controls[w, max(t - latency_steps[w], 0)]`` (``[k, nstep, nu]``)."""
+    lat = np.asarray(latency_steps, dtype=np.int64)
+    ctrl = np.broadcast_to(controls, (lat.size, *np.shape(controls)[-2:]))
+    idx = np.maximum(np.arange(ctrl.shape[1])[None, :] - lat[:, None], 0)
+    return np.take_along_axis(ctrl, idx[:, :, None], axis=1)
+
+
+def simulate_worlds(worlds: list[World], initial_state: np.ndarray, controls: np.ndarray,
+                    nthread: int = 1) -> np.ndarray:
+    """Roll out every world from ``initial_state`` (``[nstate]`` or ``[k, nstate]``,
+    ``STATE_SPEC``) under ``controls`` (``[nstep, nu]`` or ``[k, nstep, nu]``), delayed and
+    pushed per world, in one ``mujoco.rollout`` batch with ``nthread`` threads (0: all cores).
+    Returns ``states[k, nstep, nstate]``. A push at or after the last step is not applied."""
+    if not worlds:
+        raise InputError("simulate_worlds: expected at least one world")
+    k, base = len(worlds), worlds[0].model
+    dt = float(base.opt.timestep)
+    ctrl = delayed_controls(controls, np.array([w.latency_steps for w in worlds]))
+    nstep = ctrl.shape[1]
+    spec = int(mujoco.mjtState.mjSTATE_CTRL)
+    push = np.array([w.push_ns for w in worlds], dtype=float)
+    step = np.array([int(round(w.push_time_s / dt)) for w in worlds])
+    hit = np.flatnonzero(push.any(axis=1) & (step < nstep))
+    if hit.size:  # controls then carry xfrc_applied[nbody, 6] (force, torque) after ctrl
+        spec |= int(mujoco.mjtState.mjSTATE_XFRC_APPLIED)
+        xfrc = np.zeros((k, nstep, base.nbody, 6))
+        xfrc[hit, step[hit], base.body(TORSO).id, :3] = push[hit] / dt
+        ctrl = np.concatenate([ctrl, xfrc.reshape(k, nstep, -1)], axis=2)
+    ctrl = np.ascontiguousarray(ctrl, dtype=np.float64)
+    nstate = mujoco.mj_stateSize(base, STATE_SPEC)
+    init = np.ascontiguousarray(np.broadcast_to(initial_state, (k, nstate)), dtype=np.float64)
+    models = [w.model for w in worlds]
+    nthread = int(nthread) if nthread and nthread > 0 else (os.cpu_count() or 1)
+    nthread = max(1, min(nthread, k))
+    if nthread == 1:
+        return mj_rollout.rollout(models, mujoco.MjData(base), init, ctrl, control_spec=spec,
+                                  nstep=nstep)[0]
+    datas = [mujoco.MjData(base) for _ in range(nthread)]
+    with mj_rollout.Rollout(nthread=nthread) as runner:
+        return runner.rollout(models, datas, init, ctrl, control_spec=spec, nstep=nstep)[0]
