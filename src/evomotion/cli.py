@@ -141,13 +141,47 @@ def replay_cmd(
     motion: Annotated[Path, typer.Argument(help="A Webots .motion file")],
     json_out: Annotated[bool, typer.Option("--json", help="Only JSON on stdout")] = False,
     video: Annotated[Path | None, typer.Option(help="Write an MP4 of the replay")] = None,
+    hold: Annotated[float, typer.Option(help="Seconds held in the last pose")] = 1.0,
+    friction: Annotated[float | None, typer.Option(
+        help="Scale of every friction coefficient (floor and soles; > 0)")] = None,
+    mass_scale: Annotated[float | None, typer.Option(
+        "--mass-scale", help="Scale of every link mass and inertia (> 0)")] = None,
+    push: Annotated[float | None, typer.Option(
+        help="Lateral push impulse on the torso at mid-motion, N s (+ = to the left)")] = None,
+    trials: Annotated[int | None, typer.Option(
+        help="Also replay in N random perturbed worlds (fall rate, forward displacement)")
+    ] = None,
+    seed: Annotated[int, typer.Option(help="Seed of the --trials worlds")] = 0,
+    start: Annotated[str | None, typer.Option(
+        "--from", help="Initial state: standing, face-down or face-up")] = None,
 ) -> None:
-    """Play a Webots .motion on the NAO model: displacement, heading change, fall."""
-    from evomotion.sim.nao.replay import replay_command
+    """Play a Webots .motion on the NAO model: displacement, heading change, fall;
+    optionally in perturbed worlds or from lying (docs/humanoid-step.md)."""
+    from evomotion.sim.nao.replay import StressOptions, replay_command
 
     if not motion.is_file():
         raise InputError(f"{motion}: no such motion file")
-    replay_command(motion, json_out=json_out, video=video)
+    stress = StressOptions(friction=friction, mass_scale=mass_scale, push_ns=push,
+                           trials=trials, seed=seed, start=start)
+    replay_command(motion, json_out=json_out, video=video, hold_s=hold, stress=stress)
+
+
+@app.command("export")
+def export_cmd(
+    motion: Annotated[Path, typer.Argument(help="A Webots .motion file")],
+    naoqi: Annotated[Path | None, typer.Option("--naoqi", help="Write a NAOqi Python script")]
+    = None,
+    json_out: Annotated[Path | None, typer.Option("--json", help="Write a JSON keyframe file")]
+    = None,
+    clip: Annotated[bool, typer.Option(help="Clip angles to the joint ranges")] = False,
+    speed_margin: Annotated[float, typer.Option(
+        help="Fraction of each motor's no-load speed allowed, in (0, 1]")] = 1.0,
+) -> None:
+    """Check a .motion against a real NAO's limits; write a NAOqi script and/or keyframes."""
+    from evomotion.sim.nao.export import export_command
+
+    for line in export_command(motion, naoqi, json_out, clip, speed_margin):
+        typer.echo(line)
 
 
 def _mount_study_app(argv: list[str]) -> None:

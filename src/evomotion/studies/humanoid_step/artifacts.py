@@ -1,4 +1,5 @@
-"""Run-folder artifacts of ``humanoid-step``: ``best.motion``, ``best.mp4``, ``fitness.png``."""
+"""Run-folder artifacts of ``humanoid-step``: ``best.motion``, ``best.mp4``, ``fitness.png``,
+and the exports for a real NAO, ``best_naoqi.py`` and ``best_keyframes.json``."""
 
 from __future__ import annotations
 
@@ -7,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from evomotion.errors import InputError
 from evomotion.run.context import RunContext
 from evomotion.run.folder import atomic_write_text
 from evomotion.sim import nao
@@ -31,6 +33,29 @@ def write_best_motion(ctx: RunContext) -> Path | None:
     return path
 
 
+def write_exports(ctx: RunContext) -> bool:
+    """``best_naoqi.py`` and ``best_keyframes.json`` beside ``best.motion``, when the best
+    motion passes the real-NAO checks (:mod:`evomotion.sim.nao.joint_limits`); otherwise the
+    reason goes to the log, nothing is written and older exports are removed (the run does
+    not fail for it)."""
+    from evomotion.sim.nao.export import export_motion
+
+    if ctx.best_genome is None or not np.all(np.isfinite(ctx.best_genome)):
+        return False
+    motion = genome_motion(ctx.problem, ctx.best_genome)
+    try:
+        export_motion(motion, naoqi=ctx.out_dir / "best_naoqi.py",
+                      json_path=ctx.out_dir / "best_keyframes.json", source="best.motion")
+    except InputError as exc:
+        for name in ("best_naoqi.py", "best_keyframes.json"):  # stale ones of an earlier best
+            (ctx.out_dir / name).unlink(missing_ok=True)
+        ctx.log(f"best_naoqi.py and best_keyframes.json not written: {exc}")
+        return False
+    ctx.log("best_naoqi.py and best_keyframes.json written (checked against a real NAO's "
+            "joint ranges and motor speeds)")
+    return True
+
+
 def on_checkpoint(ctx: RunContext) -> None:
     write_best_motion(ctx)
 
@@ -46,6 +71,7 @@ def finalize(ctx: RunContext) -> None:
     path = write_best_motion(ctx)
     if path is None:
         return
+    write_exports(ctx)
     video: Path | None = ctx.out_dir / "best.mp4"
     try:
         summary = replay(path, video=video, hold_s=ctx.problem.cfg.hold_s)
