@@ -198,16 +198,28 @@ def bad_out(target: str):
 
 
 def all_nan(e: Env) -> str:
+    """Every fitness NaN (the test-only toy study of tests/run, NaN above x0 = -10)."""
     out = e.tmp / "nan"
-    r = e.cli("run", "functions", "-q", "--out", str(out), "--set", "problem.dim=4",
-              "--set", "run.generations=2", "--set", "problem.half_width=1e308",
-              "--set", "algorithm.mutation=\"uniform_reset\"")
+    code = ("import sys, json\n"
+            f"sys.path.insert(0, {str(ROOT / 'tests' / 'run')!r})\n"
+            "from toy_study import STUDY\n"
+            "from evomotion.run.config import resolve_config\n"
+            "from evomotion.run.runner import run_study\n"
+            "cfg = resolve_config(STUDY, None, ['run.generations=2', 'problem.nan_above=-10',"
+            " 'problem.raise_above=9'])\n"
+            "res = run_study(STUDY, cfg, sys.argv[1], quiet=True)\n"
+            "sys.exit(res.exit_code)\n")
+    r = e.py(code, str(out))
     try:
         json.loads((out / "best.json").read_text())
         valid = True
     except (OSError, ValueError):
         valid = False
-    return verdict(r, valid) + ("" if valid else "; best.json not JSON")
+    ok = r.returncode != 0 and valid and "Traceback" not in r.stderr
+    if r.returncode == 0:
+        return "exit 0" + ("" if valid else "; best.json not JSON")
+    return ("non-zero exit, valid JSON" if ok else verdict(r)) + ("" if valid else
+                                                                 "; best.json not JSON")
 
 
 def parent_kill(e: Env) -> str:
@@ -258,11 +270,13 @@ def cases() -> dict:
 
     def motion_with(value: str, time_stamp: str | None = None) -> bytes:
         out = list(lines)
-        cols = out[1].split(",")
+        poses = [k for k, ln in enumerate(out) if ln[:1].isdigit()]
+        i = poses[-1] if time_stamp is not None else poses[0]  # a late stamp on the last pose
+        cols = out[i].split(",")
         cols[2] = value
         if time_stamp is not None:
             cols[0] = time_stamp
-        out[1] = ",".join(cols)
+        out[i] = ",".join(cols)
         return ("\n".join(out) + "\n").encode()
 
     plan_ok = {"goal": "abc"}
