@@ -53,7 +53,8 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", default=None, help="run folder (default: none)")
     a = ap.parse_args()
-    pcfg = HumanoidStepConfig(intervals=a.intervals, bounds_scale=0.25, threads=a.threads)
+    pcfg = HumanoidStepConfig(intervals=a.intervals, bounds_scale=0.25, threads=a.threads,
+                              fitness="seed", hold_s=1.0)  # the workload measured before
     problem = HumanoidStepProblem(pcfg)
     cfg_cls, _ = ALGORITHMS["ga"]
     alg = cfg_cls(pop_size=a.pop, crossover="blx_alpha", crossover_params={"alpha": 0.7},

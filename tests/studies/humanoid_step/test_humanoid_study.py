@@ -71,7 +71,7 @@ def test_quick_experiment_writes_table(tmp_path):
 
 
 def test_default_run_steps_forward_without_falling(tmp_path):
-    """The README's main job: defaults only, then replay its best.motion (issue 3)."""
+    """The README's main job: defaults only, then replay its best.motion (issues 3 and 13)."""
     import subprocess
     import sys
 
@@ -79,7 +79,13 @@ def test_default_run_steps_forward_without_falling(tmp_path):
     r = subprocess.run([sys.executable, "-m", "evomotion.cli", "run", "humanoid-step", "--out",
                         str(out), "--quiet"], capture_output=True, text=True, timeout=600)
     assert r.returncode == 0, r.stderr
-    summary = replay(out / "best.motion")
-    assert summary["fell"] is False
-    assert summary["displacement_m"][0] >= 0.05  # a step: at least 5 cm forward
+    summary = replay(out / "best.motion", hold_s=2.0)
+    assert summary["fell"] is False  # stands through a 2 s hold
+    dx, dy = summary["displacement_m"]
+    assert dx >= 0.05  # a step: at least 5 cm forward
+    assert abs(dy) <= 0.02 and abs(np.degrees(summary["heading_change_rad"])) <= 5.0  # straight
+    best = json.loads((out / "best.json").read_text())
+    assert best["metrics"]["flight_s"] == 0.0  # no flight phase
     assert (out / "plots" / "fitness.png").exists() and (out / "fitness.png").exists()
+    for name in ("best_naoqi.py", "best_keyframes.json", "best_replay.json"):
+        assert (out / name).exists()

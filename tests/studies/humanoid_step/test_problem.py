@@ -6,6 +6,12 @@ from evomotion.studies.humanoid_step.problem import HumanoidStepConfig, Humanoid
 
 @pytest.fixture(scope="module")
 def problem():
+    cfg = HumanoidStepConfig(intervals=4, motion_s=0.6, hold_s=0.4, threads=2, fitness="seed")
+    return HumanoidStepProblem(cfg)
+
+
+@pytest.fixture(scope="module")
+def step_problem():
     cfg = HumanoidStepConfig(intervals=4, motion_s=0.6, hold_s=0.4, threads=2)
     return HumanoidStepProblem(cfg)
 
@@ -67,3 +73,43 @@ def test_bad_settings_are_one_line_input_errors(field, value):
 
     with pytest.raises(InputError, match=f"problem.{field}"):
         HumanoidStepProblem(HumanoidStepConfig(**{field: value}))
+
+
+def test_step_fitness_ranks_every_survivor_above_every_fall(step_problem):
+    rng = np.random.default_rng(5)
+    q = _still(step_problem, 24)
+    g = np.clip(q + rng.normal(0, 0.25, q.shape), step_problem.genome.lower,
+                step_problem.genome.upper)
+    ev = step_problem.evaluate(np.concatenate([_still(step_problem), g]))
+    fell = ev.metrics["fell"] == 1.0
+    assert fell.any() and (~fell).any()
+    total = step_problem.nstep * step_problem.dt
+    assert ev.fitness[fell].max() <= total < ev.fitness[~fell].min()
+    # standing still: no flight, no turn, no drift -> total + 1 + forward (about 0)
+    m = {k: v[0] for k, v in ev.metrics.items()}
+    assert m["flight_s"] == 0.0
+    c = step_problem.cfg
+    quality = m["forward_m"] - c.heading_weight * abs(m["heading_change_rad"]) \
+        - c.lateral_weight * abs(m["lateral_m"])
+    assert ev.fitness[0] == pytest.approx(total + 1.0 + quality)
+
+
+def test_flight_counts_gaps_of_at_least_three_steps():
+    from evomotion.studies.humanoid_step.problem import flight_steps
+
+    a = np.array([[0, 1, 1, 1, 0, 1, 0, 1, 1, 1, 1], [1, 1, 0, 0, 0, 0, 0, 0, 0, 0, 1],
+                  [0] * 11], bool)
+    assert flight_steps(a, 3).tolist() == [7, 0, 0]
+
+
+def test_perturbed_worlds_are_deterministic_and_aggregate():
+    cfg = HumanoidStepConfig(intervals=4, motion_s=0.6, hold_s=0.4, threads=2, worlds=3,
+                             world_seed=4)
+    p1, p2 = HumanoidStepProblem(cfg), HumanoidStepProblem(cfg)
+    g = _still(p1, 2)
+    e1, e2 = p1.evaluate(g), p2.evaluate(g)
+    np.testing.assert_array_equal(e1.fitness, e2.fitness)
+    assert np.all((e1.metrics["fall_rate"] >= 0) & (e1.metrics["fall_rate"] <= 1))
+    q = HumanoidStepProblem(HumanoidStepConfig(**{**cfg.__dict__, "world_aggregate": "quantile",
+                                                  "world_quantile": 0.0}))
+    assert np.all(q.evaluate(g).fitness <= e1.fitness + 1e-12)  # the minimum <= the mean

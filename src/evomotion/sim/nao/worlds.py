@@ -168,11 +168,13 @@ def delayed_controls(controls: np.ndarray, latency_steps: np.ndarray) -> np.ndar
 
 
 def simulate_worlds(worlds: list[World], initial_state: np.ndarray, controls: np.ndarray,
-                    nthread: int = 1) -> np.ndarray:
+                    nthread: int = 1, sensors: bool = False
+                    ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
     """Roll out every world from ``initial_state`` (``[nstate]`` or ``[k, nstate]``,
     ``STATE_SPEC``) under ``controls`` (``[nstep, nu]`` or ``[k, nstep, nu]``), delayed and
     pushed per world, in one ``mujoco.rollout`` batch with ``nthread`` threads (0: all cores).
-    Returns ``states[k, nstep, nstate]``. A push at or after the last step is not applied."""
+    Returns ``states[k, nstep, nstate]`` (with ``sensors``: also ``sensordata[k, nstep, n]``).
+    A push at or after the last step is not applied."""
     if not worlds:
         raise InputError("simulate_worlds: expected at least one world")
     k, base = len(worlds), worlds[0].model
@@ -195,8 +197,10 @@ def simulate_worlds(worlds: list[World], initial_state: np.ndarray, controls: np
     nthread = int(nthread) if nthread and nthread > 0 else (os.cpu_count() or 1)
     nthread = max(1, min(nthread, k))
     if nthread == 1:
-        return mj_rollout.rollout(models, mujoco.MjData(base), init, ctrl, control_spec=spec,
-                                  nstep=nstep)[0]
-    datas = [mujoco.MjData(base) for _ in range(nthread)]
-    with mj_rollout.Rollout(nthread=nthread) as runner:
-        return runner.rollout(models, datas, init, ctrl, control_spec=spec, nstep=nstep)[0]
+        out = mj_rollout.rollout(models, mujoco.MjData(base), init, ctrl, control_spec=spec,
+                                 nstep=nstep)
+    else:
+        datas = [mujoco.MjData(base) for _ in range(nthread)]
+        with mj_rollout.Rollout(nthread=nthread) as runner:
+            out = runner.rollout(models, datas, init, ctrl, control_spec=spec, nstep=nstep)
+    return (out[0], out[1]) if sensors else out[0]

@@ -3,21 +3,35 @@
 Each genome is decoded (see :mod:`.encoding`) into targets for the 10 leg servos on every
 physics step of ``motion_s + hold_s`` seconds; the other 12 servos hold the initial pose.
 The whole batch is rolled out with ``mujoco.rollout`` (threads = ``threads``) and scored from
-the recorded torso states:
+the recorded torso states, the sole positions and the sole-floor contacts.
 
-``fitness = time_to_fall_s + distance_weight * clip(forward_m, -forward_cap_m, forward_cap_m)``
-(maximised; seconds, with ``distance_weight`` = 10 s/m and ``forward_cap_m`` = 0.2 m by default)
+``fitness = "step"`` (the default; maximised; units in brackets) ranks robots that stay up
+through the motion *and* the hold (``hold_s`` >= 2 s by default) above every robot that falls,
+and among those it never saturates:
+
+- fell: ``time_up_s`` [s] ``+ 0.1 clip(forward_m, -0.1, 0.1)``, at most ``motion_s + hold_s``;
+- stayed up: ``motion_s + hold_s + 1 + max(quality_m, -0.99)`` with
+  ``quality_m = forward_m - heading_weight |heading_change_rad| - lateral_weight |lateral_m|
+  - flight_weight flight_s`` [m]: forward progress of the feet, penalised by turning
+  (``heading_weight`` m/rad, 0.5: a 60° turn costs 0.52 m), lateral drift (``lateral_weight``,
+  2 m/m) and flight phases (``flight_weight`` m/s, 2: time with neither sole on the floor, in
+  gaps of at least 12 ms), and ``excess_weight`` (5) more per radian or metre beyond the
+  tolerances ``heading_tolerance_rad`` (5°) and ``lateral_tolerance_m`` (2 cm) that a straight
+  step must meet (and per second of flight), plus ``step_bonus_m`` (0.05 m) once the feet are
+  ``step_min_m`` (5 cm) forward.
+
+``fitness = "seed"`` is the seed's literal one (``--preset seed``):
+``time_to_fall_s + distance_weight * clip(forward_m, -forward_cap_m, forward_cap_m)``
+(seconds, ``distance_weight`` = 10 s/m, ``forward_cap_m`` = 0.2 m), which saturates at
+``motion_s + hold_s + 2`` and rewards turning and hopping steps as much as straight ones.
 
 - ``time_to_fall_s``: time of the first fallen state (torso origin below ``fall_height_m`` or
-  its up axis tilted more than ``fall_tilt_rad``), or the full ``motion_s + hold_s`` when the
-  robot stays up (seed: "time from the start of the motion until the fall");
-- ``forward_m``: displacement along +x (the robot's initial heading) of the midpoint of the
-  two sole centres, at the end or at the moment of the fall. Measuring the feet, not the
-  torso, means that leaning or diving forward earns nothing: only moving the feet does.
-The cap keeps a lunge or a dive (feet thrown 0.5 m forward, then a fall) from beating a robot
-that stays up: distance credit is at most 2 s, less than a full ``motion_s + hold_s``.
-A *step* is ``forward_m >= step_min_m`` (5 cm) without falling (so upright at the end: the
-last knot is the initial pose, held for ``hold_s``).
+  its up axis tilted more than ``fall_tilt_rad``), or the full ``motion_s + hold_s``;
+- ``forward_m`` / ``lateral_m``: displacement along +x (the initial heading) / +y of the
+  midpoint of the two sole centres, at the end or at the fall: leaning or diving earns nothing;
+- ``heading_change_rad``: the torso's yaw change; ``flight_s``: time with neither sole touching
+  the floor (MuJoCo contact sensors on the sole geoms).
+A *step* (metric ``stepped``) is ``forward_m >= step_min_m`` (5 cm) without falling.
 
 Rollouts run in segments of ``segment_s``; robots that have fallen are not simulated further
 (their remaining states repeat the fallen state), which saves most of the physics early in a
@@ -30,13 +44,14 @@ import dataclasses
 import math
 from dataclasses import dataclass
 
+import mujoco
 import numpy as np
 
 from evomotion.core.checks import check_choice, check_fields, check_number
 from evomotion.core.problem import Evaluation, GenomeSpec
 from evomotion.errors import InputError
 from evomotion.sim import nao
-from evomotion.sim.nao.scene import sensor_slices
+from evomotion.sim.nao.scene import scene_xml, sensor_slices
 from evomotion.sim.rollout import BatchSimulator, fall_step, torso_track
 from evomotion.studies.humanoid_step.encoding import ENCODINGS, ServoEncoding
 
@@ -48,7 +63,16 @@ SEED_TABLE1: dict[str, tuple[float, float]] = {
     "LAnklePitch": (-1.309, 0.7854), "RAnklePitch": (-1.309, 0.7854),
     "LHipPitch": (-1.7453, 0.4363), "RHipPitch": (-1.7453, 0.4363),
 }
-METRICS = ("time_to_fall_s", "forward_m", "lateral_m", "heading_change_rad", "fell", "stepped")
+METRICS = ("time_to_fall_s", "forward_m", "lateral_m", "heading_change_rad", "flight_s", "fell",
+           "stepped", "fall_rate")
+FITNESSES = ("step", "seed")
+#: a flight phase is at least this many consecutive physics steps (12 ms) with neither sole on
+#: the floor; shorter gaps are contact flicker at touch-down, not a hop
+FLIGHT_MIN_STEPS = 3
+#: sole-floor contact sensors added to the model (1 while the sole touches the floor)
+CONTACT_SENSORS = """<contact name="l_floor" geom1="l_sole" geom2="floor" data="found"/>
+<contact name="r_floor" geom1="r_sole" geom2="floor" data="found"/>
+"""
 
 
 #: ``problem.intervals`` at most; ``problem.threads`` at most (one MjData per thread)
@@ -68,13 +92,25 @@ class HumanoidStepConfig:
     encoding: str = "linear"  # linear | spline | harmonic
     intervals: int = 20  # K time intervals of the step (seed: 20)
     motion_s: float = 2.0  # duration of the step motion T (s)
-    hold_s: float = 1.0  # initial pose held after the motion (s)
-    distance_weight: float = 10.0  # fitness per metre forward (s/m)
-    forward_cap_m: float = 0.2  # forward distance credited at most (m)
+    hold_s: float = 2.0  # initial pose held after the motion (s; seed: 1)
+    fitness: str = "step"  # step (see module doc) | seed (the seed's literal fitness)
+    heading_weight: float = 0.5  # step fitness: metres lost per radian of turning (m/rad)
+    lateral_weight: float = 2.0  # step fitness: metres lost per metre of lateral drift
+    flight_weight: float = 2.0  # step fitness: metres lost per second without a sole down (m/s)
+    heading_tolerance_rad: float = 0.0873  # step fitness: beyond 5 degrees of turning ...
+    lateral_tolerance_m: float = 0.02  # ... or 2 cm of lateral drift ...
+    excess_weight: float = 5.0  # ... each extra radian / metre (or second of flight) costs
+    step_bonus_m: float = 0.05  # step fitness: credit for feet >= step_min_m forward (m)
+    distance_weight: float = 10.0  # seed fitness: fitness per metre forward (s/m)
+    forward_cap_m: float = 0.2  # seed fitness: forward distance credited at most (m)
     fall_height_m: float = nao.FALL_HEIGHT_M
     fall_tilt_rad: float = nao.FALL_TILT_RAD  # 45 degrees
     step_min_m: float = 0.05
     bounds_scale: float = 1.0  # 1 = seed Table 1 (intersected with the model ranges)
+    worlds: int = 1  # K worlds per candidate: the nominal one and K - 1 perturbed (1: nominal)
+    world_seed: int = 0  # the K worlds are drawn from numpy.random.default_rng(world_seed)
+    world_aggregate: str = "mean"  # mean | quantile: how the K fitness values are combined
+    world_quantile: float = 0.25  # with "quantile": this quantile of the K values
     threads: int = 0  # mujoco.rollout threads; 0 = all cores
     segment_s: float = 0.2  # fallen robots stop being simulated at these boundaries (s)
 
@@ -92,13 +128,13 @@ class HumanoidStepConfig:
         n = len(nao.LEG_SERVOS)
         return 3 * n + 1 if self.encoding == "harmonic" else n * (self.intervals - 1)
 
-    memory_keys = ("motion_s", "hold_s")  # what memory_bytes depends on (for its message)
+    memory_keys = ("motion_s", "hold_s", "worlds")  # what memory_bytes depends on (for its message)
 
     def memory_bytes(self, pop_size: int) -> int:
         """Bytes of one batch's rollout: recorded states, sensors and controls (doubles) of
         every physics step of the motion and the hold, twice (analysis temporaries)."""
         steps = math.ceil((self.motion_s + self.hold_s) / NAO_TIMESTEP_S)
-        return 2 * 8 * pop_size * steps * ROLLOUT_DOUBLES_PER_STEP
+        return 2 * 8 * pop_size * self.worlds * steps * ROLLOUT_DOUBLES_PER_STEP
 
 
 def servo_bounds(model, scale: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
@@ -119,6 +155,14 @@ def validate(cfg: HumanoidStepConfig) -> None:
     """One-line :class:`InputError` for impossible settings."""
     check_fields(cfg, "problem")
     check_choice("problem.encoding", cfg.encoding, ENCODINGS)
+    check_choice("problem.fitness", cfg.fitness, FITNESSES)
+    check_choice("problem.world_aggregate", cfg.world_aggregate, ("mean", "quantile"))
+    check_number("problem.worlds", cfg.worlds, lo=1, hi=1024, integer=True)
+    check_number("problem.world_seed", cfg.world_seed, lo=0, integer=True)
+    check_number("problem.world_quantile", cfg.world_quantile, lo=0.0, hi=1.0)
+    for key in ("heading_weight", "lateral_weight", "flight_weight", "heading_tolerance_rad",
+                "lateral_tolerance_m", "excess_weight", "step_bonus_m"):
+        check_number(f"problem.{key}", getattr(cfg, key), lo=0.0)
     check_number("problem.intervals", cfg.intervals, lo=2, hi=MAX_INTERVALS, integer=True)
     check_number("problem.threads", cfg.threads, lo=0, hi=MAX_THREADS, integer=True)
     check_number("problem.fall_height_m", cfg.fall_height_m, lo=0.0, lo_open=True)
@@ -136,6 +180,19 @@ def validate(cfg: HumanoidStepConfig) -> None:
             raise InputError(message)
 
 
+def flight_steps(airborne: np.ndarray, min_run: int) -> np.ndarray:
+    """Per row, the number of True entries of ``airborne[pop, nstep]`` that lie in runs of at
+    least ``min_run`` consecutive Trues (vectorised run lengths)."""
+    a = np.pad(airborne.astype(np.int8), ((0, 0), (1, 1)))
+    d = np.diff(a, axis=1)
+    rows_s, starts = np.nonzero(d == 1)
+    _, ends = np.nonzero(d == -1)  # row-major: the i-th end closes the i-th start
+    length = ends - starts
+    out = np.zeros(airborne.shape[0], dtype=np.int64)
+    np.add.at(out, rows_s, np.where(length >= min_run, length, 0))
+    return out
+
+
 class HumanoidStepProblem:
     """Batch evaluation of forward-step trajectories (fitness maximised)."""
 
@@ -145,7 +202,7 @@ class HumanoidStepProblem:
     def __init__(self, cfg: HumanoidStepConfig | None = None) -> None:
         self.cfg = cfg = cfg or HumanoidStepConfig()
         validate(cfg)
-        self.model = nao.load_model()
+        self.model = mujoco.MjModel.from_xml_string(scene_xml(sensors=CONTACT_SENSORS))
         self.dt = float(self.model.opt.timestep)
         lo, hi = servo_bounds(self.model, cfg.bounds_scale)
         self.encoding = ServoEncoding(cfg.encoding, leg_initial_pose(), lo, hi, cfg.intervals,
@@ -158,9 +215,18 @@ class HumanoidStepProblem:
         self.state0 = nao.initial_state(self.model)
         data0 = nao.initial_data(self.model)
         self.sole0 = 0.5 * (data0.site("l_sole_site").xpos + data0.site("r_sole_site").xpos)
-        self.sole_columns = [sensor_slices(self.model)[s] for s in ("l_sole", "r_sole")]
+        slices = sensor_slices(self.model)
+        self.sole_columns = [slices[s] for s in ("l_sole", "r_sole")]
+        self.contact_columns = [slices["l_floor"].start, slices["r_floor"].start]
         self.segment_steps = max(1, int(round(cfg.segment_s / self.dt)))
         self.sim = BatchSimulator(self.model, cfg.threads)
+        self.worlds = None
+        if cfg.worlds > 1:  # the nominal world and K - 1 drawn ones
+            from evomotion.sim.nao.worlds import Perturbation, World, draw_worlds
+
+            self.worlds = [World(self.model)] + draw_worlds(
+                self.model, Perturbation(), cfg.worlds - 1,
+                np.random.default_rng(cfg.world_seed), cfg.motion_s)
 
     def controls(self, genomes: np.ndarray, t: np.ndarray | None = None) -> np.ndarray:
         """Actuator targets ``[pop, nstep, 22]`` for a batch of genomes."""
@@ -193,15 +259,54 @@ class HumanoidStepProblem:
         end = 0.5 * (left + right)
         t_fall = np.where(fell, (fall + 1) * self.dt, self.nstep * self.dt)
         forward, lateral = end[:, 0] - self.sole0[0], end[:, 1] - self.sole0[1]
-        credit = np.clip(forward, -c.forward_cap_m, c.forward_cap_m)
-        fitness = t_fall + c.distance_weight * credit
+        heading = track.yaw_rad[rows, last] - track.yaw_rad[:, 0]
+        down = (sensors[:, :, self.contact_columns] > 0.5).any(axis=2)  # [pop, nstep]
+        # from the first touch (the robot starts 0.5 mm above the floor) to the end or fall
+        steps = np.arange(self.nstep)[None]
+        airborne = ~down & (steps >= down.argmax(axis=1)[:, None]) & (steps <= last[:, None])
+        flight_s = flight_steps(airborne, FLIGHT_MIN_STEPS) * self.dt
+        if c.fitness == "seed":
+            credit = np.clip(forward, -c.forward_cap_m, c.forward_cap_m)
+            fitness = t_fall + c.distance_weight * credit
+        else:
+            total = self.nstep * self.dt
+            quality = forward - c.heading_weight * np.abs(heading) \
+                - c.lateral_weight * np.abs(lateral) - c.flight_weight * flight_s \
+                - c.excess_weight * (np.maximum(np.abs(heading) - c.heading_tolerance_rad, 0)
+                                     + np.maximum(np.abs(lateral) - c.lateral_tolerance_m, 0)
+                                     + flight_s) \
+                + c.step_bonus_m * (forward >= c.step_min_m)
+            fitness = np.where(fell, np.minimum(t_fall + 0.1 * np.clip(forward, -0.1, 0.1),
+                                                total),
+                               total + 1.0 + np.maximum(quality, -0.99))
         metrics = {
             "time_to_fall_s": t_fall, "forward_m": forward, "lateral_m": lateral,
-            "heading_change_rad": track.yaw_rad[rows, last] - track.yaw_rad[:, 0],
-            "fell": fell.astype(float),
+            "heading_change_rad": heading, "flight_s": flight_s,
+            "fell": fell.astype(float), "fall_rate": fell.astype(float),
             "stepped": ((forward >= c.step_min_m) & ~fell).astype(float),
         }
         return Evaluation(fitness, metrics)
 
     def evaluate(self, genomes: np.ndarray) -> Evaluation:
-        return self.score(*self.simulate(np.atleast_2d(genomes)))
+        genomes = np.atleast_2d(genomes)
+        if self.worlds is None:
+            return self.score(*self.simulate(genomes))
+        return self.evaluate_worlds(genomes)
+
+    def evaluate_worlds(self, genomes: np.ndarray) -> Evaluation:
+        """Every genome in each of the K perturbed worlds (:mod:`evomotion.sim.nao.worlds`),
+        one batch; fitness = mean or ``world_quantile`` of the K values, metrics = means over
+        the worlds, plus ``fall_rate``."""
+        from evomotion.sim.nao.worlds import simulate_worlds
+
+        n, k = len(genomes), len(self.worlds)
+        ctrl = np.repeat(self.controls(genomes), k, axis=0)  # genome-major: i * k + world
+        states, sensors = simulate_worlds(self.worlds * n, self.state0, ctrl,
+                                          self.sim.nthread, sensors=True)
+        ev = self.score(states, sensors)
+        fit = ev.fitness.reshape(n, k)
+        agg = fit.mean(axis=1) if self.cfg.world_aggregate == "mean" else \
+            np.quantile(fit, self.cfg.world_quantile, axis=1)
+        metrics = {m: np.asarray(v, float).reshape(n, k).mean(axis=1)
+                   for m, v in ev.metrics.items()}  # fall_rate: the share of worlds fallen
+        return Evaluation(agg, metrics)
