@@ -17,14 +17,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(Path(__file__).parent))
+from baseline import export, run_child  # noqa: E402
 
 
 def _loop(opt, rng, gens: int) -> float:
@@ -77,13 +76,7 @@ def measure() -> dict:
 
 
 def run_in(src: Path | None) -> dict:
-    env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
-    if src is not None:
-        env["PYTHONPATH"] = str(src)
-    with tempfile.NamedTemporaryFile(suffix=".json") as fh:
-        subprocess.run([sys.executable, __file__, "--child", fh.name], env=env, check=True,
-                       cwd=tempfile.gettempdir())
-        return json.loads(Path(fh.name).read_text())
+    return run_child(__file__, src, {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"})
 
 
 def main() -> None:
@@ -96,12 +89,10 @@ def main() -> None:
         Path(a.child).write_text(json.dumps(measure()))
         return
     with tempfile.TemporaryDirectory() as tmp:
-        tar = subprocess.run(["git", "-C", str(ROOT), "archive", a.baseline, "src"],
-                             check=True, capture_output=True).stdout
-        subprocess.run(["tar", "-x", "-C", tmp], input=tar, check=True)
+        src = export(a.baseline, Path(tmp))
         old, new = [], []
         for _ in range(a.repeat):
-            old.append(run_in(Path(tmp) / "src"))
+            old.append(run_in(src))
             new.append(run_in(None))
     print(f"| measure | {a.baseline} | this tree | ratio (this / baseline) |\n|---|---|---|---|")
     for k in old[0]:

@@ -27,40 +27,18 @@ import sys
 import tempfile
 from pathlib import Path
 
-SMALL = {
-    "functions": ["problem.dim=6", "algorithm.pop_size=20"],
-    "humanoid-step": ["algorithm.pop_size=8", "problem.motion_s=0.6", "problem.hold_s=0.2",
-                      "problem.intervals=4"],
-    "biped-kick": ["algorithm.pop_size=4", "run.max_evaluations=0"],
-    "arm-ik": ["algorithm.pop_size=8", "algorithm.arm_generations=2",
-               "algorithm.finger_generations=2", "problem.pictures=false",
-               "problem.scenario='three_fingers'"],
-    "grid-path": ["algorithm.pop_size=16"],
-    "quadruped-plan": ["algorithm.batch_expansions=40", "problem.goal_x=0.0",
-                       "problem.goal_y=-7.0", "problem.start_phi=0.0"],
-}
 TARGET = {"functions": "1e9", "humanoid-step": "0.0", "biped-kick": "-100.0", "arm-ik": "1e9",
           "grid-path": "1e9", "quadruped-plan": "1e9"}
 KILL = """
-import os, signal, sys
-from evomotion.run import runner
+import sys
 from evomotion.run.config import resolve_config
+from evomotion.run.faults import fault_at
+from evomotion.run.runner import run_study
 from evomotion.studies import get_study
-name, out, cut, sig = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
-build = runner.build_driver
-def wrap(*a, **k):
-    d = build(*a, **k)
-    step, n = d.step, {"k": 0}
-    def cut_step(*sa, **sk):
-        n["k"] += 1
-        if n["k"] == cut + 1:
-            os.kill(os.getpid(), sig)
-        return step(*sa, **sk)
-    d.step = cut_step
-    return d
-runner.build_driver = wrap
+name, out, cut, how = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4]
 s = get_study(name)
-res = runner.run_study(s, resolve_config(s, None, sys.argv[5:]), out, quiet=True)
+with fault_at(cut, how):
+    res = run_study(s, resolve_config(s, None, sys.argv[5:]), out, quiet=True)
 sys.exit(res.exit_code)
 """
 TIMED = {"wall_s", "evals_per_s"}
@@ -76,7 +54,9 @@ def cli(*args: str, tty: bool = False) -> subprocess.CompletedProcess:
 
 def sets(name: str, extra: list[str]) -> list[str]:
     out = []
-    for s in [*SMALL[name], "run.checkpoint_every=2", "run.seed=5", *extra]:
+    from evomotion.studies import get_study
+
+    for s in [*get_study(name).smoke, "run.checkpoint_every=2", "run.seed=5", *extra]:
         out += ["--set", s]
     return out
 
@@ -95,11 +75,11 @@ def resume_cell(name: str, tmp: Path, gens: int) -> str:
     full = tmp / "full"
     cli("run", name, "-q", "--out", str(full), *sets(name, [f"run.generations={gens}"]))
     out = []
-    for sig, label in ((2, "Ctrl-C"), (9, "kill -9")):
-        d = tmp / f"cut{sig}"
+    for sig, label in (("sigint", "Ctrl-C"), ("sigkill", "kill -9")):
+        d = tmp / f"cut-{sig}"
         d.mkdir()
         args = [a for a in sets(name, [f"run.generations={gens}"]) if a != "--set"]
-        subprocess.run([sys.executable, "-c", KILL, name, str(d), "3", str(sig), *args],
+        subprocess.run([sys.executable, "-c", KILL, name, str(d), "3", sig, *args],
                        capture_output=True, text=True, timeout=900)
         r = cli("resume", str(d), "-q")
         ok = "Traceback" not in r.stderr and same(full, d)
@@ -140,8 +120,9 @@ def main() -> None:
     ap.add_argument("--study", action="append", default=None)
     a = ap.parse_args()
     from evomotion.run.stats import COLUMNS
+    from evomotion.studies import STUDIES
 
-    names = a.study or list(SMALL)
+    names = a.study or list(STUDIES)
     print("| | " + " | ".join(names) + " |\n|---|" + "---|" * len(names))
     cells: dict[str, list[str]] = {k: [] for k in (
         "resume after Ctrl-C / kill -9", "`--evaluator`", "stop rules", "stats.csv",

@@ -13,14 +13,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(Path(__file__).parent))
+from baseline import export, run_child  # noqa: E402
 
 
 def outputs() -> dict:
@@ -87,20 +86,7 @@ def outputs() -> dict:
 
 
 def run_in(src: Path | None) -> dict:
-    env = dict(os.environ)
-    if src is not None:
-        env["PYTHONPATH"] = str(src)
-    with tempfile.NamedTemporaryFile(suffix=".json") as fh:
-        subprocess.run([sys.executable, __file__, "--child", fh.name], env=env, check=True,
-                       cwd=tempfile.gettempdir())
-        return json.loads(Path(fh.name).read_text())
-
-
-def export(rev: str, into: Path) -> Path:
-    tar = subprocess.run(["git", "-C", str(ROOT), "archive", rev, "src"], check=True,
-                         capture_output=True).stdout
-    subprocess.run(["tar", "-x", "-C", str(into)], input=tar, check=True)
-    return into / "src"
+    return run_child(__file__, src)
 
 
 def main() -> None:

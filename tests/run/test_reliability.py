@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 
 from evomotion.errors import InputError
-from evomotion.run import runner
 from evomotion.run.config import resolve_config
+from evomotion.run.faults import fault_at
 from evomotion.run.lock import RunLock
 from evomotion.run.runner import EXIT_NO_FINITE, run_study
 
@@ -32,27 +32,9 @@ SETS = ["run.generations=12", "run.checkpoint_every=4", "problem.raise_above=9"]
 
 
 def _interrupted(out: Path, cut: int = 10, sets=SETS) -> None:
-    """A toy run interrupted (Ctrl-C) during step ``cut``: checkpoints at 0, 4, 8."""
-    build = runner.build_driver
-
-    def interrupting(*a, **k):
-        d = build(*a, **k)
-        step, n = d.step, {"k": 0}
-
-        def cut_step(*sa, **sk):
-            n["k"] += 1
-            if n["k"] == cut + 1:
-                raise KeyboardInterrupt
-            return step(*sa, **sk)
-
-        d.step = cut_step
-        return d
-
-    runner.build_driver = interrupting
-    try:
+    """A toy run interrupted (Ctrl-C) during step ``cut``: checkpoints at 0, 4, 8 and 9."""
+    with fault_at(cut, "interrupt"):
         res = run_study(TOY, resolve_config(TOY, None, sets), out, quiet=True)
-    finally:
-        runner.build_driver = build
     assert res.stop_reason == "interrupted"
 
 

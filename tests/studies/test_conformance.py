@@ -21,31 +21,18 @@ import pytest
 
 from evomotion.run import runner
 from evomotion.run.config import resolve_config, study_algorithms
+from evomotion.run.faults import fault_at
 from evomotion.run.runner import EXIT_INTERRUPTED, run_study
 from evomotion.run.stats import COLUMNS, read_stats
 from evomotion.studies import STUDIES, get_study
 
-#: tiny settings per study: every registered study must have one (a test fails otherwise)
-SMOKE: dict[str, list[str]] = {
-    "functions": ["problem.dim=4", "algorithm.pop_size=10"],
-    "humanoid-step": ["algorithm.pop_size=6", "problem.motion_s=0.4", "problem.hold_s=0.2",
-                      "problem.intervals=4"],
-    "biped-kick": ["algorithm.pop_size=4", "run.max_evaluations=0"],
-    "arm-ik": ["algorithm.pop_size=8", "algorithm.arm_generations=2",
-               "algorithm.finger_generations=2", "problem.pictures=false",
-               "problem.scenario='three_fingers'"],
-    "grid-path": ["algorithm.pop_size=16"],
-    "quadruped-plan": ["algorithm.batch_expansions=40", "problem.goal_x=0.0",
-                       "problem.goal_y=-7.0", "problem.start_phi=0.0",
-                       "problem.gif_max_frames=4"],
-}
 STEPS = 6  # generations 0..5
 CUT = 3  # the interrupted runs stop during this step (the last checkpoint is at 2)
 TIMED = {"wall_s", "evals_per_s"}
 
 
 def _overrides(name: str) -> list[str]:
-    return [*SMOKE[name], f"run.generations={STEPS - 1}", "run.checkpoint_every=2",
+    return [*get_study(name).smoke, f"run.generations={STEPS - 1}", "run.checkpoint_every=2",
             "run.wall_seconds=0", "run.seed=3"]
 
 
@@ -62,7 +49,7 @@ def _same(d1: Path, d2: Path) -> None:
 
 
 def test_every_study_has_a_smoke_config():
-    assert set(SMOKE) == set(STUDIES)
+    assert all(get_study(n).smoke for n in STUDIES)
 
 
 @pytest.fixture(params=sorted(STUDIES))
@@ -82,7 +69,7 @@ def test_descriptor(name):
         assert s.preset_notes.get(preset)
 
 
-def test_run_interrupt_and_resume_are_bit_identical(name, tmp_path, monkeypatch):
+def test_run_interrupt_and_resume_are_bit_identical(name, tmp_path):
     s = get_study(name)
     cfg = resolve_config(s, None, _overrides(name))
     full = run_study(s, cfg, tmp_path / "full", quiet=True)
@@ -94,49 +81,23 @@ def test_run_interrupt_and_resume_are_bit_identical(name, tmp_path, monkeypatch)
     assert best["study"] == name and best["sense"] in ("min", "max")
     assert (tmp_path / "full" / "plots" / "fitness.png").stat().st_size > 0
 
-    build = runner.build_driver
-
-    def interrupting(*a, **k):
-        d = build(*a, **k)
-        step, n = d.step, {"k": 0}
-
-        def cut(*sa, **sk):
-            n["k"] += 1
-            if n["k"] == CUT + 1:
-                raise KeyboardInterrupt
-            return step(*sa, **sk)
-
-        d.step = cut
-        return d
-
-    monkeypatch.setattr(runner, "build_driver", interrupting)
-    cut_res = run_study(s, cfg, tmp_path / "cut", quiet=True)
+    with fault_at(CUT, "interrupt"):
+        cut_res = run_study(s, cfg, tmp_path / "cut", quiet=True)
     assert cut_res.stop_reason == "interrupted" and cut_res.exit_code == EXIT_INTERRUPTED
-    monkeypatch.setattr(runner, "build_driver", build)
     run_study(s, cfg, tmp_path / "cut", quiet=True, resume=True)
     _same(tmp_path / "full", tmp_path / "cut")
 
 
 KILLER = textwrap.dedent("""
-    import os, signal, sys
-    from evomotion.run import runner
+    import sys
     from evomotion.run.config import resolve_config
+    from evomotion.run.faults import fault_at
+    from evomotion.run.runner import run_study
     from evomotion.studies import get_study
     name, out, cut = sys.argv[1], sys.argv[2], int(sys.argv[3])
-    build = runner.build_driver
-    def killing(*a, **k):
-        d = build(*a, **k)
-        step, n = d.step, {"k": 0}
-        def cut_step(*sa, **sk):
-            n["k"] += 1
-            if n["k"] == cut + 1:
-                os.kill(os.getpid(), signal.SIGKILL)
-            return step(*sa, **sk)
-        d.step = cut_step
-        return d
-    runner.build_driver = killing
     s = get_study(name)
-    runner.run_study(s, resolve_config(s, None, sys.argv[4:]), out, quiet=True)
+    with fault_at(cut, "sigkill"):
+        run_study(s, resolve_config(s, None, sys.argv[4:]), out, quiet=True)
 """)
 
 
@@ -166,7 +127,7 @@ def test_batch_evaluation_is_deterministic_and_composable(name):
     """Where there is batch evaluation, an individual's result depends on it alone (what
     makes every evaluator bit-identical)."""
     s = get_study(name)
-    cfg = resolve_config(s, None, SMOKE[name])
+    cfg = resolve_config(s, None, list(s.smoke))
     problem = s.make_problem(cfg.problem)
     if not runner.build_driver(s, cfg, problem).uses_evaluator:
         assert cfg.run.evaluator == "serial"

@@ -30,6 +30,8 @@ class Study:
       interrupted (plots, videos); it may return an exit code (e.g. 3: not solved).
     - ``best_record(ctx) -> dict``: the study's own ``best.json`` keys (after the envelope).
     - ``cli``: a ``typer.Typer`` with the study's own subcommands (``evomotion <name> ...``).
+    - ``smoke``: ``--set`` items that make a run of a few seconds (the conformance tests and
+      ``benchmarks/run_loop_table.py`` use them; a user can too, to check an installation).
     """
 
     name: str
@@ -45,3 +47,4 @@ class Study:
     finalize: Callable[[RunContext], int | None] | None = None
     best_record: Callable[[RunContext], dict[str, Any]] | None = None
     cli: Any = None
+    smoke: tuple[str, ...] = ()

@@ -67,4 +67,11 @@ STUDY = Study(
     finalize=finalize,
     best_record=best_record,
     cli=cli,
+    smoke=(
+        "algorithm.pop_size=8",
+        "algorithm.arm_generations=2",
+        "algorithm.finger_generations=2",
+        "problem.pictures=false",
+        "problem.scenario='three_fingers'",
+    ),
 )

@@ -68,4 +68,8 @@ STUDY = Study(
     preset_notes={"seed": "the seed's improved CMA-ES: Tent-map jumps and Levy flights on"},
     core_algorithms=("cmaes", "ga"),
     cli=cli,
+    smoke=(
+        "algorithm.pop_size=4",
+        "run.max_evaluations=0",
+    ),
 )

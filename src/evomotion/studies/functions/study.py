@@ -17,4 +17,8 @@ STUDY = Study(
                       "replacement": "plus"},
         "run": {"generations": 200},
     },
+    smoke=(
+        "problem.dim=4",
+        "algorithm.pop_size=10",
+    ),
 )

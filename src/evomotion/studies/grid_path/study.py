@@ -156,4 +156,7 @@ STUDY = Study(
     finalize=finalize,
     best_record=best_record,
     cli=cli,
+    smoke=(
+        "algorithm.pop_size=16",
+    ),
 )

@@ -58,4 +58,10 @@ STUDY = Study(
     on_checkpoint=on_checkpoint,
     finalize=finalize,
     cli=cli,
+    smoke=(
+        "algorithm.pop_size=6",
+        "problem.motion_s=0.4",
+        "problem.hold_s=0.2",
+        "problem.intervals=4",
+    ),
 )

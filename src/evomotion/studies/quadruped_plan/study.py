@@ -141,4 +141,11 @@ STUDY = Study(
     finalize=finalize,
     best_record=best_record,
     cli=cli,
+    smoke=(
+        "algorithm.batch_expansions=40",
+        "problem.goal_x=0.0",
+        "problem.goal_y=-7.0",
+        "problem.start_phi=0.0",
+        "problem.gif_max_frames=4",
+    ),
 )
