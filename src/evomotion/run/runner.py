@@ -13,6 +13,7 @@ experiments of the studies use that for their many short runs.
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -101,6 +102,9 @@ def run_study(study: Any, config: Config, out_dir: Path | str | None = None,
 def _run(study: Any, config: Config, out_dir: Path | None, quiet: bool, resume: bool,
          problem: Any, evaluator: Any, stale_owner: str | None = None) -> RunResult:
     rc = config.run
+    seeded = getattr(config.problem, "with_run_seed", None)
+    if seeded is not None:  # problem randomness drawn from the run seed (e.g. perturbed worlds)
+        config = dataclasses.replace(config, problem=seeded(rc.seed))
     problem = problem if problem is not None else study.make_problem(config.problem)
     check_memory(study, config, problem)  # before any population array is allocated
     driver = build_driver(study, config, problem)

@@ -113,3 +113,15 @@ def test_perturbed_worlds_are_deterministic_and_aggregate():
     q = HumanoidStepProblem(HumanoidStepConfig(**{**cfg.__dict__, "world_aggregate": "quantile",
                                                   "world_quantile": 0.0}))
     assert np.all(q.evaluate(g).fitness <= e1.fitness + 1e-12)  # the minimum <= the mean
+
+
+def test_worlds_come_from_the_run_seed_unless_given():
+    from evomotion.run.config import resolve_config
+    from evomotion.studies import get_study
+
+    s = get_study("humanoid-step")
+    cfg = resolve_config(s, None, ["run.seed=7", "problem.worlds=3"])
+    assert cfg.problem.world_seed == -1
+    assert cfg.problem.with_run_seed(7).world_seed == 7
+    fixed = resolve_config(s, None, ["run.seed=7", "problem.worlds=3", "problem.world_seed=2"])
+    assert fixed.problem.with_run_seed(7).world_seed == 2

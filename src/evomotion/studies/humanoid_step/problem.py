@@ -108,7 +108,7 @@ class HumanoidStepConfig:
     step_min_m: float = 0.05
     bounds_scale: float = 1.0  # 1 = seed Table 1 (intersected with the model ranges)
     worlds: int = 1  # K worlds per candidate: the nominal one and K - 1 perturbed (1: nominal)
-    world_seed: int = 0  # the K worlds are drawn from numpy.random.default_rng(world_seed)
+    world_seed: int = -1  # the K worlds come from default_rng(world_seed); -1: the run's seed
     world_aggregate: str = "mean"  # mean | quantile: how the K fitness values are combined
     world_quantile: float = 0.25  # with "quantile": this quantile of the K values
     threads: int = 0  # mujoco.rollout threads; 0 = all cores
@@ -122,6 +122,11 @@ class HumanoidStepConfig:
     def validate(self) -> None:
         """One-line :class:`InputError` for impossible settings (see :func:`validate`)."""
         validate(self)
+
+    def with_run_seed(self, seed: int) -> HumanoidStepConfig:
+        """The config a run with ``run.seed = seed`` uses: ``world_seed`` -1 becomes ``seed``, so
+        the K perturbed worlds are drawn from the run seed unless a seed of their own is set."""
+        return dataclasses.replace(self, world_seed=seed) if self.world_seed < 0 else self
 
     def genome_dim(self) -> int:
         """The genome's length (for the memory check before the problem is built)."""
@@ -158,7 +163,7 @@ def validate(cfg: HumanoidStepConfig) -> None:
     check_choice("problem.fitness", cfg.fitness, FITNESSES)
     check_choice("problem.world_aggregate", cfg.world_aggregate, ("mean", "quantile"))
     check_number("problem.worlds", cfg.worlds, lo=1, hi=1024, integer=True)
-    check_number("problem.world_seed", cfg.world_seed, lo=0, integer=True)
+    check_number("problem.world_seed", cfg.world_seed, lo=-1, integer=True)
     check_number("problem.world_quantile", cfg.world_quantile, lo=0.0, hi=1.0)
     for key in ("heading_weight", "lateral_weight", "flight_weight", "heading_tolerance_rad",
                 "lateral_tolerance_m", "excess_weight", "step_bonus_m"):
@@ -226,7 +231,7 @@ class HumanoidStepProblem:
 
             self.worlds = [World(self.model)] + draw_worlds(
                 self.model, Perturbation(), cfg.worlds - 1,
-                np.random.default_rng(cfg.world_seed), cfg.motion_s)
+                np.random.default_rng(max(cfg.world_seed, 0)), cfg.motion_s)
 
     def controls(self, genomes: np.ndarray, t: np.ndarray | None = None) -> np.ndarray:
         """Actuator targets ``[pop, nstep, 22]`` for a batch of genomes."""
