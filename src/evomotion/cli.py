@@ -61,7 +61,7 @@ def run_cmd(
         if val is not None:
             overrides.append(f"run.{key}={val!r}" if isinstance(val, str) else f"run.{key}={val}")
     cfg = resolve_config(s, config, overrides, preset=preset)
-    out_dir = make_run_dir(s.name, out, overwrite=overwrite)
+    out_dir = make_run_dir(s.name, out)
     _finish(run_study(s, cfg, out_dir, quiet=quiet, overwrite=overwrite), quiet)
 
 

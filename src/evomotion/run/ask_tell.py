@@ -47,10 +47,6 @@ class AskTellDriver(Driver):
         self.problem = problem
         self.opt = optimizer
         self.sense = problem.sense
-        self._maximise = problem.sense == "max"
-        done = getattr(optimizer, "generation_done", None)
-        self._done = done if done is not None else getattr(optimizer, "end_of_generation",
-                                                           lambda _s: True)
 
     def init(self, rng: np.random.Generator) -> Any:
         make_pop = getattr(self.problem, "initial_population", None)
@@ -70,7 +66,7 @@ class AskTellDriver(Driver):
         while True:
             genomes, state = self.opt.ask(state, rng)
             ev = evaluate(genomes)  # sanitized: non-finite fitness is already the worst
-            cost = -ev.fitness if self._maximise else to_cost(ev.fitness, "min")
+            cost = to_cost(ev.fitness, self.sense)
             _, prev_best = self.opt.best(state)
             state = self.opt.tell(state, genomes, cost, rng)
             n += len(genomes)
@@ -80,7 +76,7 @@ class AskTellDriver(Driver):
                 errors.extend(ev.errors)
             if cost.min() < prev_best:
                 best_metrics = scalar_metrics(ev.metrics, int(np.argmin(cost)))
-            if self._done(state):
+            if self.opt.generation_done(state):
                 break
         pop, pcost = self.opt.population(state)
         return state, StepReport(n, np.asarray(pcost, float), pop, nfail, errors, best_metrics)

@@ -69,12 +69,14 @@ def candidates(run_dir: Path) -> list[str]:
     return names
 
 
-def load_checkpoint(run_dir: Path, accept: Callable[[dict, dict], Any] | None = None
+def load_checkpoint(run_dir: Path, accept: Callable[[dict, dict], Any] | None = None,
+                    names: list[str] | None = None
                     ) -> tuple[dict[str, np.ndarray], dict[str, Any], Any, list[str]]:
-    """The newest valid checkpoint: ``(arrays, meta, accepted, notes)``; ``accepted`` is what
-    ``accept(arrays, meta)`` returned, ``notes`` one line per damaged checkpoint skipped."""
+    """The newest valid checkpoint among ``names`` (default: :func:`candidates`):
+    ``(arrays, meta, accepted, notes)``; ``accepted`` is what ``accept(arrays, meta)``
+    returned, ``notes`` one line per damaged checkpoint skipped."""
     run_dir = Path(run_dir)
-    names = candidates(run_dir)
+    names = candidates(run_dir) if names is None else names
     if not names:
         raise InputError(f"{run_dir}: no checkpoint to resume from (checkpoints/ is empty)")
     notes = []

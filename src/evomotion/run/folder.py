@@ -21,13 +21,10 @@ def holds_run(path: Path) -> bool:
     return any((path / m).exists() for m in RUN_MARKERS)
 
 
-def make_run_dir(study: str, out: Path | str | None = None, root: Path | str = "runs",
-                 overwrite: bool = False) -> Path:
-    """``out`` if given (created), else ``runs/<study>-<YYYYmmdd-HHMMSS>[-N]``.
-
-    A folder that already holds a run is refused unless ``overwrite`` (the run loop empties it
-    once it holds the folder's lock); every problem creating it is one :class:`InputError`
-    line."""
+def make_run_dir(study: str, out: Path | str | None = None, root: Path | str = "runs") -> Path:
+    """``out`` if given (created), else ``runs/<study>-<YYYYmmdd-HHMMSS>[-N]``; every problem
+    creating it is one :class:`InputError` line. (Whether the folder already holds a run is
+    the run loop's check, under the folder's lock: :func:`evomotion.run.runner.run_study`.)"""
     if out is not None:
         path = Path(out)
     else:
@@ -39,9 +36,6 @@ def make_run_dir(study: str, out: Path | str | None = None, root: Path | str = "
             path = Path(root) / f"{study}-{stamp}-{n}"
     if path.exists() and not path.is_dir():
         raise InputError(f"--out {path}: expected a folder, found a file")
-    if path.is_dir() and holds_run(path) and not overwrite:
-        raise InputError(f"--out {path}: the folder already holds a run; continue it with "
-                         f"'evomotion resume {path}' or start it again with --overwrite")
     try:
         path.mkdir(parents=True, exist_ok=True)
         probe = path / f".write-test-{os.getpid()}"

@@ -68,7 +68,7 @@ def restore(run_dir: Path, driver: Driver, config: Config) -> tuple[Any, Any, di
         return state, rng
 
     names = candidates(run_dir)
-    _, meta, (state, rng), notes = load_checkpoint(run_dir, accept)
+    _, meta, (state, rng), notes = load_checkpoint(run_dir, accept, names)
     lines = [f"warning: {line}; skipped" for line in notes]
     if notes:
         used = f"gen-{meta['generation']:06d}.json"

@@ -126,13 +126,13 @@ def _run(study: Any, config: Config, out_dir: Path | None, quiet: bool, resume: 
     if resume:
         state, rng, c, notes = restore(out_dir, driver, config)
         done = c.get("stop_reason")
-        if done not in (None, "interrupted") and limit_reached(
-                config, c, driver.best(state)[1], sgn) and driver.stop(state) is None:
-            raise InputError(f"{out_dir}: the run already finished ({done}); raise its limit "
-                             "to continue, e.g. --set run.generations=N")
-        if done not in (None, "interrupted") and driver.stop(state) is not None:
-            raise InputError(f"{out_dir}: the run already finished ({done}); it cannot be "
-                             "continued")
+        if done not in (None, "interrupted"):
+            if driver.stop(state) is not None:
+                raise InputError(f"{out_dir}: the run already finished ({done}); it cannot be "
+                                 "continued")
+            if limit_reached(config, c, driver.best(state)[1], sgn):
+                raise InputError(f"{out_dir}: the run already finished ({done}); raise its "
+                                 "limit to continue, e.g. --set run.generations=N")
         c["stop_reason"] = None
         stats.truncate(c["stats_offset"])
         log.truncate(c["log_offset"])
@@ -152,14 +152,11 @@ def _run(study: Any, config: Config, out_dir: Path | None, quiet: bool, resume: 
     if out_dir is not None and cleaned:
         log(f"note: removed {cleaned} temporary file(s) left by an interrupted write")
 
-    own_evaluator = evaluator is None
-    if evaluator is not None:
-        pass
-    elif rc.evaluator == "serial":
-        evaluator = SerialEvaluator(lambda _cfg: problem, None)
-    else:
-        evaluator = make_evaluator(rc.evaluator, study.make_problem, config.problem,
-                                   rc.workers, rc.chunks_per_worker, rc.address)
+    own_evaluator = evaluator is None  # a given evaluator is the caller's to close
+    if own_evaluator:
+        evaluator = SerialEvaluator(lambda _cfg: problem, None) if rc.evaluator == "serial" \
+            else make_evaluator(rc.evaluator, study.make_problem, config.problem, rc.workers,
+                                rc.chunks_per_worker, rc.address)
 
     def snapshot() -> tuple[dict, dict]:
         a, m = driver.state_arrays(state)
@@ -245,7 +242,7 @@ def _run(study: Any, config: Config, out_dir: Path | None, quiet: bool, resume: 
         f"evaluations")
     ctx = context(reason)
     code = EXIT_INTERRUPTED if reason == "interrupted" else 0
-    if code == 0 and driver.uses_evaluator and not np.isfinite(driver.best(state)[1]):
+    if code == 0 and driver.uses_evaluator and not np.isfinite(ctx.best_fitness):
         log("no individual got a finite fitness (every evaluation failed or was NaN/inf); "
             "best.json holds null")
         code = EXIT_NO_FINITE
