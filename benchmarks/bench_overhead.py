@@ -67,6 +67,7 @@ def measure() -> dict:
     from evomotion.studies import get_study
 
     s = get_study("functions")
+    import evomotion.run.plots  # noqa: F401 - matplotlib's import is not the loop's time
     with tempfile.TemporaryDirectory() as tmp:
         cfg = resolve_config(s, None, ["run.checkpoint_every=10"])
         t0 = time.perf_counter()

@@ -46,7 +46,7 @@ class CrashProblem:
 def assert_same_evaluation(a: Evaluation, b: Evaluation) -> None:
     """Bit-identical fitness, failure flags, error messages and metrics."""
     assert a.fitness.tobytes() == b.fitness.tobytes()
-    np.testing.assert_array_equal(a.failed, b.failed)
+    np.testing.assert_array_equal(a.failed_mask(), b.failed_mask())
     assert a.errors == b.errors
     assert sorted(a.metrics) == sorted(b.metrics)
     for k in a.metrics:

@@ -151,13 +151,13 @@ def roulette_rows(cost: np.ndarray, rng: np.random.Generator | None,
     """
     if u is None:
         u = rng.random((cost.shape[0], 1))
-    finite = np.isfinite(cost)
-    if finite.all():  # the same weights without the inf handling
-        hi, lo = cost.max(1, keepdims=True), cost.min(1, keepdims=True)
+    hi, lo = cost.max(1, keepdims=True), cost.min(1, keepdims=True)
+    if np.isfinite(hi).all() and np.isfinite(lo).all():  # finite costs: no inf handling
         spread = hi - lo
         w = hi - cost + np.where(spread > 0, 1e-3 * spread, 1.0)
         cdf = np.cumsum(w, axis=1)
         return np.minimum((cdf <= u * cdf[:, -1:]).sum(1), cost.shape[1] - 1)
+    finite = np.isfinite(cost)
     any_f = finite.any(1, keepdims=True)
     c = np.where(finite, cost, 0.0)
     hi = np.where(any_f, np.where(finite, cost, -np.inf).max(1, keepdims=True), 0.0)
@@ -196,6 +196,23 @@ class CellularGA(Optimizer):
         parities = 2 if cfg.neighbourhood == "Margolus" else 1
         self._tables = tuple(neighbour_table(cfg.neighbourhood, self.rows, self.cols, p)
                              for p in range(parities))
+        # the schedules of ``synchronous`` and ``line_sweep`` are pure functions of the
+        # config too: (sequence, waves, cells in wave order, wave starts, their neighbours)
+        # per parity, built once
+        self._plans: tuple[tuple[np.ndarray, ...], ...] = ()
+        if cfg.update in ("synchronous", "line_sweep"):
+            n = cfg.pop_size
+            seq = np.arange(n)
+            self._plans = tuple(
+                self._plan(seq, np.zeros(n, dtype=np.int64) if cfg.update == "synchronous"
+                           else update_waves(seq, t), t) for t in self._tables)
+
+    @staticmethod
+    def _plan(seq: np.ndarray, waves: np.ndarray, table: np.ndarray) -> tuple[np.ndarray, ...]:
+        order = np.argsort(waves, kind="stable")  # sequence order within a wave
+        starts = np.r_[0, np.cumsum(np.bincount(waves))]
+        cells = seq[order]
+        return seq, waves, cells, starts, table[cells, 1:]
 
     def table(self, sweep: int) -> np.ndarray:
         """Neighbour table of sweep number ``sweep`` (0: the first sweep after the initial
@@ -224,23 +241,21 @@ class CellularGA(Optimizer):
         """The state with this sweep's update sequence, its waves and its uniforms."""
         n, pol = self.cfg.pop_size, self.cfg.update
         sweep = state.generation - 1
-        if pol == "synchronous":
-            seq, waves = np.arange(n), np.zeros(n, dtype=np.int64)
-        elif pol in ("line_sweep", "fixed_random_sweep"):
-            seq = np.arange(n) if pol == "line_sweep" else state.sweep_order
-            waves = state.fixed_waves[sweep % len(state.fixed_waves)]
+        if self._plans:  # synchronous, line_sweep
+            seq, waves, cells, starts, nbr = self._plans[sweep % len(self._plans)]
         else:
-            seq = rng.permutation(n) if pol == "new_random_sweep" else rng.integers(0, n, n)
-            waves = update_waves(seq, self.table(sweep))
-        order = np.argsort(waves, kind="stable")  # sequence order within a wave
-        starts = np.r_[0, np.cumsum(np.bincount(waves))]
+            if pol == "fixed_random_sweep":
+                seq, waves = state.sweep_order, state.fixed_waves[sweep % len(state.fixed_waves)]
+            else:
+                seq = rng.permutation(n) if pol == "new_random_sweep" else rng.integers(0, n, n)
+                waves = update_waves(seq, self.table(sweep))
+            seq, waves, cells, starts, nbr = self._plan(np.asarray(seq), waves,
+                                                        self.table(sweep))
         draws = rng.random((5, len(seq)))
         masks = one_point_masks(draws, self.genome.dim, self.cfg.crossover_rate) \
             if self._fast_one_point and self.genome.dim >= 2 else state.masks
-        cells = seq[order]
-        return replace(state, sequence=np.asarray(seq), waves=waves, wave_cells=cells,
-                       wave_starts=starts, draws=draws, masks=masks,
-                       wave_nbr=self.table(sweep)[cells, 1:])
+        return replace(state, sequence=seq, waves=waves, wave_cells=cells, wave_starts=starts,
+                       draws=draws, masks=masks, wave_nbr=nbr)
 
     def _wave(self, state: CGAState) -> tuple[np.ndarray, slice]:
         """Cells of the current wave and their columns (slice of the sweep, wave order)."""
@@ -293,9 +308,10 @@ class CellularGA(Optimizer):
         better = (cost < old if rep == "if_better" else cost <= old if rep == "if_not_worse"
                   else np.ones(len(cells), bool))
         pop, pcost = state.pop, state.cost
-        if better.any():
+        won = cells[better]
+        if won.size:
             pop, pcost = pop.copy(), pcost.copy()
-            pop[cells[better]], pcost[cells[better]] = genomes[better], cost[better]
+            pop[won], pcost[won] = genomes[better], cost[better]
         wave = state.wave + 1
         return replace(state, pop=pop, cost=pcost,
                        wave=0 if wave >= len(state.wave_starts) - 1 else wave)

@@ -82,17 +82,18 @@ class Optimizer(ABC):
             raise ValueError(f"{self.name}: tell got genomes of shape {genomes.shape}")
         if cost.shape != (genomes.shape[0],):
             raise ValueError(f"{self.name}: {cost.shape} costs for {genomes.shape[0]} genomes")
-        if not np.isfinite(cost).all():
+        if not np.isfinite(cost.sum()):  # one reduction; exact check and fix below
             cost = np.where(np.isfinite(cost), cost, np.inf)
         new = self._tell(state, genomes, cost, rng)
+        changes: dict[str, Any] = {}
         if cost.size:
-            i = int(np.argmin(cost))  # the first of equal minima
+            i = int(cost.argmin())  # the first of equal minima
             if cost[i] < new.best_cost:
-                new = replace(new, best_x=np.array(genomes[i], dtype=float),
-                              best_cost=float(cost[i]))
+                changes.update(best_x=np.array(genomes[i], dtype=float),
+                               best_cost=float(cost[i]))
         if self.generation_done(new):
-            new = replace(new, generation=new.generation + 1)
-        return new
+            changes["generation"] = new.generation + 1
+        return replace(new, **changes) if changes else new
 
     def best(self, state: Any) -> tuple[np.ndarray, float]:
         """Best genome seen so far and its cost (``inf`` before any tell)."""

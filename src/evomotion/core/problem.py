@@ -68,6 +68,12 @@ class Evaluation:
     def __len__(self) -> int:
         return int(self.fitness.shape[0])
 
+    def failed_mask(self) -> np.ndarray:
+        """``bool[pop]``: which individuals failed (``failed`` of ``None`` means none)."""
+        if self.failed is None:
+            return np.zeros(len(self), dtype=bool)
+        return np.asarray(self.failed, dtype=bool)
+
     @staticmethod
     def concat(parts: list[Evaluation]) -> Evaluation:
         fit = np.concatenate([p.fitness for p in parts])
@@ -99,9 +105,8 @@ def to_cost(fitness: np.ndarray, sense: Sense) -> np.ndarray:
     """Fitness in the problem's sense -> cost to minimise (non-finite -> +inf)."""
     f = np.asarray(fitness, dtype=float)
     cost = -f if sense == "max" else f.copy()
-    bad = ~np.isfinite(cost)
-    if bad.any():
-        cost[bad] = np.inf
+    if not np.isfinite(cost).all():
+        cost[~np.isfinite(cost)] = np.inf
     return cost
 
 
@@ -110,13 +115,17 @@ def sanitize(ev: Evaluation, sense: Sense, n: int) -> Evaluation:
     fit = np.asarray(ev.fitness, dtype=float).reshape(-1)
     if fit.shape[0] != n:
         raise ValueError(f"problem returned {fit.shape[0]} fitness values for {n} genomes")
+    metrics = ev.metrics
+    if not all(isinstance(v, np.ndarray) and v.shape[:1] == (n,) for v in metrics.values()):
+        metrics = {k: v if isinstance(v, np.ndarray) and v.shape[:1] == (n,)
+                   else np.asarray(v).reshape(n, *np.shape(v)[1:]) for k, v in metrics.items()}
+    if ev.failed is None and np.isfinite(fit).all():  # the common clean batch
+        return Evaluation(fit, metrics, None, ev.errors)  # failed None: none failed
     bad = ~np.isfinite(fit)
     if ev.failed is not None:
         bad |= np.asarray(ev.failed, dtype=bool)
     if bad.any():
         fit = np.where(bad, worst_fitness(sense), fit)
-    metrics = {k: v if isinstance(v, np.ndarray) and v.shape[:1] == (n,)
-               else np.asarray(v).reshape(n, *np.shape(v)[1:]) for k, v in ev.metrics.items()}
     return Evaluation(fit, metrics, bad, list(ev.errors))
 
 

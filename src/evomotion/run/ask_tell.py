@@ -15,7 +15,7 @@ import numpy as np
 
 from evomotion.core.algorithms import ALGORITHMS
 from evomotion.core.optimizer import Optimizer
-from evomotion.core.problem import Problem, to_cost
+from evomotion.core.problem import Problem
 from evomotion.core.registry import lookup
 from evomotion.run.driver import Driver, Evaluate, StepReport
 
@@ -63,20 +63,22 @@ class AskTellDriver(Driver):
         n = nfail = 0
         errors: list[str] = []
         best_metrics = None
-        while True:
-            genomes, state = self.opt.ask(state, rng)
+        opt, sense = self.opt, self.sense
+        while True:  # one pass per batch (a cellular-GA sweep has many): keep it lean
+            genomes, state = opt.ask(state, rng)
             ev = evaluate(genomes)  # sanitized: non-finite fitness is already the worst
-            cost = to_cost(ev.fitness, self.sense)
-            _, prev_best = self.opt.best(state)
-            state = self.opt.tell(state, genomes, cost, rng)
+            # sanitized, so only the sign remains of to_cost (tell maps any non-finite to inf)
+            cost = ev.fitness if sense == "min" else -ev.fitness
+            prev_best = state.best_cost
+            state = opt.tell(state, genomes, cost, rng)
             n += len(genomes)
             if ev.failed is not None and ev.failed.any():
                 nfail += int(ev.failed.sum())
             if ev.errors:
                 errors.extend(ev.errors)
-            if cost.min() < prev_best:
-                best_metrics = scalar_metrics(ev.metrics, int(np.argmin(cost)))
-            if self.opt.generation_done(state):
+            if state.best_cost < prev_best:
+                best_metrics = scalar_metrics(ev.metrics, int(cost.argmin()))
+            if opt.generation_done(state):
                 break
         pop, pcost = self.opt.population(state)
         return state, StepReport(n, np.asarray(pcost, float), pop, nfail, errors, best_metrics)

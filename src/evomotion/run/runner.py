@@ -39,7 +39,6 @@ from evomotion.run.folder import (
 )
 from evomotion.run.limits import check_memory
 from evomotion.run.lock import RunLock
-from evomotion.run.plots import plot_fitness
 from evomotion.run.resume import config_record, restore
 from evomotion.run.runlog import RunLog, sigterm_as_interrupt
 from evomotion.run.stats import COLUMNS, MemoryStats, StatsWriter, diversity, population_stats
@@ -249,6 +248,8 @@ def _run(study: Any, config: Config, out_dir: Path | None, quiet: bool, resume: 
     if save:
         _write_best(study, ctx, sense, rc.seed, log)
         if c["generation"] >= 0:
+            from evomotion.run.plots import plot_fitness  # matplotlib: only when plotting
+
             plot_fitness(out_dir / "stats.csv", out_dir / "plots" / "fitness", title=study.name)
         if code != EXIT_NO_FINITE:
             _hook(study.on_checkpoint, ctx, log)

@@ -28,8 +28,8 @@ def clip_to_bounds(x: np.ndarray, lower: np.ndarray, upper: np.ndarray,
     """Clip every gene into its box; NaN genes become the lower bound (``out`` may be ``x``)."""
     y = np.maximum(x, lower, out=out)  # maximum propagates NaN ...
     np.minimum(y, upper, out=y)
-    nan = np.isnan(y)
-    if nan.any():  # ... so replace NaN genes explicitly
+    if np.isnan(y.sum()):  # ... so replace NaN genes explicitly (one reduction when none)
+        nan = np.isnan(y)
         y[nan] = np.broadcast_to(lower, y.shape)[nan]
     return y
 

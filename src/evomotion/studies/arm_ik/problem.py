@@ -82,6 +82,9 @@ class Assessment:
         return Assessment(**{k: np.concatenate([v, getattr(b, k)]) for k, v in vars(a).items()})
 
 
+_ASSESSMENT_FIELDS = tuple(f.name for f in dataclasses.fields(Assessment))
+
+
 class ArmIKProblem:
     """Batch evaluation of limbs; ``evaluate`` gives the penalised whole-limb fitness."""
 
@@ -156,7 +159,7 @@ class ArmIKProblem:
     def assessment_of(self, ev: Evaluation) -> Assessment:
         """The :class:`Assessment` carried by ``ev`` (from any evaluator); an individual
         whose evaluation failed counts as infinitely far with one intersection per bone."""
-        fields = [f.name for f in dataclasses.fields(Assessment)]
+        fields = _ASSESSMENT_FIELDS
         if all(f"assessment.{k}" in ev.metrics for k in fields):
             a = Assessment(**{k: np.asarray(ev.metrics[f"assessment.{k}"]) for k in fields})
         else:

@@ -14,13 +14,13 @@ state is explicit, so a run stops, checkpoints and resumes like any other.
 
 from __future__ import annotations
 
-import dataclasses
 import time
 from dataclasses import dataclass
 
 import numpy as np
 
 from evomotion.core.checks import MAX_POP_SIZE, check_fields, check_number
+from evomotion.core.state import replaced
 from evomotion.errors import InputError
 from evomotion.run.driver import Driver, Evaluate, StepReport
 from evomotion.studies.arm_ik.evolution import crossover, mutate, parents, rank_order, survivors
@@ -160,7 +160,7 @@ class ScheduleDriver(Driver):
         t0 = time.perf_counter()
         if self._cpu0 is None:  # process CPU time is read twice per run (it is slow in VMs)
             self._cpu0 = time.process_time()
-        s = dataclasses.replace(state)
+        s = replaced(state)  # a shallow copy; the generation replaces the arrays it changes
         n_eval, failed, errors = 0, 0, []
 
         def assess(x: np.ndarray) -> Assessment:
@@ -253,9 +253,8 @@ class ScheduleDriver(Driver):
         extras = {
             "phase": mode, "best_objective": float(obj[b]), "best_intersections": int(hits[b]),
             "best_feasible_objective": float(obj[feas].min()) if feas.any() else float("nan"),
-            "mean_objective": float(obj.mean()), "var_objective": float(obj.var()),
-            "mean_intersections": float(hits.mean()), "var_intersections": float(hits.var()),
-            "originality": np.unique(s.pop, axis=0).shape[0] / s.pop.shape[0],
+            **_mean_var("objective", obj), **_mean_var("intersections", hits),
+            "originality": distinct_rows(s.pop) / s.pop.shape[0],
             "feasible_fraction": float(feas.mean()),
             "best_limb_distance": float(b_a.distance[0]),
             "best_limb_intersections": int(b_a.intersections[0]),
@@ -270,6 +269,24 @@ class ScheduleDriver(Driver):
                                     else "")] if changed and mode != "init" else []
         return StepReport(n, self.problem.fitness(A), s.pop, failed, errors, metrics, extras,
                           lines)
+
+
+def _mean_var(name: str, x: np.ndarray) -> dict[str, float]:
+    """``mean_<name>`` and ``var_<name>``: the values of ``x.mean()`` and ``x.var()``
+    without their per-call overhead (the report runs every generation)."""
+    x = np.asarray(x, dtype=float)
+    m = x.sum() / x.size
+    d = x - m
+    return {f"mean_{name}": float(m), f"var_{name}": float((d * d).sum() / x.size)}
+
+
+def distinct_rows(x: np.ndarray) -> int:
+    """Number of distinct rows of ``x[n, d]`` (``np.unique(x, axis=0)``'s row count, by one
+    lexicographic sort; ``-0.0`` and ``0.0`` count as equal)."""
+    if len(x) < 2:
+        return len(x)
+    s = x[np.lexsort(x.T[::-1])]
+    return 1 + int((s[1:] != s[:-1]).any(1).sum())
 
 
 def make_driver(problem: ArmIKProblem, config) -> ScheduleDriver:
