@@ -5,7 +5,8 @@ which MuJoCo reads once, when it is first imported. Because any earlier ``import
 the process fixes the backend (and an OSMesa teardown can crash), frames are rendered in a
 fresh child process (``python -m evomotion.sim.render``) that receives the trajectory on
 stdin. Shadows are off (about 6x faster on llvmpipe); a camera follows the torso from the
-robot's right side. Where no backend works, :class:`RenderUnavailableError` says so and callers
+robot's right side, and visual-only floor marks every 0.5 m along +x (a post every metre)
+show the progress. Where no backend works, :class:`RenderUnavailableError` says so and callers
 skip only the video.
 """
 
@@ -45,10 +46,37 @@ def render_video(qpos: np.ndarray, dt: float, out_path: str | Path, fps: int = 2
     return out_path
 
 
+MARK_SPACING_M = 0.5  # floor marks across the +x direction: every 0.5 m, a post every 1 m
+MARK_RANGE_M = (-2.0, 8.0)
+
+
+def _with_distance_marks(model_path: str):
+    """The model with visual-only floor marks (no collisions, no mass): a line across the
+    floor every 0.5 m along x, darker and with a post every metre, so a video shows progress
+    while the camera follows the robot."""
+    import mujoco
+
+    spec = mujoco.MjSpec.from_file(model_path)
+    world = spec.worldbody
+    lo, hi = MARK_RANGE_M
+    for i, x in enumerate(np.arange(lo, hi + 1e-9, MARK_SPACING_M)):
+        metre = abs(x - round(x)) < 1e-9
+        rgba = [0.15, 0.25, 0.55, 1.0] if metre else [0.45, 0.5, 0.6, 1.0]
+        world.add_geom(name=f"mark_{i}", type=mujoco.mjtGeom.mjGEOM_BOX,
+                       size=[0.006 if metre else 0.004, 1.0, 0.0005],
+                       pos=[float(x), 0.0, 0.0005], rgba=rgba, contype=0, conaffinity=0,
+                       mass=0.0, density=0.0)
+        if metre:
+            world.add_geom(name=f"post_{i}", type=mujoco.mjtGeom.mjGEOM_CYLINDER,
+                           size=[0.01, 0.06, 0.0], pos=[float(x), 0.45, 0.06], rgba=rgba,
+                           contype=0, conaffinity=0, mass=0.0, density=0.0)
+    return spec.compile()
+
+
 def _render_frames(model_path: str, frames_q: np.ndarray, width: int, height: int):
     import mujoco
 
-    model = mujoco.MjModel.from_xml_path(model_path)
+    model = _with_distance_marks(model_path)
     data = mujoco.MjData(model)
     try:
         renderer = mujoco.Renderer(model, height=height, width=width)

@@ -196,3 +196,40 @@ def test_bad_perturbation_ranges_are_errors(base):
         draw_worlds(base, Perturbation(latency_steps=(0, 2.5)), 1, np.random.default_rng(), 1.0)
     with pytest.raises(InputError, match="hold"):
         replay(HANDWAVE, hold_s=-1.0)
+
+
+def test_latin_worlds_put_one_world_in_each_stratum(base):
+    k = 8
+    ws = draw_worlds(base, Perturbation(), k, np.random.default_rng(3), 4.0, design="latin")
+    f = np.array([w.params["friction_scale"] for w in ws])
+    strata = np.floor((f - 0.5) / (1.4 - 0.5) * k).astype(int)
+    assert sorted(strata.tolist()) == list(range(k))
+    push = np.array([w.push_ns[1] for w in ws])
+    assert sorted(np.floor((push + 2.5) / 5.0 * k).astype(int).tolist()) == list(range(k))
+    lat = np.array([w.latency_steps for w in ws])
+    assert lat.min() >= 0 and lat.max() <= 10
+    again = draw_worlds(base, Perturbation(), k, np.random.default_rng(3), 4.0, design="latin")
+    assert [w.params for w in again] == [w.params for w in ws]
+    with pytest.raises(InputError, match="design"):
+        draw_worlds(base, Perturbation(), k, np.random.default_rng(3), 4.0, design="sobol")
+
+
+def test_early_stop_keeps_the_standing_worlds_and_freezes_the_fallen(base, handwave):
+    _, init, ctrl = handwave
+    ctrl = ctrl[:300]
+    calm = make_world(base)
+    shove = make_world(base, push_ns=(0.0, 12.0, 0.0), push_time_s=0.2)
+    full = simulate_worlds([calm, shove], init, ctrl, nthread=1)
+
+    def fell(states):
+        return states[:, :, nao.STATE_QPOS_OFFSET + 2] < 0.28
+
+    part = simulate_worlds([calm, shove], init, ctrl, nthread=1,
+                           stopped=lambda s: fell(s).any(axis=1), segment_steps=50)
+    np.testing.assert_allclose(part[0], full[0], atol=1e-8)
+    first = int(np.argmax(fell(full[1:])[0]))
+    stop = (first // 50 + 1) * 50  # the end of the segment in which it fell
+    assert fell(full[1:])[0].any() and stop < 300
+    np.testing.assert_allclose(part[1, :stop], full[1, :stop], atol=1e-8)
+    np.testing.assert_array_equal(part[1, stop:], np.repeat(part[1, stop - 1][None],
+                                                            300 - stop, axis=0))

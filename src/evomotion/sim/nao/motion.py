@@ -113,7 +113,8 @@ def read_motion(path: str | Path) -> Motion:
 
 
 #: The Webots motions shipped in ``motions/`` (package data).
-SHIPPED_MOTIONS: tuple[str, ...] = ("Shoot",)
+SHIPPED_MOTIONS: tuple[str, ...] = ("Shoot", "SideStepLeft", "SideStepRight", "TurnLeft40",
+                                     "TurnLeft60", "TurnRight40")
 
 
 def shipped_motion(name: str) -> Motion:

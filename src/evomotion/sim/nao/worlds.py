@@ -138,20 +138,45 @@ def make_world(base: mujoco.MjModel, *, friction_scale: float = 1.0,
                  float(push_time_s), params)
 
 
+def _latin(rng: np.random.Generator, lo: float, hi: float, k: int, cols: int = 0) -> np.ndarray:
+    """``k`` draws (``[k]``, or ``[k, cols]`` with each column its own design) of a Latin
+    hypercube on ``[lo, hi]``: one draw in each of ``k`` equal strata, in random order."""
+    shape = (k, cols) if cols else (k,)
+    strata = np.argsort(rng.random(shape), axis=0)
+    return lo + (hi - lo) * (strata + rng.random(shape)) / k
+
+
 def draw_worlds(base: mujoco.MjModel, perturbation: Perturbation, k: int,
-                rng: np.random.Generator, duration_s: float) -> list[World]:
+                rng: np.random.Generator, duration_s: float,
+                design: str = "random") -> list[World]:
     """``k`` worlds drawn from ``perturbation``'s ranges; pushes at a fraction ``push_at`` of
     ``duration_s`` (s). Deterministic in ``rng``'s state; every range is drawn (pinned ones
-    too), so pinning one range does not change the others' draws."""
+    too), so pinning one range does not change the others' draws.
+
+    ``design = "latin"`` draws every range as a Latin hypercube instead of independently:
+    each of the ``k`` equal strata of each range holds one world (the latency rounded to its
+    integers), so a few worlds still cover the extremes (training with few worlds)."""
     perturbation.validate()
     p = perturbation
-    friction = rng.uniform(*p.friction_scale, size=k)
-    mass = rng.uniform(*p.mass_scale, size=(k, base.nbody - 1))
-    com = rng.uniform(*p.com_offset_m, size=(k, 3))
-    motor = rng.uniform(*p.motor_scale, size=(k, base.nu))
-    latency = rng.integers(int(p.latency_steps[0]), int(p.latency_steps[1]) + 1, size=k)
-    push = rng.uniform(*p.push_ns, size=k)
-    when = rng.uniform(*p.push_at, size=k) * float(duration_s)
+    if design not in ("random", "latin"):
+        raise InputError(f"draw_worlds: design must be 'random' or 'latin', got {design!r}")
+    if design == "latin":
+        friction = _latin(rng, *p.friction_scale, k)
+        mass = _latin(rng, *p.mass_scale, k, base.nbody - 1)
+        com = _latin(rng, *p.com_offset_m, k, 3)
+        motor = _latin(rng, *p.motor_scale, k, base.nu)
+        lat_lo, lat_hi = (int(v) for v in p.latency_steps)
+        latency = np.minimum(np.floor(_latin(rng, lat_lo, lat_hi + 1, k)), lat_hi).astype(int)
+        push = _latin(rng, *p.push_ns, k)
+        when = _latin(rng, *p.push_at, k) * float(duration_s)
+    else:
+        friction = rng.uniform(*p.friction_scale, size=k)
+        mass = rng.uniform(*p.mass_scale, size=(k, base.nbody - 1))
+        com = rng.uniform(*p.com_offset_m, size=(k, 3))
+        motor = rng.uniform(*p.motor_scale, size=(k, base.nu))
+        latency = rng.integers(int(p.latency_steps[0]), int(p.latency_steps[1]) + 1, size=k)
+        push = rng.uniform(*p.push_ns, size=k)
+        when = rng.uniform(*p.push_at, size=k) * float(duration_s)
     return [make_world(base, friction_scale=friction[i], mass_scale=mass[i],
                        com_offset_m=com[i], motor_scale=motor[i],
                        latency_steps=int(latency[i]), push_ns=(0.0, push[i], 0.0),
@@ -167,40 +192,86 @@ def delayed_controls(controls: np.ndarray, latency_steps: np.ndarray) -> np.ndar
     return np.take_along_axis(ctrl, idx[:, :, None], axis=1)
 
 
+def _pushes(worlds: list[World], nstep: int) -> tuple[np.ndarray, np.ndarray]:
+    """(``impulse[k, 3]`` N s, ``step[k]``) of each world's push; ``step`` is ``-1`` where a
+    world has no push before the last step."""
+    dt = float(worlds[0].model.opt.timestep)
+    push = np.array([w.push_ns for w in worlds], dtype=float)
+    step = np.array([int(round(w.push_time_s / dt)) for w in worlds])
+    return push, np.where(push.any(axis=1) & (step < nstep), step, -1)
+
+
+def _segment_controls(ctrl: np.ndarray, push: np.ndarray, step: np.ndarray, rows: np.ndarray,
+                      start: int, stop: int, base: mujoco.MjModel) -> tuple[np.ndarray, int]:
+    """Controls of ``rows`` for steps ``start:stop`` and their ``control_spec``: the
+    ``xfrc_applied`` columns are added only when a push of these rows falls in the segment."""
+    spec = int(mujoco.mjtState.mjSTATE_CTRL)
+    c = ctrl[rows, start:stop]
+    hit = np.flatnonzero((step[rows] >= start) & (step[rows] < stop))
+    if hit.size:  # xfrc_applied[nbody, 6] (force, torque) after ctrl, for this segment only
+        spec |= int(mujoco.mjtState.mjSTATE_XFRC_APPLIED)
+        dt = float(base.opt.timestep)
+        xfrc = np.zeros((len(rows), stop - start, base.nbody, 6))
+        xfrc[hit, step[rows[hit]] - start, base.body(TORSO).id, :3] = push[rows[hit]] / dt
+        c = np.concatenate([c, xfrc.reshape(len(rows), stop - start, -1)], axis=2)
+    return np.ascontiguousarray(c, dtype=np.float64), spec
+
+
 def simulate_worlds(worlds: list[World], initial_state: np.ndarray, controls: np.ndarray,
-                    nthread: int = 1, sensors: bool = False
-                    ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+                    nthread: int = 1, sensors: bool = False, stopped=None,
+                    segment_steps: int = 0) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
     """Roll out every world from ``initial_state`` (``[nstate]`` or ``[k, nstate]``,
     ``STATE_SPEC``) under ``controls`` (``[nstep, nu]`` or ``[k, nstep, nu]``), delayed and
     pushed per world, in one ``mujoco.rollout`` batch with ``nthread`` threads (0: all cores).
     Returns ``states[k, nstep, nstate]`` (with ``sensors``: also ``sensordata[k, nstep, n]``).
-    A push at or after the last step is not applied."""
+    A push at or after the last step is not applied. The batch is stepped in segments that
+    end where a push starts, so the pushes travel as ``xfrc_applied`` controls of one step only.
+
+    With ``stopped(states_segment) -> bool[k]`` and ``segment_steps``, worlds for which
+    ``stopped`` is true after a segment of ``segment_steps`` are not simulated further (their
+    remaining rows repeat their last state), as :meth:`~evomotion.sim.rollout.BatchSimulator.
+    run_until` does for one model."""
     if not worlds:
         raise InputError("simulate_worlds: expected at least one world")
     k, base = len(worlds), worlds[0].model
-    dt = float(base.opt.timestep)
     ctrl = delayed_controls(controls, np.array([w.latency_steps for w in worlds]))
     nstep = ctrl.shape[1]
-    spec = int(mujoco.mjtState.mjSTATE_CTRL)
-    push = np.array([w.push_ns for w in worlds], dtype=float)
-    step = np.array([int(round(w.push_time_s / dt)) for w in worlds])
-    hit = np.flatnonzero(push.any(axis=1) & (step < nstep))
-    if hit.size:  # controls then carry xfrc_applied[nbody, 6] (force, torque) after ctrl
-        spec |= int(mujoco.mjtState.mjSTATE_XFRC_APPLIED)
-        xfrc = np.zeros((k, nstep, base.nbody, 6))
-        xfrc[hit, step[hit], base.body(TORSO).id, :3] = push[hit] / dt
-        ctrl = np.concatenate([ctrl, xfrc.reshape(k, nstep, -1)], axis=2)
-    ctrl = np.ascontiguousarray(ctrl, dtype=np.float64)
+    push, step = _pushes(worlds, nstep)
     nstate = mujoco.mj_stateSize(base, STATE_SPEC)
-    init = np.ascontiguousarray(np.broadcast_to(initial_state, (k, nstate)), dtype=np.float64)
+    init = np.array(np.broadcast_to(initial_state, (k, nstate)), dtype=np.float64)
     models = [w.model for w in worlds]
     nthread = int(nthread) if nthread and nthread > 0 else (os.cpu_count() or 1)
     nthread = max(1, min(nthread, k))
-    if nthread == 1:
-        out = mj_rollout.rollout(models, mujoco.MjData(base), init, ctrl, control_spec=spec,
-                                 nstep=nstep)
-    else:
-        datas = [mujoco.MjData(base) for _ in range(nthread)]
-        with mj_rollout.Rollout(nthread=nthread) as runner:
-            out = runner.rollout(models, datas, init, ctrl, control_spec=spec, nstep=nstep)
-    return (out[0], out[1]) if sensors else out[0]
+    seg = segment_steps if stopped is not None and segment_steps > 0 else nstep
+    bounds = sorted(set(range(0, nstep, seg)) | {int(v) for v in step if v > 0} | {nstep})
+    checks = set(range(seg, nstep, seg))  # where ``stopped`` is asked
+    states = np.empty((k, nstep, nstate))
+    sens = np.empty((k, nstep, base.nsensordata))
+    active = np.arange(k)
+    checked = 0  # states before this step were already checked
+    runner = mj_rollout.Rollout(nthread=nthread) if nthread > 1 else None
+    datas = [mujoco.MjData(base) for _ in range(nthread)]
+    try:
+        for start, stop in zip(bounds[:-1], bounds[1:], strict=True):
+            c, spec = _segment_controls(ctrl, push, step, active, start, stop, base)
+            args = ([models[i] for i in active], datas if runner else datas[0],
+                    np.ascontiguousarray(init[active]), c)
+            kw = {"control_spec": spec, "nstep": stop - start}
+            s, d = runner.rollout(*args, **kw) if runner else mj_rollout.rollout(*args, **kw)
+            states[active, start:stop], sens[active, start:stop] = s, d
+            init[active] = s[:, -1]
+            if stop not in checks:
+                continue
+            done = np.asarray(stopped(states[active, checked:stop]), dtype=bool)
+            checked = stop
+            if done.any():
+                gone = active[done]
+                states[gone, stop:] = s[done, -1][:, None]
+                sens[gone, stop:] = d[done, -1][:, None]
+                active = active[~done]
+            if active.size == 0:
+                break
+    finally:
+        if runner is not None:
+            runner.close()
+    return (states, sens) if sensors else states

@@ -307,7 +307,8 @@ class HumanoidStepProblem:
         n, k = len(genomes), len(self.worlds)
         ctrl = np.repeat(self.controls(genomes), k, axis=0)  # genome-major: i * k + world
         states, sensors = simulate_worlds(self.worlds * n, self.state0, ctrl,
-                                          self.sim.nthread, sensors=True)
+                                          self.sim.nthread, sensors=True, stopped=self._fallen,
+                                          segment_steps=self.segment_steps)
         ev = self.score(states, sensors)
         fit = ev.fitness.reshape(n, k)
         agg = fit.mean(axis=1) if self.cfg.world_aggregate == "mean" else \

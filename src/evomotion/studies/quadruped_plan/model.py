@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 TWO_PI = 2.0 * math.pi
 EPS = 1e-9  # geometric tolerance [units]
+WORKSPACE_TOL = 1e-7  # a foot this far outside its sector still counts as inside [units]
 STABILITY_TOL = 1e-9  # a margin of -1e-9 counts as 0 (symmetric stances sit on an edge)
 
 
@@ -97,7 +98,7 @@ class QuadrupedModel:
             beta += TWO_PI
         return math.hypot(rx, ry), beta
 
-    def in_workspace(self, leg: int, px: float, py: float, tol: float = 1e-7) -> bool:
+    def in_workspace(self, leg: int, px: float, py: float, tol: float = WORKSPACE_TOL) -> bool:
         hx, hy = self.hips[leg]
         ux = self.sides[leg] * (px - hx)
         ry = py - hy
@@ -181,8 +182,9 @@ def translation_limit(model: QuadrupedModel, state: tuple[float, ...], sign: flo
         if u < t:
             t = u
         # the inner circle blocks the way down only from above it (a foot on the circle's
-        # vertical tangent, ux = l_min, slides past it)
-        if ux < lmin - EPS and ry > 0:
+        # vertical tangent, ux = l_min, slides past it; so does one that would dip into it by
+        # no more than the workspace tolerance, as in_workspace accepts)
+        if ux < lmin - WORKSPACE_TOL and ry > 0:
             u = ry - sqrt(lmin * lmin - ux * ux)
             if u < t:
                 t = u

@@ -1,0 +1,109 @@
+"""Run-folder artifacts of ``humanoid-walk``.
+
+- ``best.motion``: the whole walk (start-up, the repeated cycle, stop), 22 joints, 20 ms
+  poses; ``walk_start.motion``, ``walk_cycle.motion`` (loop it) and ``walk_stop.motion``: its
+  three parts (:mod:`.walk_motion`);
+- ``best_naoqi.py`` and ``best_keyframes.json``: the exports for a real NAO, written only when
+  the walk passes the joint-range and motor-speed checks;
+- ``best_replay.json``: ``evomotion replay`` of ``best.motion`` with the run's hold;
+- ``best.mp4``: that replay on video;
+- the gait parameters by name in ``best.json`` (key ``gait``).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from evomotion.errors import InputError
+from evomotion.run.context import RunContext
+from evomotion.run.folder import atomic_write_text
+from evomotion.sim.nao.motion import format_motion
+from evomotion.studies.humanoid_walk import gait
+from evomotion.studies.humanoid_walk.walk_motion import assemble, walk_parts
+
+PART_FILES = ("walk_start.motion", "walk_cycle.motion", "walk_stop.motion")
+
+
+def _ok(genome: Any) -> bool:
+    return genome is not None and np.all(np.isfinite(genome))
+
+
+def best_record(ctx: RunContext) -> dict[str, Any]:
+    """The gait parameters by name, the period as played, and the walk's structure."""
+    if not _ok(ctx.best_genome):
+        return {}
+    parts = walk_parts(ctx.best_genome, ctx.problem.cfg.walk_s)
+    return {"gait": gait.named(ctx.best_genome),
+            "motion": {"start_s": parts.start.duration_s, "cycle_s": parts.cycle.duration_s,
+                       "cycles": parts.cycles, "stop_s": parts.stop.duration_s,
+                       "total_s": assemble(parts).duration_s}}
+
+
+def write_motions(ctx: RunContext) -> Path | None:
+    """``best.motion`` and its three parts; the path of ``best.motion``."""
+    if not _ok(ctx.best_genome):
+        return None
+    parts = walk_parts(ctx.best_genome, ctx.problem.cfg.walk_s)
+    for name, motion in zip(PART_FILES, (parts.start, parts.cycle, parts.stop), strict=True):
+        atomic_write_text(ctx.out_dir / name, format_motion(motion))
+    path = ctx.out_dir / "best.motion"
+    atomic_write_text(path, format_motion(assemble(parts)))
+    return path
+
+
+def write_exports(ctx: RunContext) -> bool:
+    """``best_naoqi.py`` and ``best_keyframes.json`` when the walk passes the real-NAO checks
+    (else the reason is logged and stale exports are removed)."""
+    from evomotion.sim.nao.export import export_motion
+
+    if not _ok(ctx.best_genome):
+        return False
+    motion = ctx.problem.motion(ctx.best_genome)
+    try:
+        export_motion(motion, naoqi=ctx.out_dir / "best_naoqi.py",
+                      json_path=ctx.out_dir / "best_keyframes.json", source="best.motion")
+    except InputError as exc:
+        for name in ("best_naoqi.py", "best_keyframes.json"):
+            (ctx.out_dir / name).unlink(missing_ok=True)
+        ctx.log(f"best_naoqi.py and best_keyframes.json not written: {exc}")
+        return False
+    ctx.log("best_naoqi.py and best_keyframes.json written (checked against a real NAO's "
+            "joint ranges and motor speeds)")
+    return True
+
+
+def on_checkpoint(ctx: RunContext) -> None:
+    write_motions(ctx)
+
+
+def finalize(ctx: RunContext) -> None:
+    """The motions, the exports, the replay summary and the video."""
+    from evomotion.sim.nao.replay import replay
+    from evomotion.sim.render import RenderUnavailableError
+
+    path = write_motions(ctx)
+    if path is None:
+        return
+    write_exports(ctx)
+    hold = ctx.problem.cfg.hold_s
+    video: Path | None = ctx.out_dir / "best.mp4"
+    try:
+        summary = replay(path, video=video, hold_s=hold)
+    except RenderUnavailableError as exc:
+        ctx.log(f"best.mp4 skipped: {exc}")
+        video = None
+        summary = replay(path, hold_s=hold)
+    duration = ctx.problem.motion(ctx.best_genome).duration_s
+    dx, dy = summary["displacement_m"]
+    summary.update(hold_s=hold, duration_s=duration, speed_mps=dx / duration,
+                   heading_deg_per_m=float(np.degrees(abs(summary["heading_change_rad"]))
+                                           / max(dx, 0.01)))
+    atomic_write_text(ctx.out_dir / "best_replay.json", json.dumps(summary, indent=2) + "\n")
+    ctx.log(f"best.motion replayed: {dx:+.3f} m forward, {dy:+.3f} m sideways in "
+            f"{duration:.2f} s ({summary['speed_mps']:.3f} m/s over the whole motion), "
+            f"{'fell' if summary['fell'] else 'stayed up'}"
+            + (f"; video {video.name}" if video else ""))

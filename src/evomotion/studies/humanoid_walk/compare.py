@@ -1,0 +1,88 @@
+"""``evomotion humanoid-walk compare``: an evolved walk beside Webots' own NAO motions.
+
+Every motion is replayed open loop on the same model and contact (``evomotion replay``):
+the walk (``best.motion`` of a run folder, or any ``.motion``) and the step and turn motions
+Webots ships for its NAO (package data, Apache-2.0; Webots' ``Forwards50.motion`` is not among
+the fixtures this project has). For each: duration, displacement, heading change, speed
+(forward displacement over the motion's duration), heading change per metre and whether it
+fell. ``--trials N`` adds the fall rate in N perturbed worlds (:mod:`evomotion.sim.nao.worlds`,
+default ranges) for each motion.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+from evomotion.errors import InputError
+from evomotion.sim.nao.motion import SHIPPED_MOTIONS, Motion, read_motion, shipped_motion
+from evomotion.sim.nao.replay import StressOptions, simulate_motion, stress_motion
+
+WEBOTS = tuple(m for m in SHIPPED_MOTIONS if m != "Shoot")
+
+
+def walk_motion_path(run: Path) -> Path:
+    """``run/best.motion`` for a run folder, ``run`` for a ``.motion`` file."""
+    path = run / "best.motion" if run.is_dir() else run
+    if not path.is_file():
+        raise InputError(f"{run}: expected a humanoid-walk run folder (with best.motion) or "
+                         "a .motion file")
+    return path
+
+
+def measure(motion: Motion, hold_s: float, trials: int = 0, seed: int = 0) -> dict:
+    """Replay summary of one motion plus speed and heading per metre (and the fall rate in
+    ``trials`` perturbed worlds)."""
+    if trials:
+        s = stress_motion(motion, StressOptions(trials=trials, seed=seed), hold_s=hold_s)
+        s = s["summary"]
+    else:
+        s = simulate_motion(motion, hold_s=hold_s)["summary"]
+    dx, dy = s["displacement_m"]
+    dur = motion.duration_s
+    row = {"duration_s": dur, "dx_m": dx, "dy_m": dy,
+           "heading_deg": math.degrees(s["heading_change_rad"]),
+           "speed_mps": dx / dur if dur > 0 else float("nan"),
+           "heading_deg_per_m": abs(math.degrees(s["heading_change_rad"])) / max(abs(dx), 0.01),
+           "fell": bool(s["fell"])}
+    if trials:
+        row["fall_rate"] = s["fall_rate"]
+    return row
+
+
+def compare(run: Path, hold_s: float = 1.0, trials: int = 0, seed: int = 0) -> dict[str, dict]:
+    """``{motion name: row}``: the walk first, then Webots' motions."""
+    path = walk_motion_path(run)
+    rows = {f"evolved walk ({path.name})": measure(read_motion(path), hold_s, trials, seed)}
+    for name in WEBOTS:
+        rows[f"Webots {name}"] = measure(shipped_motion(name), hold_s, trials, seed)
+    return rows
+
+
+def table(rows: dict[str, dict]) -> str:
+    """A Markdown table of :func:`compare`'s rows."""
+    trials = any("fall_rate" in r for r in rows.values())
+    head = "| motion | s | dx m | dy m | heading deg | m/s | deg/m | fell |" + \
+        (" fall rate |" if trials else "")
+    lines = [head, "|" + "---|" * (9 if trials else 8)]
+    for name, r in rows.items():
+        line = (f"| {name} | {r['duration_s']:.2f} | {r['dx_m']:+.3f} | {r['dy_m']:+.3f} | "
+                f"{r['heading_deg']:+.1f} | {r['speed_mps']:+.3f} | "
+                f"{r['heading_deg_per_m']:.1f} | {'yes' if r['fell'] else 'no'} |")
+        if trials:
+            line += f" {100 * r['fall_rate']:.0f}% |"
+        lines.append(line)
+    return "\n".join(lines)
+
+
+def compare_command(run: Path, hold_s: float = 1.0, json_out: bool = False,
+                    trials: int = 0, seed: int = 0) -> None:
+    """CLI body: the table (or JSON) on stdout."""
+    from evomotion.core.checks import check_number
+
+    check_number("--hold", hold_s, lo=0.0, hi=60.0)
+    check_number("--trials", trials, lo=0, hi=1000, integer=True)
+    check_number("--seed", seed, lo=0, integer=True)
+    rows = compare(run, hold_s, trials, seed)
+    print(json.dumps(rows, indent=2) if json_out else table(rows))

@@ -1,0 +1,75 @@
+"""``humanoid-walk``: a NAO walk whose gait parameters are evolved by CMA-ES (or the GA)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from evomotion.studies.base import Study
+from evomotion.studies.humanoid_walk.problem import HumanoidWalkConfig, make_problem
+
+cli = typer.Typer(help="A NAO walk: 14 gait parameters evolved by CMA-ES.",
+                  no_args_is_help=True)
+
+
+@cli.command("compare")
+def compare_cmd(run: Path = typer.Argument(..., help="a humanoid-walk run folder, or a "
+                                                     ".motion file of a walk"),
+                hold: float = typer.Option(1.0, "--hold", help="seconds held after each motion"),
+                trials: int = typer.Option(0, "--trials",
+                                           help="also the fall rate in N perturbed worlds"),
+                seed: int = typer.Option(0, "--seed", help="seed of the perturbed worlds"),
+                json_out: bool = typer.Option(False, "--json", help="JSON on stdout")) -> None:
+    """The evolved walk beside Webots' own NAO motions, replayed on the same model."""
+    from evomotion.studies.humanoid_walk.compare import compare_command
+
+    compare_command(run, hold_s=hold, json_out=json_out, trials=trials, seed=seed)
+
+
+def _finalize(ctx):
+    from evomotion.studies.humanoid_walk.artifacts import finalize
+
+    return finalize(ctx)
+
+
+def _on_checkpoint(ctx):
+    from evomotion.studies.humanoid_walk.artifacts import on_checkpoint
+
+    return on_checkpoint(ctx)
+
+
+def _best_record(ctx):
+    from evomotion.studies.humanoid_walk.artifacts import best_record
+
+    return best_record(ctx)
+
+
+STUDY = Study(
+    name="humanoid-walk",
+    description="A periodic NAO H25 walk in MuJoCo: 14 gait parameters (period, step "
+                "length and height, sway, lean, arm swing, ...) through leg IK, evolved by "
+                "CMA-ES over 10 s of walking; exported as Webots .motion and NAOqi script.",
+    problem_config=HumanoidWalkConfig,
+    make_problem=make_problem,
+    defaults={
+        "algorithm": {"name": "cmaes", "pop_size": 8, "sigma0": 0.15},
+        "run": {"generations": 100, "checkpoint_every": 10},
+        "problem": {"worlds": 8},
+    },
+    presets={"nominal": {"problem": {"worlds": 1}, "algorithm": {"pop_size": 16}}},
+    preset_notes={"nominal": "evolve in the nominal world only (K = 1, population 16): "
+                             "about 8x cheaper per generation and faster walks, which fall "
+                             "in most perturbed worlds"},
+    core_algorithms=("cmaes", "ga"),
+    on_checkpoint=_on_checkpoint,
+    finalize=_finalize,
+    best_record=_best_record,
+    cli=cli,
+    smoke=(
+        "algorithm.pop_size=4",
+        "problem.walk_s=0.5",
+        "problem.hold_s=0.2",
+        "problem.worlds=2",
+    ),
+)
