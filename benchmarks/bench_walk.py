@@ -6,12 +6,13 @@ the CMA-ES run loop's physics throughput against raw ``mujoco.rollout``.
    and K = 8 worlds (nominal + 7 perturbed, one batch), on two populations: the default gait
    jittered by 5 % of each range (most walk, like late in a run) and uniform samples of the
    box (many fall, like generation 0).
-2. The run loop: ``run_study`` (CMA-ES, population 16, K = 1) for ``--generations``
+2. The run loop: ``run_study`` (the study's CMA-ES, population 16, K = 1) for ``--generations``
    generations, no run folder; loop steps/s = physics steps simulated / wall time of the whole
    run (ask, decoding, control interpolation, rollouts, scoring, tell, statistics); raw steps/s
    = the same steps / the time inside ``mujoco.rollout``; the ratio (target >= 0.9).
 
     python benchmarks/bench_walk.py [--pop 16] [--generations 20] [--threads 0] [--repeat 2]
+        [--only evaluations|loop]
 """
 
 from __future__ import annotations
@@ -54,7 +55,8 @@ def loop(pop: int, generations: int, threads: int) -> None:
     study = get_study("humanoid-walk")
     cfg = resolve_config(study, None, [f"algorithm.pop_size={pop}",
                                        f"run.generations={generations}",
-                                       f"problem.threads={threads}", "run.checkpoint_every=0"])
+                                       f"problem.threads={threads}", "problem.worlds=1",
+                                       "run.checkpoint_every=0"])
     problem = study.make_problem(cfg.problem)
     ev = SerialEvaluator(lambda _c: problem, None)
     t0 = time.perf_counter()
@@ -78,9 +80,12 @@ def main() -> None:
     ap.add_argument("--generations", type=int, default=20)
     ap.add_argument("--threads", type=int, default=0, help="0 = all cores")
     ap.add_argument("--repeat", type=int, default=2)
+    ap.add_argument("--only", choices=("evaluations", "loop"), default=None)
     a = ap.parse_args()
-    evaluations(a.pop, a.threads, a.repeat)
-    loop(a.pop, a.generations, a.threads)
+    if a.only != "loop":
+        evaluations(a.pop, a.threads, a.repeat)
+    if a.only != "evaluations":
+        loop(a.pop, a.generations, a.threads)
 
 
 if __name__ == "__main__":

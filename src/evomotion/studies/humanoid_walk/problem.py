@@ -17,9 +17,9 @@ up above every robot that falls and never saturates:
   ``quality_m = forward_m - heading_weight |heading_change_rad| - lateral_weight
   |lateral_m| - excess_weight max(|heading_change_rad| - heading_tolerance_rad_per_m
   max(forward_m, 0), 0) - energy_weight cost_of_transport`` [m]: forward torso
-  displacement over the walk, penalised by turning (0.5 m/rad), sideways drift (0.5 m/m),
+  displacement over the walk, penalised by turning (1 m/rad), sideways drift (1 m/m),
   turning beyond 5 degrees per metre walked
-  (5 m/rad more) and the cost of transport (mechanical work ``sum |tau qdot| dt`` of the 22
+  (20 m/rad more) and the cost of transport (mechanical work ``sum |tau qdot| dt`` of the 22
   servos over ``m g forward``; ``tau = clip(kp (target - q), force range)``, the position
   servo of the model; 0.05 m per unit).
 - stayed up but too fast for the real robot (a joint moves faster between two key poses than
@@ -65,10 +65,10 @@ class HumanoidWalkConfig:
 
     walk_s: float = 10.0  # steady walking at full amplitude (s), after the start-up ramp
     hold_s: float = 1.0  # the ready pose held after the stop (s), at least
-    heading_weight: float = 0.5  # m lost per radian of turning
-    lateral_weight: float = 0.5  # m lost per metre of sideways drift
+    heading_weight: float = 1.0  # m lost per radian of turning
+    lateral_weight: float = 1.0  # m lost per metre of sideways drift
     heading_tolerance_rad_per_m: float = 0.0873  # 5 degrees per metre walked ...
-    excess_weight: float = 5.0  # ... each radian beyond costs this much more (m/rad)
+    excess_weight: float = 20.0  # ... each radian beyond costs this much more (m/rad)
     energy_weight: float = 0.05  # m lost per unit of cost of transport
     speed_margin: float = 1.0  # joint speeds allowed: this times the NAO motors' no-load speed
     fall_height_m: float = nao.FALL_HEIGHT_M
@@ -140,8 +140,8 @@ class HumanoidWalkProblem:
         self.segment_steps = max(1, int(round(cfg.segment_s / self.dt)))
         m = self.model
         joints = m.actuator_trnid[:, 0]
-        self.q_cols = QPOS_OFFSET + m.jnt_qposadr[joints]
-        self.v_cols = QPOS_OFFSET + m.nq + m.jnt_dofadr[joints]
+        self.q_cols = _as_slice(QPOS_OFFSET + m.jnt_qposadr[joints])
+        self.v_cols = _as_slice(QPOS_OFFSET + m.nq + m.jnt_dofadr[joints])
         self.kp = m.actuator_gainprm[:, 0].copy()
         self.force_range = m.actuator_forcerange.copy()
         self.mass_kg = float(m.body_mass.sum())
@@ -194,12 +194,19 @@ class HumanoidWalkProblem:
         return first, ctrl, walk, ratio
 
     def _initial_states(self, first: np.ndarray) -> np.ndarray:
-        return np.stack([nao.initial_state(self.model, f) for f in first])
+        """One initial state per genome (every walk starts in the same crouch: one state per
+        distinct first pose is computed)."""
+        poses, inverse = np.unique(first, axis=0, return_inverse=True)
+        states = np.stack([nao.initial_state(self.model, f) for f in poses])
+        return states[np.asarray(inverse).ravel()]
 
     def _fallen(self, states: np.ndarray) -> np.ndarray:
+        """Whether each rollout of a segment fell (torso height and tilt only)."""
+        q = states[..., QPOS_OFFSET:QPOS_OFFSET + 7]
+        x, y = q[..., 4], q[..., 5]
+        up_z = 1.0 - 2.0 * (x * x + y * y)
         c = self.cfg
-        return fall_step(torso_track(states), c.fall_height_m, c.fall_tilt_rad) < \
-            states.shape[1]
+        return ((q[..., 2] < c.fall_height_m) | (up_z < np.cos(c.fall_tilt_rad))).any(axis=1)
 
     def evaluate(self, genomes: np.ndarray) -> Evaluation:
         genomes = np.atleast_2d(np.asarray(genomes, dtype=float))
@@ -244,10 +251,14 @@ class HumanoidWalkProblem:
         heading = track.yaw_rad[rows, last] - track.yaw_rad[:, 0]
         t_up = np.where(fell, (fall + 1) * self.dt, self.nstep * self.dt)
         # mechanical work of the position servos up to the end or the fall
-        q, qd = states[..., self.q_cols], states[..., self.v_cols]
-        tau = np.clip(self.kp * (ctrl - q), self.force_range[:, 0], self.force_range[:, 1])
-        alive = (np.arange(self.nstep)[None] <= last[:, None])[..., None]
-        work = (np.abs(tau * qd) * alive).sum(axis=(1, 2)) * self.dt
+        tau = ctrl - states[..., self.q_cols]  # in place from here: [P, nstep, 22] is large
+        tau *= self.kp
+        np.maximum(tau, self.force_range[:, 0], out=tau)
+        np.minimum(tau, self.force_range[:, 1], out=tau)
+        tau *= states[..., self.v_cols]
+        power = np.abs(tau, out=tau).sum(axis=2)  # [P, nstep] W
+        alive = np.arange(self.nstep)[None] <= last[:, None]
+        work = (power * alive).sum(axis=1) * self.dt
         cot = work / (self.mass_kg * GRAVITY * np.maximum(forward, 0.1))
         heading_abs = np.abs(heading)
         quality = forward - c.heading_weight * heading_abs - c.lateral_weight * np.abs(lateral) \
@@ -267,6 +278,14 @@ class HumanoidWalkProblem:
             "fall_rate": fell.astype(float), "speed_ratio": np.asarray(speed_ratio, float),
         }
         return Evaluation(fitness, metrics)
+
+
+def _as_slice(cols: np.ndarray) -> slice | np.ndarray:
+    """``cols`` as a slice when they are consecutive (a view instead of a gather)."""
+    cols = np.asarray(cols)
+    if cols.size and np.all(np.diff(cols) == 1):
+        return slice(int(cols[0]), int(cols[-1]) + 1)
+    return cols
 
 
 def soft_floor(quality: np.ndarray) -> np.ndarray:
