@@ -4,9 +4,9 @@ Every motion is replayed open loop on the same model and contact (``evomotion re
 the walk (``best.motion`` of a run folder, or any ``.motion``) and the step and turn motions
 Webots ships for its NAO (package data, Apache-2.0; Webots' ``Forwards50.motion`` is not among
 the fixtures this project has). For each: duration, displacement, heading change, speed
-(forward displacement over the motion's duration), heading change per metre and whether it
-fell. ``--trials N`` adds the fall rate in N perturbed worlds (:mod:`evomotion.sim.nao.worlds`,
-default ranges) for each motion.
+(forward displacement over the motion's duration), heading change per metre (for motions that
+move at least 5 cm forward) and whether it fell. ``--trials N`` adds the fall rate in N
+perturbed worlds (:mod:`evomotion.sim.nao.worlds`, default ranges) for each motion.
 """
 
 from __future__ import annotations
@@ -20,6 +20,8 @@ from evomotion.sim.nao.motion import SHIPPED_MOTIONS, Motion, read_motion, shipp
 from evomotion.sim.nao.replay import StressOptions, simulate_motion, stress_motion
 
 WEBOTS = tuple(m for m in SHIPPED_MOTIONS if m != "Shoot")
+#: heading per metre is reported only for motions that move at least this far forward (m)
+MIN_DISTANCE_M = 0.05
 
 
 def walk_motion_path(run: Path) -> Path:
@@ -44,7 +46,8 @@ def measure(motion: Motion, hold_s: float, trials: int = 0, seed: int = 0) -> di
     row = {"duration_s": dur, "dx_m": dx, "dy_m": dy,
            "heading_deg": math.degrees(s["heading_change_rad"]),
            "speed_mps": dx / dur if dur > 0 else float("nan"),
-           "heading_deg_per_m": abs(math.degrees(s["heading_change_rad"])) / max(abs(dx), 0.01),
+           "heading_deg_per_m": (abs(math.degrees(s["heading_change_rad"])) / abs(dx)
+                                 if abs(dx) >= MIN_DISTANCE_M else None),
            "fell": bool(s["fell"])}
     if trials:
         row["fall_rate"] = s["fall_rate"]
@@ -69,11 +72,15 @@ def table(rows: dict[str, dict]) -> str:
     for name, r in rows.items():
         line = (f"| {name} | {r['duration_s']:.2f} | {r['dx_m']:+.3f} | {r['dy_m']:+.3f} | "
                 f"{r['heading_deg']:+.1f} | {r['speed_mps']:+.3f} | "
-                f"{r['heading_deg_per_m']:.1f} | {'yes' if r['fell'] else 'no'} |")
+                f"{_per_m(r['heading_deg_per_m'])} | {'yes' if r['fell'] else 'no'} |")
         if trials:
             line += f" {100 * r['fall_rate']:.0f}% |"
         lines.append(line)
     return "\n".join(lines)
+
+
+def _per_m(v: float | None) -> str:
+    return "—" if v is None else f"{v:.1f}"
 
 
 def compare_command(run: Path, hold_s: float = 1.0, json_out: bool = False,
