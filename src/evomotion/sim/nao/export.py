@@ -252,6 +252,24 @@ def export_motion(motion: Motion, *, naoqi: str | Path | None = None,
     return done
 
 
+def write_run_exports(motion: Motion, out_dir: Path, log, source: str = "best.motion") -> bool:
+    """A run's ``best_naoqi.py`` and ``best_keyframes.json`` in ``out_dir`` when ``motion``
+    passes the real-NAO checks; otherwise the reason goes to ``log`` (one line), nothing is
+    written and exports of an earlier best are removed (the run does not fail for it)."""
+    names = ("best_naoqi.py", "best_keyframes.json")
+    try:
+        export_motion(motion, naoqi=out_dir / names[0], json_path=out_dir / names[1],
+                      source=source)
+    except InputError as exc:
+        for name in names:
+            (out_dir / name).unlink(missing_ok=True)
+        log(f"best_naoqi.py and best_keyframes.json not written: {exc}")
+        return False
+    log("best_naoqi.py and best_keyframes.json written (checked against a real NAO's "
+        "joint ranges and motor speeds)")
+    return True
+
+
 def export_command(motion_path: Path, naoqi: Path | None, json_path: Path | None,
                    clip: bool, speed_margin: float) -> list[str]:
     """``evomotion export``: read a Webots .motion, check it, write the outputs."""

@@ -8,7 +8,6 @@ from pathlib import Path
 
 import numpy as np
 
-from evomotion.errors import InputError
 from evomotion.run.context import RunContext
 from evomotion.run.folder import atomic_write_text
 from evomotion.sim import nao
@@ -38,22 +37,11 @@ def write_exports(ctx: RunContext) -> bool:
     motion passes the real-NAO checks (:mod:`evomotion.sim.nao.joint_limits`); otherwise the
     reason goes to the log, nothing is written and older exports are removed (the run does
     not fail for it)."""
-    from evomotion.sim.nao.export import export_motion
+    from evomotion.sim.nao.export import write_run_exports
 
     if ctx.best_genome is None or not np.all(np.isfinite(ctx.best_genome)):
         return False
-    motion = genome_motion(ctx.problem, ctx.best_genome)
-    try:
-        export_motion(motion, naoqi=ctx.out_dir / "best_naoqi.py",
-                      json_path=ctx.out_dir / "best_keyframes.json", source="best.motion")
-    except InputError as exc:
-        for name in ("best_naoqi.py", "best_keyframes.json"):  # stale ones of an earlier best
-            (ctx.out_dir / name).unlink(missing_ok=True)
-        ctx.log(f"best_naoqi.py and best_keyframes.json not written: {exc}")
-        return False
-    ctx.log("best_naoqi.py and best_keyframes.json written (checked against a real NAO's "
-            "joint ranges and motor speeds)")
-    return True
+    return write_run_exports(genome_motion(ctx.problem, ctx.best_genome), ctx.out_dir, ctx.log)
 
 
 def on_checkpoint(ctx: RunContext) -> None:

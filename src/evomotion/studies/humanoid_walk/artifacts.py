@@ -18,7 +18,6 @@ from typing import Any
 
 import numpy as np
 
-from evomotion.errors import InputError
 from evomotion.run.context import RunContext
 from evomotion.run.folder import atomic_write_text
 from evomotion.sim.nao.motion import format_motion
@@ -58,22 +57,11 @@ def write_motions(ctx: RunContext) -> Path | None:
 def write_exports(ctx: RunContext) -> bool:
     """``best_naoqi.py`` and ``best_keyframes.json`` when the walk passes the real-NAO checks
     (else the reason is logged and stale exports are removed)."""
-    from evomotion.sim.nao.export import export_motion
+    from evomotion.sim.nao.export import write_run_exports
 
     if not _ok(ctx.best_genome):
         return False
-    motion = ctx.problem.motion(ctx.best_genome)
-    try:
-        export_motion(motion, naoqi=ctx.out_dir / "best_naoqi.py",
-                      json_path=ctx.out_dir / "best_keyframes.json", source="best.motion")
-    except InputError as exc:
-        for name in ("best_naoqi.py", "best_keyframes.json"):
-            (ctx.out_dir / name).unlink(missing_ok=True)
-        ctx.log(f"best_naoqi.py and best_keyframes.json not written: {exc}")
-        return False
-    ctx.log("best_naoqi.py and best_keyframes.json written (checked against a real NAO's "
-            "joint ranges and motor speeds)")
-    return True
+    return write_run_exports(ctx.problem.motion(ctx.best_genome), ctx.out_dir, ctx.log)
 
 
 def on_checkpoint(ctx: RunContext) -> None:
