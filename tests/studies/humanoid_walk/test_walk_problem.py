@@ -86,3 +86,17 @@ def test_bad_config_is_one_line(key, value):
     with pytest.raises(InputError) as e:
         dataclasses.replace(HumanoidWalkConfig(), **{key: value}).validate()
     assert f"problem.{key}" in str(e.value) and "\n" not in str(e.value)
+
+
+def test_worlds_give_the_same_result_whatever_the_batch_split():
+    """Evaluators split a population into chunks: a genome's evaluation in K pushed worlds
+    must not depend on the other genomes of its batch (bit for bit)."""
+    p = HumanoidWalkProblem(HumanoidWalkConfig(walk_s=0.5, hold_s=0.2, threads=2, worlds=4,
+                                               world_seed=3))
+    x = p.initial_population(4, np.random.default_rng(1))
+    whole = p.evaluate(x)
+    parts = [p.evaluate(x[:1]), p.evaluate(x[1:3]), p.evaluate(x[3:])]
+    np.testing.assert_array_equal(whole.fitness, np.concatenate([e.fitness for e in parts]))
+    for k in whole.metrics:
+        np.testing.assert_array_equal(whole.metrics[k],
+                                      np.concatenate([e.metrics[k] for e in parts]))

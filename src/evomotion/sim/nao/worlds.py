@@ -202,18 +202,21 @@ def _pushes(worlds: list[World], nstep: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _segment_controls(ctrl: np.ndarray, push: np.ndarray, step: np.ndarray, rows: np.ndarray,
-                      start: int, stop: int, base: mujoco.MjModel) -> tuple[np.ndarray, int]:
-    """Controls of ``rows`` for steps ``start:stop`` and their ``control_spec``: the
-    ``xfrc_applied`` columns are added only when a push of these rows falls in the segment."""
-    spec = int(mujoco.mjtState.mjSTATE_CTRL)
+                      start: int, stop: int, base: mujoco.MjModel,
+                      pushed: bool) -> tuple[np.ndarray, int]:
+    """Controls of ``rows`` for steps ``start:stop`` and their ``control_spec``. When any world
+    of the batch is ``pushed``, every segment carries ``xfrc_applied`` columns (zero but at a
+    push), so no force is left over in a thread's ``MjData`` and a trajectory does not depend
+    on the other trajectories of its batch."""
     c = ctrl[rows, start:stop]
+    if not pushed:
+        return np.ascontiguousarray(c, dtype=np.float64), int(mujoco.mjtState.mjSTATE_CTRL)
+    spec = int(mujoco.mjtState.mjSTATE_CTRL) | int(mujoco.mjtState.mjSTATE_XFRC_APPLIED)
+    xfrc = np.zeros((len(rows), stop - start, base.nbody, 6))
     hit = np.flatnonzero((step[rows] >= start) & (step[rows] < stop))
-    if hit.size:  # xfrc_applied[nbody, 6] (force, torque) after ctrl, for this segment only
-        spec |= int(mujoco.mjtState.mjSTATE_XFRC_APPLIED)
-        dt = float(base.opt.timestep)
-        xfrc = np.zeros((len(rows), stop - start, base.nbody, 6))
-        xfrc[hit, step[rows[hit]] - start, base.body(TORSO).id, :3] = push[rows[hit]] / dt
-        c = np.concatenate([c, xfrc.reshape(len(rows), stop - start, -1)], axis=2)
+    dt = float(base.opt.timestep)
+    xfrc[hit, step[rows[hit]] - start, base.body(TORSO).id, :3] = push[rows[hit]] / dt
+    c = np.concatenate([c, xfrc.reshape(len(rows), stop - start, -1)], axis=2)
     return np.ascontiguousarray(c, dtype=np.float64), spec
 
 
@@ -224,13 +227,15 @@ def simulate_worlds(worlds: list[World], initial_state: np.ndarray, controls: np
     ``STATE_SPEC``) under ``controls`` (``[nstep, nu]`` or ``[k, nstep, nu]``), delayed and
     pushed per world, in one ``mujoco.rollout`` batch with ``nthread`` threads (0: all cores).
     Returns ``states[k, nstep, nstate]`` (with ``sensors``: also ``sensordata[k, nstep, n]``).
-    A push at or after the last step is not applied. The batch is stepped in segments that
-    end where a push starts, so the pushes travel as ``xfrc_applied`` controls of one step only.
+    A push at or after the last step is not applied.
 
-    With ``stopped(states_segment) -> bool[k]`` and ``segment_steps``, worlds for which
-    ``stopped`` is true after a segment of ``segment_steps`` are not simulated further (their
-    remaining rows repeat their last state), as :meth:`~evomotion.sim.rollout.BatchSimulator.
-    run_until` does for one model."""
+    With ``stopped(states_segment) -> bool[k]`` and ``segment_steps``, the batch is stepped in
+    segments of ``segment_steps`` (at the same steps for every trajectory, whatever the batch
+    holds) and worlds for which ``stopped`` is true after a segment are not simulated further
+    (their remaining rows repeat their last state), as :meth:`~evomotion.sim.rollout.
+    BatchSimulator.run_until` does for one model. A trajectory's states depend only on its own
+    world, start and controls, so any split of the worlds over batches (evaluators) gives the
+    same states."""
     if not worlds:
         raise InputError("simulate_worlds: expected at least one world")
     k, base = len(worlds), worlds[0].model
@@ -243,8 +248,8 @@ def simulate_worlds(worlds: list[World], initial_state: np.ndarray, controls: np
     nthread = int(nthread) if nthread and nthread > 0 else (os.cpu_count() or 1)
     nthread = max(1, min(nthread, k))
     seg = segment_steps if stopped is not None and segment_steps > 0 else nstep
-    bounds = sorted(set(range(0, nstep, seg)) | {int(v) for v in step if v > 0} | {nstep})
-    checks = set(range(seg, nstep, seg))  # where ``stopped`` is asked
+    bounds = list(range(0, nstep, seg)) + [nstep]
+    pushed = bool((step >= 0).any())
     states = np.empty((k, nstep, nstate))
     sens = np.empty((k, nstep, base.nsensordata))
     active = np.arange(k)
@@ -253,15 +258,15 @@ def simulate_worlds(worlds: list[World], initial_state: np.ndarray, controls: np
     datas = [mujoco.MjData(base) for _ in range(nthread)]
     try:
         for start, stop in zip(bounds[:-1], bounds[1:], strict=True):
-            c, spec = _segment_controls(ctrl, push, step, active, start, stop, base)
+            c, spec = _segment_controls(ctrl, push, step, active, start, stop, base, pushed)
             args = ([models[i] for i in active], datas if runner else datas[0],
                     np.ascontiguousarray(init[active]), c)
             kw = {"control_spec": spec, "nstep": stop - start}
             s, d = runner.rollout(*args, **kw) if runner else mj_rollout.rollout(*args, **kw)
             states[active, start:stop], sens[active, start:stop] = s, d
             init[active] = s[:, -1]
-            if stop not in checks:
-                continue
+            if stop >= nstep:
+                break
             done = np.asarray(stopped(states[active, checked:stop]), dtype=bool)
             checked = stop
             if done.any():
