@@ -62,24 +62,10 @@ class BatchSimulator:
         not simulated further; their remaining rows repeat their last state and sensor values.
         (A fallen robot stays fallen, so falls are still found from the recorded states.)"""
         batch, nstep, _ = ctrl.shape
-        states = np.empty((batch, nstep, self.nstate))
-        sensors = np.empty((batch, nstep, self.model.nsensordata))
-        current = np.array(np.broadcast_to(initial_state, (batch, self.nstate)), np.float64)
-        active = np.arange(batch)
-        for start in range(0, nstep, segment_steps):
-            stop = min(start + segment_steps, nstep)
-            s, d = self.run_with_sensors(current[active], ctrl[active, start:stop])
-            states[active, start:stop], sensors[active, start:stop] = s, d
-            current[active] = s[:, -1]
-            done = stopped(s)
-            if done.any() and stop < nstep:
-                gone = active[done]
-                states[gone, stop:] = s[done, -1][:, None]
-                sensors[gone, stop:] = d[done, -1][:, None]
-                active = active[~done]
-            if active.size == 0:
-                break
-        return states, sensors
+        return rollout_segments(
+            lambda rows, start, stop, init: self.run_with_sensors(init, ctrl[rows, start:stop]),
+            np.broadcast_to(initial_state, (batch, self.nstate)), nstep,
+            self.model.nsensordata, stopped, segment_steps)
 
     def close(self) -> None:
         if self._runner is not None:
@@ -91,6 +77,52 @@ class BatchSimulator:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def rollout_segments(roll: Callable[[np.ndarray, int, int, np.ndarray],
+                                    tuple[np.ndarray, np.ndarray]],
+                     initial: np.ndarray, nstep: int, nsensordata: int,
+                     stopped: Callable[[np.ndarray], np.ndarray] | None,
+                     segment_steps: int) -> tuple[np.ndarray, np.ndarray]:
+    """(``states[batch, nstep, nstate]``, ``sensors[batch, nstep, nsensordata]``) of a batch
+    rolled out from ``initial[batch, nstate]`` in segments of ``segment_steps`` (one segment
+    when ``stopped`` is ``None``): ``roll(rows, start, stop, init_rows) -> (states, sensors)``
+    simulates steps ``start:stop`` of the trajectories ``rows``. After each segment,
+    trajectories for which ``stopped(segment_states) -> bool[rows]`` is true are not
+    simulated further; their remaining rows repeat their last state and sensor values. The
+    segments start at the same steps for every trajectory, whatever the batch holds."""
+    init = np.array(initial, dtype=np.float64)
+    batch, nstate = init.shape
+    seg = segment_steps if stopped is not None and segment_steps > 0 else nstep
+    states = np.empty((batch, nstep, nstate))
+    sensors = np.empty((batch, nstep, nsensordata))
+    active = np.arange(batch)
+    for start in range(0, nstep, seg):
+        stop = min(start + seg, nstep)
+        s, d = roll(active, start, stop, np.ascontiguousarray(init[active]))
+        states[active, start:stop], sensors[active, start:stop] = s, d
+        init[active] = s[:, -1]
+        if stopped is None:
+            continue
+        done = np.asarray(stopped(s), dtype=bool)
+        if done.any() and stop < nstep:
+            gone = active[done]
+            states[gone, stop:] = s[done, -1][:, None]
+            sensors[gone, stop:] = d[done, -1][:, None]
+            active = active[~done]
+        if active.size == 0:
+            break
+    return states, sensors
+
+
+def fell(states: np.ndarray, fall_height_m: float, fall_tilt_rad: float) -> np.ndarray:
+    """``bool[batch]``: whether each trajectory of ``states[batch, T, nstate]`` is fallen at
+    some step (:func:`fall_step` ``< T``), from the torso height and tilt alone (cheap enough
+    to ask after every segment of an early-stopped rollout)."""
+    q = states[..., QPOS_OFFSET:QPOS_OFFSET + 7]
+    x, y = q[..., 4], q[..., 5]  # the quaternion's x and y (w, x, y, z at 3..6)
+    up_z = 1.0 - 2.0 * (x * x + y * y)
+    return ((q[..., 2] < fall_height_m) | (up_z < np.cos(fall_tilt_rad))).any(axis=-1)
 
 
 @dataclass

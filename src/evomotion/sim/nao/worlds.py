@@ -37,8 +37,10 @@ import mujoco
 import numpy as np
 from mujoco import rollout as mj_rollout
 
+from evomotion.core.problem import Evaluation
 from evomotion.errors import InputError
 from evomotion.sim.nao.constants import STATE_SPEC
+from evomotion.sim.rollout import rollout_segments
 
 TORSO = "torso"  # the body with the free joint: CoM offsets and pushes act on it
 
@@ -220,6 +222,19 @@ def _segment_controls(ctrl: np.ndarray, push: np.ndarray, step: np.ndarray, rows
     return np.ascontiguousarray(c, dtype=np.float64), spec
 
 
+def aggregate_worlds(ev: Evaluation, n: int, k: int, aggregate: str = "mean",
+                     quantile: float = 0.25) -> Evaluation:
+    """The evaluation of ``n`` genomes from that of their ``n * k`` world rollouts (genome-
+    major: row ``i * k + w``): fitness the mean (``aggregate = "mean"``) or the ``quantile``
+    of each genome's K values, every metric its mean over the K worlds (a 0/1 ``fell`` becomes
+    the share of worlds fallen)."""
+    fit = ev.fitness.reshape(n, k)
+    agg = fit.mean(axis=1) if aggregate == "mean" else np.quantile(fit, quantile, axis=1)
+    metrics = {m: np.asarray(v, float).reshape(n, k).mean(axis=1)
+               for m, v in ev.metrics.items()}
+    return Evaluation(agg, metrics)
+
+
 def simulate_worlds(worlds: list[World], initial_state: np.ndarray, controls: np.ndarray,
                     nthread: int = 1, sensors: bool = False, stopped=None,
                     segment_steps: int = 0) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
@@ -243,39 +258,22 @@ def simulate_worlds(worlds: list[World], initial_state: np.ndarray, controls: np
     nstep = ctrl.shape[1]
     push, step = _pushes(worlds, nstep)
     nstate = mujoco.mj_stateSize(base, STATE_SPEC)
-    init = np.array(np.broadcast_to(initial_state, (k, nstate)), dtype=np.float64)
     models = [w.model for w in worlds]
     nthread = int(nthread) if nthread and nthread > 0 else (os.cpu_count() or 1)
     nthread = max(1, min(nthread, k))
-    seg = segment_steps if stopped is not None and segment_steps > 0 else nstep
-    bounds = list(range(0, nstep, seg)) + [nstep]
     pushed = bool((step >= 0).any())
-    states = np.empty((k, nstep, nstate))
-    sens = np.empty((k, nstep, base.nsensordata))
-    active = np.arange(k)
-    checked = 0  # states before this step were already checked
     runner = mj_rollout.Rollout(nthread=nthread) if nthread > 1 else None
     datas = [mujoco.MjData(base) for _ in range(nthread)]
+
+    def roll(rows: np.ndarray, start: int, stop: int, init: np.ndarray):
+        c, spec = _segment_controls(ctrl, push, step, rows, start, stop, base, pushed)
+        args = ([models[i] for i in rows], datas if runner else datas[0], init, c)
+        kw = {"control_spec": spec, "nstep": stop - start}
+        return runner.rollout(*args, **kw) if runner else mj_rollout.rollout(*args, **kw)
+
     try:
-        for start, stop in zip(bounds[:-1], bounds[1:], strict=True):
-            c, spec = _segment_controls(ctrl, push, step, active, start, stop, base, pushed)
-            args = ([models[i] for i in active], datas if runner else datas[0],
-                    np.ascontiguousarray(init[active]), c)
-            kw = {"control_spec": spec, "nstep": stop - start}
-            s, d = runner.rollout(*args, **kw) if runner else mj_rollout.rollout(*args, **kw)
-            states[active, start:stop], sens[active, start:stop] = s, d
-            init[active] = s[:, -1]
-            if stop >= nstep:
-                break
-            done = np.asarray(stopped(states[active, checked:stop]), dtype=bool)
-            checked = stop
-            if done.any():
-                gone = active[done]
-                states[gone, stop:] = s[done, -1][:, None]
-                sens[gone, stop:] = d[done, -1][:, None]
-                active = active[~done]
-            if active.size == 0:
-                break
+        states, sens = rollout_segments(roll, np.broadcast_to(initial_state, (k, nstate)),
+                                        nstep, base.nsensordata, stopped, segment_steps)
     finally:
         if runner is not None:
             runner.close()

@@ -52,7 +52,7 @@ from evomotion.core.problem import Evaluation, GenomeSpec
 from evomotion.errors import InputError
 from evomotion.sim import nao
 from evomotion.sim.nao.scene import scene_xml, sensor_slices
-from evomotion.sim.rollout import BatchSimulator, fall_step, torso_track
+from evomotion.sim.rollout import BatchSimulator, fall_step, fell, torso_track
 from evomotion.studies.humanoid_step.encoding import ENCODINGS, ServoEncoding
 
 #: Seed 000, Table 1: servo angle limits (rad) used as GA bounds.
@@ -242,9 +242,7 @@ class HumanoidStepProblem:
         return ctrl
 
     def _fallen(self, states: np.ndarray) -> np.ndarray:
-        c = self.cfg
-        return fall_step(torso_track(states), c.fall_height_m,
-                         c.fall_tilt_rad) < states.shape[1]
+        return fell(states, self.cfg.fall_height_m, self.cfg.fall_tilt_rad)
 
     def simulate(self, genomes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Recorded (states, sole positions) of a batch, fallen robots stopped early."""
@@ -302,17 +300,13 @@ class HumanoidStepProblem:
         """Every genome in each of the K perturbed worlds (:mod:`evomotion.sim.nao.worlds`),
         one batch; fitness = mean or ``world_quantile`` of the K values, metrics = means over
         the worlds, plus ``fall_rate``."""
-        from evomotion.sim.nao.worlds import simulate_worlds
+        from evomotion.sim.nao.worlds import aggregate_worlds, simulate_worlds
 
         n, k = len(genomes), len(self.worlds)
         ctrl = np.repeat(self.controls(genomes), k, axis=0)  # genome-major: i * k + world
         states, sensors = simulate_worlds(self.worlds * n, self.state0, ctrl,
                                           self.sim.nthread, sensors=True, stopped=self._fallen,
                                           segment_steps=self.segment_steps)
-        ev = self.score(states, sensors)
-        fit = ev.fitness.reshape(n, k)
-        agg = fit.mean(axis=1) if self.cfg.world_aggregate == "mean" else \
-            np.quantile(fit, self.cfg.world_quantile, axis=1)
-        metrics = {m: np.asarray(v, float).reshape(n, k).mean(axis=1)
-                   for m, v in ev.metrics.items()}  # fall_rate: the share of worlds fallen
-        return Evaluation(agg, metrics)
+        # fall_rate: the share of worlds fallen
+        return aggregate_worlds(self.score(states, sensors), n, k, self.cfg.world_aggregate,
+                                self.cfg.world_quantile)

@@ -48,7 +48,7 @@ from evomotion.sim import nao
 from evomotion.sim.nao.joint_limits import SPEED_LIMITS
 from evomotion.sim.nao.motion import Motion
 from evomotion.sim.nao.replay import motion_targets
-from evomotion.sim.rollout import QPOS_OFFSET, BatchSimulator, fall_step, torso_track
+from evomotion.sim.rollout import QPOS_OFFSET, BatchSimulator, fall_step, fell, torso_track
 from evomotion.studies.humanoid_walk import gait
 from evomotion.studies.humanoid_walk.walk_motion import assemble_poses, parts_batch, whole_walk
 
@@ -201,12 +201,7 @@ class HumanoidWalkProblem:
         return states[np.asarray(inverse).ravel()]
 
     def _fallen(self, states: np.ndarray) -> np.ndarray:
-        """Whether each rollout of a segment fell (torso height and tilt only)."""
-        q = states[..., QPOS_OFFSET:QPOS_OFFSET + 7]
-        x, y = q[..., 4], q[..., 5]
-        up_z = 1.0 - 2.0 * (x * x + y * y)
-        c = self.cfg
-        return ((q[..., 2] < c.fall_height_m) | (up_z < np.cos(c.fall_tilt_rad))).any(axis=1)
+        return fell(states, self.cfg.fall_height_m, self.cfg.fall_tilt_rad)
 
     def evaluate(self, genomes: np.ndarray) -> Evaluation:
         genomes = np.atleast_2d(np.asarray(genomes, dtype=float))
@@ -219,7 +214,7 @@ class HumanoidWalkProblem:
 
     def _evaluate_worlds(self, init: np.ndarray, ctrl: np.ndarray, walk: np.ndarray,
                          ratio: np.ndarray) -> Evaluation:
-        from evomotion.sim.nao.worlds import delayed_controls, simulate_worlds
+        from evomotion.sim.nao.worlds import aggregate_worlds, delayed_controls, simulate_worlds
 
         n, k = len(ctrl), len(self.worlds)
         c = np.repeat(ctrl, k, axis=0)  # genome-major: i * k + world
@@ -229,12 +224,7 @@ class HumanoidWalkProblem:
         lat = np.tile([w.latency_steps for w in self.worlds], n)
         ev = self.score(states, delayed_controls(c, lat), np.repeat(walk, k),
                         np.repeat(ratio, k))
-        fit = ev.fitness.reshape(n, k)
-        agg = fit.mean(axis=1) if self.cfg.world_aggregate == "mean" else \
-            np.quantile(fit, self.cfg.world_quantile, axis=1)
-        metrics = {m: np.asarray(v, float).reshape(n, k).mean(axis=1)
-                   for m, v in ev.metrics.items()}
-        return Evaluation(agg, metrics)
+        return aggregate_worlds(ev, n, k, self.cfg.world_aggregate, self.cfg.world_quantile)
 
     def score(self, states: np.ndarray, ctrl: np.ndarray, walk_s: np.ndarray,
               speed_ratio: np.ndarray) -> Evaluation:
