@@ -105,8 +105,9 @@ def to_cost(fitness: np.ndarray, sense: Sense) -> np.ndarray:
     """Fitness in the problem's sense -> cost to minimise (non-finite -> +inf)."""
     f = np.asarray(fitness, dtype=float)
     cost = -f if sense == "max" else f.copy()
-    if not np.isfinite(cost).all():
-        cost[~np.isfinite(cost)] = np.inf
+    bad = ~np.isfinite(cost)
+    if bad.any():
+        cost[bad] = np.inf
     return cost
 
 

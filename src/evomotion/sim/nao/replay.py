@@ -214,37 +214,52 @@ def stress_motion(motion: Motion, options: StressOptions, hold_s: float = 1.0,
     return {"summary": summary, "qpos": qpos, "dt": dt}
 
 
-def replay(path: str | Path, video: str | Path | None = None, hold_s: float = 1.0,
-           stress: StressOptions | None = None) -> dict:
-    """Replay a ``.motion`` file: ``{"displacement_m": [dx, dy], "heading_change_rad": h,
-    "fell": bool, "fall_time_s": t or None}`` (with active ``stress`` options, the keys of
-    :func:`stress_motion`); optionally render an MP4 of the (nominal) replay to ``video``."""
+def replay_motion(motion: Motion, video: str | Path | None = None, hold_s: float = 1.0,
+                  stress: StressOptions | None = None) -> tuple[dict, str | None]:
+    """Replay ``motion`` once (with active ``stress`` options, :func:`stress_motion`, else
+    :func:`simulate_motion`) and render that replay to ``video`` when one is named. Returns
+    the summary and, when no GL backend can render, the reason the video was skipped (the
+    replay is not run again for it)."""
+    from evomotion.sim.render import RenderUnavailableError, render_video
+
     check_number("--hold", hold_s, lo=0.0, hi=MAX_HOLD_S)
-    motion = read_motion(path)
     if stress is not None and stress.active:
         result = stress_motion(motion, stress, hold_s=hold_s)
     else:
         result = simulate_motion(motion, hold_s=hold_s)
+    skipped = None
     if video is not None:
-        from evomotion.sim.render import render_video
+        try:
+            render_video(result["qpos"], result["dt"], video)
+        except RenderUnavailableError as exc:
+            skipped = str(exc)
+    return result["summary"], skipped
 
-        render_video(result["qpos"], result["dt"], video)
-    return result["summary"]
+
+def replay(path: str | Path, video: str | Path | None = None, hold_s: float = 1.0,
+           stress: StressOptions | None = None) -> dict:
+    """Replay a ``.motion`` file: ``{"displacement_m": [dx, dy], "heading_change_rad": h,
+    "fell": bool, "fall_time_s": t or None}`` (with active ``stress`` options, the keys of
+    :func:`stress_motion`); optionally render an MP4 of the (nominal) replay to ``video``
+    (:class:`~evomotion.sim.render.RenderUnavailableError` without a GL backend)."""
+    from evomotion.sim.render import RenderUnavailableError
+
+    summary, skipped = replay_motion(read_motion(path), video, hold_s, stress)
+    if skipped is not None:
+        raise RenderUnavailableError(skipped)
+    return summary
 
 
 def replay_command(path: Path, json_out: bool = False, video: Path | None = None,
                    hold_s: float = 1.0, stress: StressOptions | None = None) -> None:
     """CLI body of ``evomotion replay``: JSON only on stdout with ``json_out``. Without a GL
     backend the video is skipped with a note on stderr."""
-    from evomotion.sim.render import RenderUnavailableError
-
     if stress is not None:
         stress.validate()
-    try:
-        summary = replay(path, video=video, hold_s=hold_s, stress=stress)
-    except RenderUnavailableError as exc:
-        print(f"video skipped: {exc}", file=sys.stderr)
-        summary, video = replay(path, hold_s=hold_s, stress=stress), None
+    summary, skipped = replay_motion(read_motion(path), video, hold_s, stress)
+    if skipped is not None:
+        print(f"video skipped: {skipped}", file=sys.stderr)
+        video = None
     if json_out:
         print(json.dumps(summary))
         return

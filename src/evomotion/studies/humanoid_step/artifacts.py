@@ -51,7 +51,8 @@ def on_checkpoint(ctx: RunContext) -> None:
 def finalize(ctx: RunContext) -> None:
     """best.motion, its replay summary (best_replay.json), best.mp4 and fitness.png."""
     from evomotion.run.plots import plot_fitness
-    from evomotion.sim.nao.replay import replay
+    from evomotion.sim.nao.motion import read_motion
+    from evomotion.sim.nao.replay import replay_motion
 
     stats = ctx.out_dir / "stats.csv"
     if stats.exists():
@@ -61,16 +62,10 @@ def finalize(ctx: RunContext) -> None:
         return
     write_exports(ctx)
     video: Path | None = ctx.out_dir / "best.mp4"
-    try:
-        summary = replay(path, video=video, hold_s=ctx.problem.cfg.hold_s)
-    except Exception as exc:  # no GL backend: keep everything but the video
-        from evomotion.sim.render import RenderUnavailableError
-
-        if not isinstance(exc, RenderUnavailableError):
-            raise
-        ctx.log(f"best.mp4 skipped: {exc}")
+    summary, skipped = replay_motion(read_motion(path), video, ctx.problem.cfg.hold_s)
+    if skipped is not None:  # no GL backend: keep everything but the video
+        ctx.log(f"best.mp4 skipped: {skipped}")
         video = None
-        summary = replay(path, hold_s=ctx.problem.cfg.hold_s)
     atomic_write_text(ctx.out_dir / "best_replay.json", json.dumps(summary, indent=2) + "\n")
     dx, dy = summary["displacement_m"]
     ctx.log(f"best.motion replayed: dx={dx:+.3f} m dy={dy:+.3f} m, "

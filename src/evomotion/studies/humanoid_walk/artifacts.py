@@ -20,7 +20,7 @@ import numpy as np
 
 from evomotion.run.context import RunContext
 from evomotion.run.folder import atomic_write_text
-from evomotion.sim.nao.motion import format_motion
+from evomotion.sim.nao.motion import Motion, format_motion
 from evomotion.studies.humanoid_walk import gait
 from evomotion.studies.humanoid_walk.walk_motion import assemble, walk_parts
 
@@ -42,26 +42,16 @@ def best_record(ctx: RunContext) -> dict[str, Any]:
                        "total_s": assemble(parts).duration_s}}
 
 
-def write_motions(ctx: RunContext) -> Path | None:
-    """``best.motion`` and its three parts; the path of ``best.motion``."""
+def write_motions(ctx: RunContext) -> Motion | None:
+    """``best.motion`` and its three parts; the whole walk (``None`` without a best)."""
     if not _ok(ctx.best_genome):
         return None
     parts = walk_parts(ctx.best_genome, ctx.problem.cfg.walk_s)
     for name, motion in zip(PART_FILES, (parts.start, parts.cycle, parts.stop), strict=True):
         atomic_write_text(ctx.out_dir / name, format_motion(motion))
-    path = ctx.out_dir / "best.motion"
-    atomic_write_text(path, format_motion(assemble(parts)))
-    return path
-
-
-def write_exports(ctx: RunContext) -> bool:
-    """``best_naoqi.py`` and ``best_keyframes.json`` when the walk passes the real-NAO checks
-    (else the reason is logged and stale exports are removed)."""
-    from evomotion.sim.nao.export import write_run_exports
-
-    if not _ok(ctx.best_genome):
-        return False
-    return write_run_exports(ctx.problem.motion(ctx.best_genome), ctx.out_dir, ctx.log)
+    whole = assemble(parts)
+    atomic_write_text(ctx.out_dir / "best.motion", format_motion(whole))
+    return whole
 
 
 def on_checkpoint(ctx: RunContext) -> None:
@@ -70,22 +60,21 @@ def on_checkpoint(ctx: RunContext) -> None:
 
 def finalize(ctx: RunContext) -> None:
     """The motions, the exports, the replay summary and the video."""
-    from evomotion.sim.nao.replay import replay
-    from evomotion.sim.render import RenderUnavailableError
+    from evomotion.sim.nao.export import write_run_exports
+    from evomotion.sim.nao.replay import replay_motion
 
-    path = write_motions(ctx)
-    if path is None:
+    motion = write_motions(ctx)
+    if motion is None:
         return
-    write_exports(ctx)
+    # best_naoqi.py and best_keyframes.json only when the walk passes the real-NAO checks
+    write_run_exports(motion, ctx.out_dir, ctx.log)
     hold = ctx.problem.cfg.hold_s
     video: Path | None = ctx.out_dir / "best.mp4"
-    try:
-        summary = replay(path, video=video, hold_s=hold)
-    except RenderUnavailableError as exc:
-        ctx.log(f"best.mp4 skipped: {exc}")
+    summary, skipped = replay_motion(motion, video, hold)
+    if skipped is not None:
+        ctx.log(f"best.mp4 skipped: {skipped}")
         video = None
-        summary = replay(path, hold_s=hold)
-    duration = ctx.problem.motion(ctx.best_genome).duration_s
+    duration = motion.duration_s
     dx, dy = summary["displacement_m"]
     summary.update(hold_s=hold, duration_s=duration, speed_mps=dx / duration,
                    heading_deg_per_m=float(np.degrees(abs(summary["heading_change_rad"]))

@@ -37,6 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from evomotion.sim import nao
+from evomotion.sim.nao.joint_limits import JOINT_RANGES
 from evomotion.sim.nao.leg_ik import leg_ik, rot_x, rot_y
 
 #: (name, low, high, default) of each gene; SI units (m, s, rad)
@@ -68,6 +69,8 @@ READY_S = 0.6  # initial crouch -> ready pose
 RAMP_CYCLES = 2  # cycles of rising (and of falling) amplitude
 HIP_Z_M = nao.HIP_OFFSET_Z_M
 HIP_Y_M = nao.HIP_OFFSET_Y_M
+#: the real NAO's joint ranges (rad) in ``nao.JOINTS`` order: every target is clipped to them
+_RANGE_LO, _RANGE_HI = np.array([JOINT_RANGES[j] for j in nao.JOINTS]).T
 
 
 @dataclass(frozen=True)
@@ -173,15 +176,8 @@ def joint_targets(genes: np.ndarray, t_ms: np.ndarray, s: Schedule) -> np.ndarra
     blend = _smoothstep(t_ms.astype(float) / s.ready_ms)[None, :, None]
     out = np.where((t_ms < s.ready_ms)[None, :, None], crouch + blend * (ready_pose - crouch),
                    out)
-    lo, hi = _ranges()
-    return np.clip(out, lo, hi)
+    return np.clip(out, _RANGE_LO, _RANGE_HI)
 
-
-def _ranges() -> tuple[np.ndarray, np.ndarray]:
-    from evomotion.sim.nao.joint_limits import JOINT_RANGES
-
-    r = np.array([JOINT_RANGES[j] for j in nao.JOINTS])
-    return r[:, 0], r[:, 1]
 
 
 def key_times_ms(s: Schedule) -> np.ndarray:
