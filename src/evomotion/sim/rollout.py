@@ -163,3 +163,36 @@ def interpolate_controls(times_s: np.ndarray, values: np.ndarray, dt: float,
     span = np.where(nxt > idx, times_s[nxt] - times_s[idx], 1.0)
     frac = np.clip((t - times_s[idx]) / span, 0.0, 1.0)[:, None]
     return values[..., idx, :] * (1.0 - frac) + values[..., nxt, :] * frac
+
+
+class ServoWork:
+    """Mechanical work of a model's position servos from recorded rollouts:
+    ``sum_t sum_j |tau_j qdot_j| dt`` with ``tau = clip(kp (target - q), force range)`` (J)."""
+
+    def __init__(self, model) -> None:
+        joints = model.actuator_trnid[:, 0]
+        self.q_cols = _as_slice(QPOS_OFFSET + model.jnt_qposadr[joints])
+        self.v_cols = _as_slice(QPOS_OFFSET + model.nq + model.jnt_dofadr[joints])
+        self.kp = model.actuator_gainprm[:, 0].copy()
+        self.force_range = model.actuator_forcerange.copy()
+        self.dt = float(model.opt.timestep)
+
+    def __call__(self, states: np.ndarray, ctrl: np.ndarray, last: np.ndarray) -> np.ndarray:
+        """Work ``[P]`` (J) up to and including step ``last[P]``, from ``states[P, T, ns]``
+        and the targets the servos received ``ctrl[P, T, nu]``."""
+        tau = ctrl - states[..., self.q_cols]  # in place from here: [P, T, nu] is large
+        tau *= self.kp
+        np.maximum(tau, self.force_range[:, 0], out=tau)
+        np.minimum(tau, self.force_range[:, 1], out=tau)
+        tau *= states[..., self.v_cols]
+        power = np.abs(tau, out=tau).sum(axis=2)  # [P, T] W
+        alive = np.arange(power.shape[1])[None] <= np.asarray(last)[:, None]
+        return (power * alive).sum(axis=1) * self.dt
+
+
+def _as_slice(cols: np.ndarray) -> slice | np.ndarray:
+    """``cols`` as a slice when they are consecutive (a view instead of a gather)."""
+    cols = np.asarray(cols)
+    if cols.size and np.all(np.diff(cols) == 1):
+        return slice(int(cols[0]), int(cols[-1]) + 1)
+    return cols

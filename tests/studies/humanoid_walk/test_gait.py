@@ -91,4 +91,4 @@ def test_whole_walk_round_trips_through_the_motion_format():
 
 def test_named_genes():
     d = gait.named(gait.DEFAULT)
-    assert set(gait.NAMES) <= set(d) and d["period_used_s"] == 0.48
+    assert set(gait.NAMES) <= set(d) and d["period_used_s"] == 0.56

@@ -22,6 +22,11 @@ torso moves over the stance foot), stand ``0.050 + width`` from the midline and
 orientation are expressed in the torso frame rotated by ``lean`` about y; the swing foot pitches
 by ``foot_pitch sin(pi s)``. Arms swing against the legs (``ShoulderPitch +- arm cos``).
 
+:data:`DEFAULT`, where CMA-ES starts, is a hand-set cautious gait in the style of B-Human's
+configuration (a 0.56 s cycle, i.e. 280 ms per step; 2 cm foot lift; knees bent to a 0.155 m
+hip-to-ankle height; feet 3 cm wider than the hips; no lean): it walks about 0.17 m/s and
+stays up in the 8 training worlds of seed 0, so the search starts from a walk, not a shuffle.
+
 Start-up, cycle, stop: 0.6 s from the initial crouch to the ready pose (joint space,
 smoothstep), ``RAMP_CYCLES`` cycles with the amplitudes rising from 0 to 1, the steady cycles,
 ``RAMP_CYCLES`` cycles falling back to 0, then the ready pose is held. The period is rounded
@@ -42,15 +47,15 @@ from evomotion.sim.nao.leg_ik import leg_ik, rot_x, rot_y
 
 #: (name, low, high, default) of each gene; SI units (m, s, rad)
 GENES: tuple[tuple[str, float, float, float], ...] = (
-    ("period_s", 0.32, 0.64, 0.48),  # one cycle = two steps
-    ("step_length_m", 0.0, 0.12, 0.04),  # L: each foot's travel relative to the torso
-    ("step_height_m", 0.005, 0.04, 0.018),  # H: swing foot lift
-    ("leg_height_m", 0.150, 0.195, 0.175),  # h: hip joint to ankle, vertical
-    ("sway_m", 0.0, 0.05, 0.02),  # A: lateral sway amplitude of the torso over the feet
+    ("period_s", 0.32, 0.64, 0.56),  # one cycle = two steps
+    ("step_length_m", 0.0, 0.12, 0.08),  # L: each foot's travel relative to the torso
+    ("step_height_m", 0.005, 0.04, 0.02),  # H: swing foot lift
+    ("leg_height_m", 0.140, 0.195, 0.155),  # h: hip joint to ankle, vertical
+    ("sway_m", 0.0, 0.05, 0.03),  # A: lateral sway amplitude of the torso over the feet
     ("sway_phase_rad", -0.8, 0.8, 0.0),  # psi: sway lead (+) or lag (-) on the steps
-    ("lean_rad", -0.05, 0.30, 0.05),  # torso pitch forward
-    ("width_m", -0.01, 0.05, 0.005),  # extra lateral foot offset (each side)
-    ("swing_fraction", 0.30, 0.50, 0.42),  # w: share of a cycle a foot is in the air
+    ("lean_rad", -0.05, 0.30, 0.0),  # torso pitch forward
+    ("width_m", -0.01, 0.05, 0.03),  # extra lateral foot offset (each side)
+    ("swing_fraction", 0.30, 0.50, 0.45),  # w: share of a cycle a foot is in the air
     ("arm_swing_rad", 0.0, 0.6, 0.2),  # shoulder pitch amplitude
     ("x_offset_m", -0.03, 0.03, 0.0),  # ankles forward of the torso origin
     ("turn_trim", -0.2, 0.2, 0.0),  # step length asymmetry (left +, right -)

@@ -29,8 +29,10 @@ up above every robot that falls and never saturates:
 
 Perturbed worlds (``worlds = K``: the nominal world and K - 1 drawn from the run seed, by
 default as a Latin hypercube over the ranges of :class:`~evomotion.sim.nao.worlds.Perturbation`,
-pushes during the walk) are one rollout batch, fallen robots stopped early; the fitness is the
-mean (or ``world_quantile``) of the K values, the metrics their means.
+pushes during the walk of up to ``train_push_ns`` = 3.5 N s, harder than the replay trials'
+2.5 N s, so that surviving 7 drawn worlds means surviving most others) are one rollout
+batch, fallen robots stopped early; the fitness is the mean (or ``world_quantile``) of the K
+values, the metrics their means.
 """
 
 from __future__ import annotations
@@ -48,7 +50,7 @@ from evomotion.sim import nao
 from evomotion.sim.nao.joint_limits import SPEED_LIMITS
 from evomotion.sim.nao.motion import Motion
 from evomotion.sim.nao.replay import motion_targets
-from evomotion.sim.rollout import QPOS_OFFSET, BatchSimulator, fall_step, fell, torso_track
+from evomotion.sim.rollout import BatchSimulator, ServoWork, fall_step, fell, torso_track
 from evomotion.studies.humanoid_walk import gait
 from evomotion.studies.humanoid_walk.walk_motion import assemble_poses, parts_batch, whole_walk
 
@@ -78,6 +80,9 @@ class HumanoidWalkConfig:
     world_design: str = "latin"  # latin (strata cover every range) | random
     world_aggregate: str = "mean"  # mean | quantile
     world_quantile: float = 0.25
+    #: the training worlds' lateral pushes, U(-p, p) N s: harder than the 2.5 N s of the
+    #: replay trials, so that a walk that survives 7 drawn worlds survives most others
+    train_push_ns: float = 3.5
     threads: int = 0  # mujoco.rollout threads; 0 = all cores
     segment_s: float = 0.4  # fallen robots stop being simulated at these boundaries (s)
 
@@ -100,6 +105,7 @@ class HumanoidWalkConfig:
         check_choice("problem.world_design", self.world_design, ("latin", "random"))
         check_choice("problem.world_aggregate", self.world_aggregate, ("mean", "quantile"))
         check_number("problem.world_quantile", self.world_quantile, lo=0.0, hi=1.0)
+        check_number("problem.train_push_ns", self.train_push_ns, lo=0.0, hi=100.0)
         check_number("problem.threads", self.threads, lo=0, hi=MAX_THREADS, integer=True)
         check_number("problem.segment_s", self.segment_s, lo=0.0, lo_open=True)
 
@@ -139,11 +145,7 @@ class HumanoidWalkProblem:
         self.sim = BatchSimulator(self.model, cfg.threads)
         self.segment_steps = max(1, int(round(cfg.segment_s / self.dt)))
         m = self.model
-        joints = m.actuator_trnid[:, 0]
-        self.q_cols = _as_slice(QPOS_OFFSET + m.jnt_qposadr[joints])
-        self.v_cols = _as_slice(QPOS_OFFSET + m.nq + m.jnt_dofadr[joints])
-        self.kp = m.actuator_gainprm[:, 0].copy()
-        self.force_range = m.actuator_forcerange.copy()
+        self.work = ServoWork(m)
         self.mass_kg = float(m.body_mass.sum())
         self.speed_limits = cfg.speed_margin * np.array([SPEED_LIMITS[j] for j in nao.JOINTS])
         self.worlds = None
@@ -151,12 +153,12 @@ class HumanoidWalkProblem:
             from evomotion.sim.nao.worlds import Perturbation, World, draw_worlds
 
             self.worlds = [World(m)] + draw_worlds(
-                m, Perturbation(), cfg.worlds - 1,
+                m, Perturbation(push_ns=(-cfg.train_push_ns, cfg.train_push_ns)), cfg.worlds - 1,
                 np.random.default_rng(max(cfg.world_seed, 0)), self.horizon_s,
                 design=cfg.world_design)
 
     def initial_population(self, n: int, rng: np.random.Generator) -> np.ndarray:
-        """The hand-set gait of :data:`.gait.DEFAULT` (a slow, safe walk; CMA-ES starts from
+        """The hand-set gait of :data:`.gait.DEFAULT` (a cautious walk; CMA-ES starts from
         its mean) and ``n - 1`` copies jittered by 5 % of each gene's range (for the GA)."""
         n = max(int(n), 1)
         span = self.genome.upper - self.genome.lower
@@ -240,15 +242,7 @@ class HumanoidWalkProblem:
         forward, lateral = d[:, 0], d[:, 1]
         heading = track.yaw_rad[rows, last] - track.yaw_rad[:, 0]
         t_up = np.where(fell, (fall + 1) * self.dt, self.nstep * self.dt)
-        # mechanical work of the position servos up to the end or the fall
-        tau = ctrl - states[..., self.q_cols]  # in place from here: [P, nstep, 22] is large
-        tau *= self.kp
-        np.maximum(tau, self.force_range[:, 0], out=tau)
-        np.minimum(tau, self.force_range[:, 1], out=tau)
-        tau *= states[..., self.v_cols]
-        power = np.abs(tau, out=tau).sum(axis=2)  # [P, nstep] W
-        alive = np.arange(self.nstep)[None] <= last[:, None]
-        work = (power * alive).sum(axis=1) * self.dt
+        work = self.work(states, ctrl, last)  # mechanical work of the servos (J)
         cot = work / (self.mass_kg * GRAVITY * np.maximum(forward, 0.1))
         heading_abs = np.abs(heading)
         quality = forward - c.heading_weight * heading_abs - c.lateral_weight * np.abs(lateral) \
@@ -268,14 +262,6 @@ class HumanoidWalkProblem:
             "fall_rate": fell.astype(float), "speed_ratio": np.asarray(speed_ratio, float),
         }
         return Evaluation(fitness, metrics)
-
-
-def _as_slice(cols: np.ndarray) -> slice | np.ndarray:
-    """``cols`` as a slice when they are consecutive (a view instead of a gather)."""
-    cols = np.asarray(cols)
-    if cols.size and np.all(np.diff(cols) == 1):
-        return slice(int(cols[0]), int(cols[-1]) + 1)
-    return cols
 
 
 def soft_floor(quality: np.ndarray) -> np.ndarray:
