@@ -122,14 +122,19 @@ def plot_cmd(
     run_dirs: Annotated[list[Path], typer.Argument(help="One or more run folders")],
     out: Annotated[Path | None, typer.Option(help="Output stem (.png and .svg)")] = None,
 ) -> None:
-    """Fitness per generation (one run) or median/IQR against evaluations (several)."""
-    from evomotion.run.plots import plot_fitness, plot_runs
+    """Fitness per generation (one run; a quality-diversity run also gets its coverage /
+    QD-score curves and the archive heat map) or median/IQR against evaluations (several)."""
+    from evomotion.run.plots import plot_archive, plot_fitness, plot_qd, plot_runs
 
     for d in run_dirs:
         if not (d / "stats.csv").exists():
             raise InputError(f"{d}: not a run folder (no stats.csv)")
     if len(run_dirs) == 1:
-        paths = plot_fitness(run_dirs[0] / "stats.csv", out or run_dirs[0] / "plots" / "fitness")
+        d = run_dirs[0]
+        paths = plot_fitness(d / "stats.csv", out or d / "plots" / "fitness")
+        if (d / "archive.npz").exists() and out is None:
+            paths += plot_qd(d / "stats.csv", d / "plots" / "qd")
+            paths += plot_archive(d / "archive.npz", d / "plots" / "archive")
     else:
         paths = plot_runs([d / "stats.csv" for d in run_dirs], out or Path("runs-comparison"))
     for p in paths:

@@ -4,6 +4,9 @@ Parametrised over ``ALGORITHMS`` with no exemptions: shapes; ``ask``/``tell`` ne
 the state passed in; the base's best-so-far and generation bookkeeping; checkpoint round trip
 through ``state_to_arrays``/``state_from_arrays`` with bit-identical continuation; the
 uniform factory signature with the ``mutate`` hook either used or rejected with ValueError.
+Every optimizer is told the measures (behaviour descriptors) of what it asked for; the
+quality-diversity ones (``needs_measures``) get the measure spec from their factory and use
+them, the others ignore them.
 """
 
 from __future__ import annotations
@@ -16,17 +19,24 @@ import pytest
 
 from evomotion.core.algorithms import ALGORITHMS
 from evomotion.core.optimizer import Optimizer
-from evomotion.core.problem import GenomeSpec
+from evomotion.core.problem import GenomeSpec, MeasureSpec
 from evomotion.core.state import state_from_arrays, state_to_arrays
 
 GENOME = GenomeSpec.box(4, -2.0, 3.0)
+MEASURES = MeasureSpec(("x0", "x1"), GENOME.lower[:2], GENOME.upper[:2], (5, 5))
 NAMES = sorted(ALGORITHMS)
 
 
 def make(name: str, **kw) -> tuple[Optimizer, object]:
     cfg_cls, factory = ALGORITHMS[name]
     cfg = cfg_cls(pop_size=16)
+    if getattr(cfg, "needs_measures", False):
+        kw["measures"] = MEASURES
     return factory(GENOME, cfg, **kw), cfg
+
+
+def measures_of(x: np.ndarray) -> np.ndarray:
+    return x[:, :2].copy()
 
 
 def cost_fn(x: np.ndarray) -> np.ndarray:
@@ -52,7 +62,7 @@ def step(opt: Optimizer, state, rng, fn=cost_fn):
     assert np.all(np.isfinite(x))
     asked_copy = copy.deepcopy(asked)
     cost = fn(x)
-    new = opt.tell(asked, x, cost, rng)
+    new = opt.tell(asked, x, cost, rng, measures=measures_of(x))
     assert_same_state(asked, asked_copy)
     assert type(new) is type(state)
     return x, cost, asked, new

@@ -14,6 +14,10 @@ counter. Every state dataclass therefore has the fields ``best_x``, ``best_cost`
 population included: a ``tell`` completes one when :meth:`Optimizer.generation_done` says so
 (always, except between the waves of an asynchronous cellular-GA sweep).
 
+Quality-diversity optimizers (``needs_measures = True``) also get the behaviour descriptors
+of the told genomes: ``tell(state, genomes, cost, rng, measures=m)`` passes them on to
+``_tell(state, genomes, cost, rng, measures)``; every other optimizer ignores the keyword.
+
 Construction is uniform: every registered factory is ``factory(genome, cfg, *, mutate=None)``
 (see :mod:`evomotion.core.algorithms`), where ``mutate`` is a problem-supplied mutation
 :data:`MutateFn`; an algorithm that cannot use one raises ``ValueError``. Every
@@ -47,6 +51,8 @@ class Optimizer(ABC):
     """Base class of ask/tell optimizers over a real-valued genome."""
 
     name: str = "optimizer"
+    needs_measures: bool = False  # QD optimizers: tell needs the behaviour descriptors
+    extra_columns: tuple[str, ...] = ()  # the optimizer's own stats.csv columns (qd_stats)
 
     def __init__(self, genome: GenomeSpec, *, mutate: MutateFn | None = None) -> None:
         self.genome = genome
@@ -74,8 +80,9 @@ class Optimizer(ABC):
         return genomes, state
 
     def tell(self, state: Any, genomes: np.ndarray, cost: np.ndarray,
-             rng: np.random.Generator) -> Any:
-        """The new state after the evaluated ``genomes`` got ``cost`` (minimised)."""
+             rng: np.random.Generator, measures: np.ndarray | None = None) -> Any:
+        """The new state after the evaluated ``genomes`` got ``cost`` (minimised) and, for a
+        QD optimizer, ``measures[n, m]`` (``None``: none, e.g. every individual failed)."""
         genomes = np.asarray(genomes)
         cost = np.asarray(cost, dtype=float)
         if genomes.ndim != 2 or genomes.shape[1] != self.genome.dim:
@@ -84,7 +91,8 @@ class Optimizer(ABC):
             raise ValueError(f"{self.name}: {cost.shape} costs for {genomes.shape[0]} genomes")
         if not np.isfinite(cost.sum()):  # one reduction; exact check and fix below
             cost = np.where(np.isfinite(cost), cost, np.inf)
-        new = self._tell(state, genomes, cost, rng)
+        new = self._tell(state, genomes, cost, rng, measures) if self.needs_measures \
+            else self._tell(state, genomes, cost, rng)
         changes: dict[str, Any] = {}
         if cost.size:
             i = int(cost.argmin())  # the first of equal minima
@@ -94,6 +102,14 @@ class Optimizer(ABC):
         if self.generation_done(new):
             changes["generation"] = new.generation + 1
         return replace(new, **changes) if changes else new
+
+    def qd_stats(self, state: Any) -> dict[str, float]:
+        """Values of :attr:`extra_columns` for ``stats.csv`` (none for plain optimizers)."""
+        return {}
+
+    def expected_population(self) -> int | None:
+        """Rows of :meth:`population` (``None``: not fixed); checked on resume."""
+        return getattr(getattr(self, "cfg", None), "pop_size", None)
 
     def best(self, state: Any) -> tuple[np.ndarray, float]:
         """Best genome seen so far and its cost (``inf`` before any tell)."""

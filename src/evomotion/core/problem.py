@@ -7,6 +7,11 @@ per row plus named per-individual metrics (for example ``time_to_fall_s``).
 Fitness is in the problem's own sense (``"max"`` or ``"min"``). Optimizers work on a
 *cost* that is always minimised: ``cost = fitness`` for ``"min"`` and ``-fitness`` for
 ``"max"``. A non-finite fitness becomes the worst cost (``+inf``); see :func:`sanitize`.
+
+Quality-diversity problems also describe *what* each individual does: ``measure_spec``
+(a :class:`MeasureSpec`: names, ranges and units of the behaviour descriptors) and
+``Evaluation.measures[pop, m]``. Both are optional; a problem without them is unchanged, and
+the QD optimizers (MAP-Elites, CMA-ME) refuse it with a one-line message.
 """
 
 from __future__ import annotations
@@ -56,14 +61,43 @@ class GenomeSpec:
         return rng.uniform(self.lower, self.upper, size=(n, self.dim))
 
 
+@dataclass(frozen=True)
+class MeasureSpec:
+    """The behaviour descriptors of a QD problem: ``names`` with units in them, the ranges
+    ``lower``/``upper`` an archive spans, and a suggested number of grid ``bins`` each."""
+
+    names: tuple[str, ...]
+    lower: np.ndarray
+    upper: np.ndarray
+    bins: tuple[int, ...] = ()
+
+    def __post_init__(self) -> None:
+        lo = np.asarray(self.lower, dtype=float).ravel()
+        hi = np.asarray(self.upper, dtype=float).ravel()
+        if lo.shape != hi.shape or lo.size != len(self.names) or not np.all(hi > lo):
+            raise ValueError(f"measure ranges must be {len(self.names)} intervals lower < upper")
+        bins = tuple(int(b) for b in self.bins) or (10,) * lo.size
+        if len(bins) != lo.size or min(bins) < 1:
+            raise ValueError(f"measure bins must be {lo.size} counts >= 1, got {bins}")
+        object.__setattr__(self, "lower", lo)
+        object.__setattr__(self, "upper", hi)
+        object.__setattr__(self, "bins", bins)
+
+    @property
+    def dim(self) -> int:
+        return int(self.lower.size)
+
+
 @dataclass
 class Evaluation:
-    """Result of evaluating a batch: ``fitness[pop]`` and ``metrics[name][pop]``."""
+    """Result of evaluating a batch: ``fitness[pop]``, ``metrics[name][pop]`` and, for a
+    quality-diversity problem, the behaviour descriptors ``measures[pop, m]``."""
 
     fitness: np.ndarray
     metrics: dict[str, np.ndarray] = field(default_factory=dict)
     failed: np.ndarray | None = None  # bool[pop]: non-finite or raised
     errors: list[str] = field(default_factory=list)  # messages of exceptions caught
+    measures: np.ndarray | None = None  # [pop, m]; None: the problem has none
 
     def __len__(self) -> int:
         return int(self.fitness.shape[0])
@@ -83,7 +117,13 @@ class Evaluation:
             [p.failed if p.failed is not None else np.zeros(len(p), bool) for p in parts]
         )
         errors = [e for p in parts for e in p.errors]
-        return Evaluation(fit, metrics, failed, errors)
+        dims = {p.measures.shape[1] for p in parts if p.measures is not None}
+        measures = None
+        if dims:  # a failed part (no measures) gets NaN rows
+            m = dims.pop()
+            measures = np.concatenate([p.measures if p.measures is not None
+                                       else np.full((len(p), m), np.nan) for p in parts])
+        return Evaluation(fit, metrics, failed, errors, measures)
 
 
 @runtime_checkable
@@ -120,14 +160,23 @@ def sanitize(ev: Evaluation, sense: Sense, n: int) -> Evaluation:
     if not all(isinstance(v, np.ndarray) and v.shape[:1] == (n,) for v in metrics.values()):
         metrics = {k: v if isinstance(v, np.ndarray) and v.shape[:1] == (n,)
                    else np.asarray(v).reshape(n, *np.shape(v)[1:]) for k, v in metrics.items()}
-    if ev.failed is None and np.isfinite(fit).all():  # the common clean batch
-        return Evaluation(fit, metrics, None, ev.errors)  # failed None: none failed
+    measures = ev.measures
+    if measures is not None:
+        measures = np.asarray(measures, dtype=float)
+        if measures.ndim != 2 or measures.shape[0] != n:
+            raise ValueError(f"problem returned measures of shape {measures.shape} for "
+                             f"{n} genomes")
+    if ev.failed is None and np.isfinite(fit).all() and (
+            measures is None or np.isfinite(measures.sum())):  # the common clean batch
+        return Evaluation(fit, metrics, None, ev.errors, measures)  # failed None: none failed
     bad = ~np.isfinite(fit)
+    if measures is not None:
+        bad |= ~np.isfinite(measures).all(axis=1)  # a NaN descriptor places nothing
     if ev.failed is not None:
         bad |= np.asarray(ev.failed, dtype=bool)
     if bad.any():
         fit = np.where(bad, worst_fitness(sense), fit)
-    return Evaluation(fit, metrics, bad, list(ev.errors))
+    return Evaluation(fit, metrics, bad, list(ev.errors), measures)
 
 
 def failed_evaluation(n: int, sense: Sense, metric_names: tuple[str, ...]) -> Evaluation:

@@ -16,17 +16,27 @@ import numpy as np
 from evomotion.core.algorithms import ALGORITHMS
 from evomotion.core.optimizer import Optimizer
 from evomotion.core.problem import Problem
+from evomotion.core.qd import QDOptimizer
 from evomotion.core.registry import lookup
+from evomotion.errors import InputError
 from evomotion.run.driver import Driver, Evaluate, StepReport
 
 
 def make_optimizer(problem: Problem, algorithm_cfg: Any) -> Optimizer:
-    """The optimizer registered as ``algorithm_cfg.name``, with the problem's hooks."""
+    """The optimizer registered as ``algorithm_cfg.name``, with the problem's hooks (its
+    mutation; its measure spec for a quality-diversity optimizer)."""
     _, factory = lookup(ALGORITHMS, "algorithm", algorithm_cfg.name)
-    kwargs = {}
+    kwargs: dict[str, Any] = {}
     mutate = getattr(problem, "mutate", None)
     if mutate is not None:
         kwargs["mutate"] = mutate
+    if getattr(algorithm_cfg, "needs_measures", False):
+        spec = getattr(problem, "measure_spec", None)
+        if spec is None:
+            raise InputError(f"algorithm.name: {algorithm_cfg.name!r} is a quality-diversity "
+                             "optimizer and needs a problem with measures (behaviour "
+                             "descriptors); this study's problem has none")
+        kwargs["measures"] = spec
     return factory(problem.genome, algorithm_cfg, **kwargs)
 
 
@@ -47,6 +57,7 @@ class AskTellDriver(Driver):
         self.problem = problem
         self.opt = optimizer
         self.sense = problem.sense
+        self.extra_columns = tuple(optimizer.extra_columns)
 
     def init(self, rng: np.random.Generator) -> Any:
         make_pop = getattr(self.problem, "initial_population", None)
@@ -70,7 +81,8 @@ class AskTellDriver(Driver):
             # sanitized, so only the sign remains of to_cost (tell maps any non-finite to inf)
             cost = ev.fitness if sense == "min" else -ev.fitness
             prev_best = state.best_cost
-            state = opt.tell(state, genomes, cost, rng)
+            state = opt.tell(state, genomes, cost, rng, measures=ev.measures) \
+                if opt.needs_measures else opt.tell(state, genomes, cost, rng)
             n += len(genomes)
             if ev.failed is not None and ev.failed.any():
                 nfail += int(ev.failed.sum())
@@ -81,13 +93,15 @@ class AskTellDriver(Driver):
             if opt.generation_done(state):
                 break
         pop, pcost = self.opt.population(state)
-        return state, StepReport(n, np.asarray(pcost, float), pop, nfail, errors, best_metrics)
+        extras = opt.qd_stats(state) if self.extra_columns else {}
+        return state, StepReport(n, np.asarray(pcost, float), pop, nfail, errors, best_metrics,
+                                 extras)
 
     def check_state(self, state: Any) -> None:
         d = self.problem.genome.dim
         pop, cost = self.opt.population(state)
         pop, cost = np.asarray(pop), np.asarray(cost)
-        n = getattr(self.opt.cfg, "pop_size", None)
+        n = self.opt.expected_population()
         if pop.ndim != 2 or pop.shape[1] != d or (n is not None and pop.shape[0] != n):
             raise ValueError(f"population of shape {pop.shape}, expected "
                              f"({n if n is not None else 'n'}, {d})")
@@ -101,6 +115,11 @@ class AskTellDriver(Driver):
 
     def best(self, state: Any) -> tuple[np.ndarray, float]:
         return self.opt.best(state)
+
+    def archive_view(self, state: Any) -> tuple[Any, Any, tuple[str, ...]] | None:
+        if not isinstance(self.opt, QDOptimizer):
+            return None
+        return self.opt.spec, self.opt.result_archive(state), self.opt.measure_spec.names
 
     def stop(self, state: Any) -> str | None:
         return self.opt.stop(state)

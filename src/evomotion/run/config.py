@@ -277,7 +277,12 @@ def resolve_config(study: Any, file: Path | None = None,
         if preset not in presets:
             raise InputError(f"--preset: unknown preset {preset!r} for study {study.name!r}; "
                              f"available: {', '.join(presets) or 'none'}")
-        defaults = _merge(defaults, presets[preset])
+        chosen = presets[preset]
+        p_alg = chosen.get("algorithm", {}).get("name")
+        if p_alg is not None and p_alg != defaults.get("algorithm", {}).get("name"):
+            # a preset with another algorithm: the defaults' tuning was for the other one
+            defaults = {k: v for k, v in defaults.items() if k != "algorithm"}
+        defaults = _merge(defaults, chosen)
     default_alg = defaults.get("algorithm", {}).get("name") or default_algorithm(study)
     user_alg = user.get("algorithm", {}) if isinstance(user.get("algorithm"), dict) else {}
     if user_alg.get("name", default_alg) != default_alg:

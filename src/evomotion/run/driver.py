@@ -94,6 +94,11 @@ class Driver(ABC):
         """Inverse of :meth:`state_arrays`."""
         return state_from_arrays(self.state_type(), arrays, meta)
 
+    def archive_view(self, state: Any) -> tuple[Any, Any, tuple[str, ...]] | None:
+        """``(archive spec, archive state, measure names)`` of a quality-diversity method
+        (the run loop writes ``archive.npz`` and the heat map from it), else ``None``."""
+        return None
+
     def check_state(self, state: Any) -> None:
         """Raise ``ValueError`` naming what is wrong when a restored ``state`` cannot belong
         to this driver's run (shapes against the config, non-finite genomes, ...)."""

@@ -70,3 +70,100 @@ def _save(fig, out_stem: Path) -> list[Path]:
         fig.savefig(p, dpi=120)
     plt.close(fig)
     return paths
+
+
+def plot_qd(stats_csv: Path, out_stem: Path, title: str = "") -> list[Path]:
+    """Coverage, QD-score, best objective and archive size against evaluations (the
+    ``stats.csv`` columns of a quality-diversity run)."""
+    s = read_stats(stats_csv)
+    if not s or "coverage" not in s:
+        raise InputError(f"{stats_csv}: no quality-diversity columns (coverage, qd_score)")
+    fig, axes = plt.subplots(1, 3, figsize=(11.0, 3.4))
+    e = s["evaluations"]
+    for ax, key, label in zip(axes, ("coverage", "qd_score", "qd_best"),
+                              ("coverage (filled / cells)", "QD-score", "best objective"),
+                              strict=True):
+        ax.plot(e, s[key], color="tab:blue")
+        ax.set_xlabel("evaluations")
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+    axes[0].set_title(title or Path(stats_csv).parent.name)
+    return _save(fig, out_stem)
+
+
+def plot_archive(archive_npz: Path, out_stem: Path, title: str = "") -> list[Path]:
+    """Heat map of the elites' objective over the first two measures; with three or more
+    measures one panel per slice of the third (the best elite of the others shown)."""
+    from evomotion.run.archive_file import read_archive
+
+    a = read_archive(archive_npz)
+    m = a.lower.size
+    names = a.measure_names
+    if m == 1:
+        fig, ax = plt.subplots(figsize=(6.4, 3.2))
+        order = np.argsort(a.centre[:, 0])
+        ax.plot(a.centre[order, 0], a.objective[order], ".", color="tab:blue")
+        ax.set_xlabel(names[0])
+        ax.set_ylabel("objective")
+        ax.set_xlim(a.lower[0], a.upper[0])
+        ax.set_title(title)
+        return _save(fig, out_stem)
+    nslice = 1 if m == 2 else (int(a.bins[2]) if a.kind == "grid" else 6)
+    nslice = min(nslice, 12)
+    edges = np.linspace(a.lower[2], a.upper[2], nslice + 1) if m > 2 else None
+    cols = min(nslice, 4)
+    rows = int(np.ceil(nslice / cols))
+    fig, axes = plt.subplots(rows, cols, figsize=(3.6 * cols + 1.2, 3.2 * rows), squeeze=False,
+                             layout="constrained")
+    # the colour range of most elites: a few far worse ones (fallen robots, say) would
+    # otherwise flatten the map; they show in the darkest colour
+    vmin, vmax = (float(np.percentile(a.objective, 5)), float(a.objective.max())) \
+        if a.objective.size else (0.0, 1.0)
+    vmin = min(vmin, vmax - 1e-12)
+    image = None
+    for k, ax in enumerate(axes.ravel()):
+        if k >= nslice:
+            ax.axis("off")
+            continue
+        if edges is not None:
+            top = edges[k + 1] if k < nslice - 1 else np.inf
+            sel = (a.measures[:, 2] >= edges[k]) & (a.measures[:, 2] < top)
+            ax.set_title(f"{names[2]} {edges[k]:.3g}..{edges[k + 1]:.3g}", fontsize=9)
+        else:
+            sel = np.ones(a.objective.size, bool)
+        image = _panel(ax, a, sel, vmin, vmax)
+        ax.set_xlabel(names[0])
+        ax.set_ylabel(names[1])
+    if image is not None:
+        fig.colorbar(image, ax=axes.ravel().tolist(), label="objective", shrink=0.85,
+                     extend="min" if a.objective.min() < vmin else "neither")
+    fig.suptitle(title or f"archive: {a.objective.size} of {a.cells} cells filled")
+    paths = [Path(out_stem).with_suffix(".png"), Path(out_stem).with_suffix(".svg")]
+    Path(out_stem).parent.mkdir(parents=True, exist_ok=True)
+    for p in paths:  # constrained layout: no tight_layout
+        fig.savefig(p, dpi=120)
+    plt.close(fig)
+    return paths
+
+
+def _panel(ax, a, sel: np.ndarray, vmin: float, vmax: float):
+    """One 2-D panel: a grid as an image (best elite per (x, y) bin), a CVT as coloured
+    centroids (empty ones grey)."""
+    lo, hi = a.lower, a.upper
+    if a.kind == "grid":
+        bx, by = int(a.bins[0]), int(a.bins[1])
+        img = np.full((by, bx), np.nan)
+        ix = np.clip(((a.centre[sel, 0] - lo[0]) / (hi[0] - lo[0]) * bx).astype(int), 0, bx - 1)
+        iy = np.clip(((a.centre[sel, 1] - lo[1]) / (hi[1] - lo[1]) * by).astype(int), 0, by - 1)
+        obj = a.objective[sel]
+        for x, y, f in zip(ix, iy, obj, strict=True):  # the best of the hidden measures
+            if not f <= img[y, x]:
+                img[y, x] = f
+        return ax.imshow(img, origin="lower", extent=(lo[0], hi[0], lo[1], hi[1]),
+                         aspect="auto", vmin=vmin, vmax=vmax, cmap="viridis",
+                         interpolation="nearest")
+    ax.scatter(a.all_centres[:, 0], a.all_centres[:, 1], s=2, color="0.85", linewidths=0)
+    ax.set_xlim(lo[0], hi[0])
+    ax.set_ylim(lo[1], hi[1])
+    return ax.scatter(a.centre[sel, 0], a.centre[sel, 1], c=a.objective[sel], s=4,
+                      vmin=vmin, vmax=vmax, cmap="viridis", linewidths=0)

@@ -215,6 +215,7 @@ def _run(study: Any, config: Config, out_dir: Path | None, quiet: bool, resume: 
                     snap = snapshot()
                 if save and due:
                     save_checkpoint(out_dir, c["generation"], *snap)
+                    _write_archive(driver, state, out_dir)
                     _hook(study.on_checkpoint, context(), log)
     except KeyboardInterrupt:
         reason = "interrupted"
@@ -251,6 +252,11 @@ def _run(study: Any, config: Config, out_dir: Path | None, quiet: bool, resume: 
             from evomotion.run.plots import plot_fitness  # matplotlib: only when plotting
 
             plot_fitness(out_dir / "stats.csv", out_dir / "plots" / "fitness", title=study.name)
+            if _write_archive(driver, state, out_dir):
+                from evomotion.run.plots import plot_archive, plot_qd
+
+                plot_qd(out_dir / "stats.csv", out_dir / "plots" / "qd", title=study.name)
+                plot_archive(out_dir / "archive.npz", out_dir / "plots" / "archive")
         if code != EXIT_NO_FINITE:
             _hook(study.on_checkpoint, ctx, log)
         if code == 0:  # a second Ctrl-C should not wait for videos
@@ -259,6 +265,17 @@ def _run(study: Any, config: Config, out_dir: Path | None, quiet: bool, resume: 
     return RunResult(out_dir, reason, c["generation"], c["evaluations"], ctx.best_fitness,
                      ctx.best_genome, ctx.best_metrics, code, driver, state,
                      getattr(stats, "rows", []))
+
+
+def _write_archive(driver: Any, state: Any, out_dir: Path) -> bool:
+    """``archive.npz`` of a quality-diversity run (:mod:`evomotion.run.archive_file`)."""
+    view = driver.archive_view(state)
+    if view is None:
+        return False
+    from evomotion.run.archive_file import NAME, write_archive
+
+    write_archive(out_dir / NAME, *view)
+    return True
 
 
 def _hook(fn, ctx: RunContext, log) -> Any:

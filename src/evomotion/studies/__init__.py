@@ -16,6 +16,7 @@ STUDIES: dict[str, str] = {
     "functions": "evomotion.studies.functions.study:STUDY",
     "humanoid-step": "evomotion.studies.humanoid_step.study:STUDY",
     "humanoid-walk": "evomotion.studies.humanoid_walk.study:STUDY",
+    "humanoid-repertoire": "evomotion.studies.humanoid_repertoire.study:STUDY",
     "arm-ik": "evomotion.studies.arm_ik.study:STUDY",
     "biped-kick": "evomotion.studies.biped_kick.study:STUDY",
     "quadruped-plan": "evomotion.studies.quadruped_plan.study:STUDY",

@@ -3,6 +3,13 @@
 Definitions as in Jamil & Yang (2013), "A literature survey of benchmark functions for global
 optimization problems": sphere, Rosenbrock (valley), Rastrigin (A = 10), Ackley
 (a = 20, b = 0.2, c = 2*pi). Default domains follow the same survey.
+
+``problem.measures = "linear_projection"`` makes any of them a quality-diversity benchmark:
+the behaviour descriptors of Fontaine et al., "Covariance Matrix Adaptation for the Rapid
+Illumination of Behavior Space", GECCO 2020, section 5.1: ``b1 = sum_{i <= n/2} clip(x_i)``,
+``b2 = sum_{i > n/2} clip(x_i)`` with ``clip(x) = x`` for ``|x| <= 5.12`` and ``5.12 / x``
+otherwise, each in ``[-5.12 n/2, 5.12 n/2]`` (run it with ``algorithm.name = "cma_me"`` or
+``"map_elites"``).
 """
 
 from __future__ import annotations
@@ -12,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from evomotion.core.checks import check_fields, check_number
-from evomotion.core.problem import Evaluation, GenomeSpec
+from evomotion.core.problem import Evaluation, GenomeSpec, MeasureSpec
 from evomotion.core.registry import lookup
 from evomotion.errors import InputError
 
@@ -44,6 +51,17 @@ FUNCTIONS = {  # name -> (function, default half-width of the domain)
 }
 
 
+MEASURES = ("none", "linear_projection")
+CLIP = 5.12  # Fontaine et al. 2020: the clip bound of the linear projection
+
+
+def linear_projection(x: np.ndarray) -> np.ndarray:
+    """``[pop, 2]`` descriptors of Fontaine et al. 2020, section 5.1."""
+    c = np.where(np.abs(x) <= CLIP, x, CLIP / np.where(x == 0, 1.0, x))
+    h = x.shape[1] // 2
+    return np.stack([c[:, :h].sum(1), c[:, h:].sum(1)], axis=1)
+
+
 #: the largest ``problem.dim`` (a benchmark genome; refused before any array is built)
 MAX_DIM = 1_000_000
 #: the largest ``problem.half_width`` (squares and sums of genes stay finite)
@@ -60,10 +78,17 @@ class FunctionsConfig:
     name: str = "sphere"
     dim: int = 30
     half_width: float = 0.0
+    measures: str = "none"  # none | linear_projection (QD benchmark, Fontaine et al. 2020)
 
     def validate(self) -> None:
         check_fields(self, "problem")
         lookup(FUNCTIONS, "function", self.name)
+        if self.measures not in MEASURES:
+            raise InputError(f"problem.measures: expected one of {', '.join(MEASURES)}, got "
+                             f"{self.measures!r}")
+        if self.measures != "none" and self.dim < 2:
+            raise InputError("problem.dim must be >= 2 for problem.measures = "
+                             f"{self.measures!r}")
         if self.dim < 1:
             raise ValueError(f"problem.dim must be >= 1, got {self.dim}")
         if self.name == "rosenbrock" and self.dim < 2:
@@ -92,8 +117,14 @@ class FunctionProblem:
         hw = cfg.half_width or hw
         self.genome = GenomeSpec.box(cfg.dim, -hw, hw)
         self.optimum = np.ones(cfg.dim) if cfg.name == "rosenbrock" else np.zeros(cfg.dim)
+        self.measure_spec = None
+        if cfg.measures == "linear_projection":
+            h = cfg.dim // 2
+            r = CLIP * np.array([h, cfg.dim - h], dtype=float)
+            self.measure_spec = MeasureSpec(("b1", "b2"), -r, r, (100, 100))
 
     def evaluate(self, genomes: np.ndarray) -> Evaluation:
         x = np.asarray(genomes, dtype=float)
         dist = np.linalg.norm(x - self.optimum, axis=1)
-        return Evaluation(self.fn(x), {"distance_to_optimum": dist})
+        m = linear_projection(x) if self.measure_spec is not None else None
+        return Evaluation(self.fn(x), {"distance_to_optimum": dist}, measures=m)

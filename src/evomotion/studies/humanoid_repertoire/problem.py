@@ -1,0 +1,165 @@
+"""The repertoire problem: one NAO step (:mod:`.step`), described by what it does.
+
+Each genome's key poses (every 20 ms, ready pose to ready pose) become one servo target per
+physics step by the linear interpolation :func:`evomotion.sim.nao.replay.motion_targets`
+applies to a ``.motion``, from the robot standing in the ready pose, on the model every
+study uses; the motion is followed by ``hold_s`` (2 s) in the ready pose. So the cell's
+exported ``.motion`` replayed with ``evomotion replay --hold 2`` is the evaluated rollout
+(measured at the same physics step; the batch runs to the longest step's end).
+
+Measures (behaviour descriptors), at the end of the hold, in the robot's initial frame:
+``dx_m`` / ``dy_m``, the torso's displacement (forward / left; the torso stands over the
+middle of the feet in the ready pose before and after, so this is the feet's displacement
+too), and ``dtheta_deg``, its yaw change.
+
+Objective (maximised), stability minus effort: a robot that stays up scores
+``-peak_tilt_rad - effort_weight * work_J`` (the largest tilt of the torso's up axis from
+vertical during the step and the hold; the servos' mechanical work, :class:`~evomotion.sim.
+rollout.ServoWork`; 0.01 per J): between about -1 and 0; one that falls scores
+``-10 + time_up_s / horizon_s``, below every standing one. QD-scores use the offset -10.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from evomotion.core.checks import check_fields, check_number
+from evomotion.core.problem import Evaluation, GenomeSpec, MeasureSpec
+from evomotion.errors import InputError
+from evomotion.sim import nao
+from evomotion.sim.nao.motion import Motion
+from evomotion.sim.nao.replay import motion_targets
+from evomotion.sim.rollout import BatchSimulator, ServoWork, fall_step, fell, torso_track
+from evomotion.studies.humanoid_repertoire import step
+
+METRICS = ("time_to_fall_s", "fell", "dx_m", "dy_m", "dtheta_deg", "peak_tilt_deg", "work_j")
+MEASURES = MeasureSpec(("dx_m", "dy_m", "dtheta_deg"), np.array([-0.10, -0.08, -45.0]),
+                       np.array([0.15, 0.08, 45.0]), (10, 8, 9))
+FALLEN_OBJECTIVE = -10.0
+NAO_TIMESTEP_S = 0.004
+
+
+@dataclass(frozen=True)
+class HumanoidRepertoireConfig:
+    """The ``[problem]`` section of ``humanoid-repertoire``."""
+
+    hold_s: float = 2.0  # the ready pose held after the step (s)
+    effort_weight: float = 0.01  # objective lost per joule of servo work
+    fall_height_m: float = nao.FALL_HEIGHT_M
+    fall_tilt_rad: float = nao.FALL_TILT_RAD
+    threads: int = 0  # mujoco.rollout threads; 0 = all cores
+    segment_s: float = 0.4  # fallen robots stop being simulated at these boundaries (s)
+
+    def for_worker(self) -> HumanoidRepertoireConfig:
+        return dataclasses.replace(self, threads=1) if self.threads == 0 else self
+
+    def validate(self) -> None:
+        check_fields(self, "problem")
+        check_number("problem.hold_s", self.hold_s, lo=0.0, hi=60.0)
+        check_number("problem.effort_weight", self.effort_weight, lo=0.0)
+        check_number("problem.fall_height_m", self.fall_height_m, lo=0.0, lo_open=True)
+        check_number("problem.fall_tilt_rad", self.fall_tilt_rad, lo=0.0, hi=math.pi,
+                     lo_open=True)
+        check_number("problem.threads", self.threads, lo=0, hi=1024, integer=True)
+        check_number("problem.segment_s", self.segment_s, lo=0.0, lo_open=True)
+
+    def genome_dim(self) -> int:
+        return len(step.GENES)
+
+    def horizon_s(self) -> float:
+        return step.MAX_DURATION_S + self.hold_s
+
+    memory_keys = ("hold_s",)
+
+    def memory_bytes(self, pop_size: int) -> int:
+        """Recorded states of one batch (about 90 doubles per physics step), twice."""
+        return 2 * 8 * pop_size * math.ceil(self.horizon_s() / NAO_TIMESTEP_S) * 90
+
+
+class HumanoidRepertoireProblem:
+    """Batch evaluation of steps: objective and (dx, dy, dtheta) measures."""
+
+    sense = "max"
+    metric_names = METRICS
+    measure_spec = MEASURES
+
+    def __init__(self, cfg: HumanoidRepertoireConfig | None = None) -> None:
+        self.cfg = cfg = cfg or HumanoidRepertoireConfig()
+        cfg.validate()
+        self.model = nao.load_model()
+        self.dt = float(self.model.opt.timestep)
+        self.genome = GenomeSpec(step.LOWER.copy(), step.UPPER.copy(), names=step.NAMES)
+        self.horizon_s = cfg.horizon_s()
+        self.nstep = int(math.ceil(self.horizon_s / self.dt))
+        self.sim = BatchSimulator(self.model, cfg.threads)
+        self.segment_steps = max(1, int(round(cfg.segment_s / self.dt)))
+        self.state0 = nao.initial_state(self.model, step.ready_pose())
+        self.work = ServoWork(self.model)
+
+    def initial_population(self, n: int, rng: np.random.Generator) -> np.ndarray:
+        """The in-place step of :data:`.step.DEFAULT` (CMA-ME's emitters start from it)."""
+        return np.tile(step.DEFAULT, (max(int(n), 1), 1))
+
+    def motion(self, genes: np.ndarray) -> Motion:
+        """The step of one genome as a Webots motion (ready pose to ready pose)."""
+        from evomotion.studies.humanoid_repertoire.artifacts import step_motion
+
+        return step_motion(genes)
+
+    def controls(self, genomes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Servo targets ``[P, nstep, 22]`` (each step's motion, then its last pose held) and
+        the last physics step of each step's motion plus ``hold_s`` ``[P]``, where it is
+        measured: the last step ``evomotion replay --hold hold_s`` simulates."""
+        ctrl = np.empty((len(genomes), self.nstep, len(nao.JOINTS)))
+        end = np.empty(len(genomes), np.int64)
+        for i, g in enumerate(genomes):
+            m = self.motion(g)
+            _, ctrl[i] = motion_targets(m, self.dt, self.nstep)
+            end[i] = min(int(np.ceil((m.duration_s + self.cfg.hold_s) / self.dt)),
+                         self.nstep) - 1
+        return ctrl, end
+
+    def _fallen(self, states: np.ndarray) -> np.ndarray:
+        return fell(states, self.cfg.fall_height_m, self.cfg.fall_tilt_rad)
+
+    def evaluate(self, genomes: np.ndarray) -> Evaluation:
+        genomes = np.atleast_2d(np.asarray(genomes, dtype=float))
+        ctrl, end = self.controls(genomes)
+        states, _ = self.sim.run_until(self.state0, ctrl, self._fallen, self.segment_steps)
+        return self.score(states, ctrl, end)
+
+    def score(self, states: np.ndarray, ctrl: np.ndarray, end: np.ndarray) -> Evaluation:
+        """Objective, metrics and measures from recorded ``states[P, nstep, ns]``, measured
+        at step ``end[P]`` (or at the fall, when it comes first)."""
+        c = self.cfg
+        track = torso_track(states)
+        fall = fall_step(track, c.fall_height_m, c.fall_tilt_rad)
+        fell_ = fall <= end
+        last = np.minimum(fall, end)
+        rows = np.arange(len(states))
+        yaw0 = track.yaw_rad[:, 0]
+        d = track.xyz[rows, last, :2] - track.xyz[:, 0, :2]
+        cy, sy = np.cos(yaw0), np.sin(yaw0)
+        dx, dy = cy * d[:, 0] + sy * d[:, 1], -sy * d[:, 0] + cy * d[:, 1]
+        dtheta = np.degrees(track.yaw_rad[rows, last] - yaw0)
+        tilt = np.arccos(np.clip(track.up_z, -1.0, 1.0))
+        alive = np.arange(self.nstep)[None] <= last[:, None]
+        peak = np.where(alive, tilt, 0.0).max(axis=1)
+        work = self.work(states, ctrl, last)
+        t_up = np.where(fell_, fall + 1, end + 1) * self.dt
+        objective = np.where(fell_, FALLEN_OBJECTIVE + t_up / self.horizon_s,
+                             -peak - c.effort_weight * work)
+        metrics = {"time_to_fall_s": t_up, "fell": fell_.astype(float), "dx_m": dx,
+                   "dy_m": dy, "dtheta_deg": dtheta, "peak_tilt_deg": np.degrees(peak),
+                   "work_j": work}
+        return Evaluation(objective, metrics, measures=np.stack([dx, dy, dtheta], axis=1))
+
+
+def make_problem(cfg: HumanoidRepertoireConfig) -> HumanoidRepertoireProblem:
+    if not isinstance(cfg, HumanoidRepertoireConfig):
+        raise InputError("humanoid-repertoire: expected a HumanoidRepertoireConfig")
+    return HumanoidRepertoireProblem(cfg)

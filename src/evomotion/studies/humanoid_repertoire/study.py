@@ -1,0 +1,113 @@
+"""``humanoid-repertoire``: a repertoire of NAO steps by quality-diversity (CMA-ME)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import typer
+
+from evomotion.studies.base import Study
+from evomotion.studies.humanoid_repertoire.problem import (
+    FALLEN_OBJECTIVE,
+    HumanoidRepertoireConfig,
+    make_problem,
+)
+
+cli = typer.Typer(help="A repertoire of NAO steps (dx, dy, dtheta) by CMA-ME.",
+                  no_args_is_help=True)
+
+
+@cli.command("pick")
+def pick_cmd(run: Path = typer.Argument(..., help="a humanoid-repertoire run folder"),
+             dx: float = typer.Option(..., "--dx", help="forward displacement (m)"),
+             dy: float = typer.Option(0.0, "--dy", help="leftward displacement (m)"),
+             dtheta: float = typer.Option(0.0, "--dtheta", help="turn, degrees (+ = left)"),
+             json_out: bool = typer.Option(False, "--json", help="JSON on stdout")) -> None:
+    """The repertoire's step nearest the request: its .motion and measured behaviour."""
+    from evomotion.studies.humanoid_repertoire.use import pick
+
+    r = pick(run, dx, dy, dtheta)
+    if json_out:
+        typer.echo(json.dumps(r, indent=2))
+        return
+    m = r["measured"]
+    typer.echo(f"{r['file']}: cell {r['cell']}, measured dx {m['dx_m']:+.3f} m, dy "
+               f"{m['dy_m']:+.3f} m, dtheta {m['dtheta_deg']:+.1f} deg, objective "
+               f"{r['objective']:.3f}")
+
+
+@cli.command("export")
+def export_cmd(run: Path = typer.Argument(..., help="a humanoid-repertoire run folder"),
+               hold: float = typer.Option(2.0, "--hold", help="the run's hold (s), recorded "
+                                                             "in index.json")) -> None:
+    """Rebuild repertoire/ (one .motion per standing cell, index.json) from archive.npz."""
+    from evomotion.studies.humanoid_repertoire.artifacts import write_repertoire
+
+    entries = write_repertoire(Path(run), hold)
+    typer.echo(f"{len(entries)} standing steps -> {Path(run) / 'repertoire'}")
+
+
+@cli.command("walk-to")
+def walk_to_cmd(run: Path = typer.Argument(..., help="a humanoid-repertoire run folder"),
+                x: float = typer.Option(..., "--x", help="target forward (m)"),
+                y: float = typer.Option(0.0, "--y", help="target left (m)"),
+                theta: float = typer.Option(0.0, "--theta", help="target heading (deg)"),
+                video: Path = typer.Option(None, "--video", help="write an MP4 of the walk"),
+                out: Path = typer.Option(None, "--out", help="the chained .motion (default: "
+                                                             "in the run folder)"),
+                json_out: bool = typer.Option(False, "--json", help="JSON on stdout")) -> None:
+    """Plan a sequence of repertoire steps to a pose (A*), chain and play it."""
+    from evomotion.studies.humanoid_repertoire.use import walk_to
+
+    r = walk_to(run, x, y, theta, video=video, out=out)
+    if json_out:
+        typer.echo(json.dumps(r, indent=2))
+        return
+    typer.echo(f"{r['steps']} steps -> ({r['reached']['x_m']:+.3f}, {r['reached']['y_m']:+.3f}"
+               f") m, {r['reached']['theta_deg']:+.1f} deg: error {r['position_error_m']:.3f}"
+               f" m, {r['heading_error_deg']:.1f} deg, {'FELL' if r['fell'] else 'stayed up'}"
+               f"; {r['motion']}")
+
+
+def _finalize(ctx):
+    from evomotion.studies.humanoid_repertoire.artifacts import finalize
+
+    return finalize(ctx)
+
+
+def _on_checkpoint(ctx):
+    from evomotion.studies.humanoid_repertoire.artifacts import on_checkpoint
+
+    return on_checkpoint(ctx)
+
+
+def _best_record(ctx):
+    from evomotion.studies.humanoid_repertoire.artifacts import best_record
+
+    return best_record(ctx)
+
+
+STUDY = Study(
+    name="humanoid-repertoire",
+    description="A repertoire of NAO H25 steps in MuJoCo: each cell of a (dx, dy, dtheta) "
+                "grid holds the most stable step that does it, found by CMA-ME; one Webots "
+                ".motion per cell, pick and walk-to.",
+    problem_config=HumanoidRepertoireConfig,
+    make_problem=make_problem,
+    defaults={
+        "algorithm": {"name": "cma_me", "emitters": 4, "pop_size": 16, "sigma0": 0.15,
+                      "qd_offset": FALLEN_OBJECTIVE},
+        "run": {"generations": 380, "checkpoint_every": 50},
+    },
+    presets={"map_elites": {"algorithm": {"name": "map_elites", "pop_size": 64,
+                                          "qd_offset": FALLEN_OBJECTIVE}}},
+    preset_notes={"map_elites": "MAP-Elites (iso+line) instead of CMA-ME, same budget"},
+    core_algorithms=("cma_me", "map_elites"),
+    on_checkpoint=_on_checkpoint,
+    finalize=_finalize,
+    best_record=_best_record,
+    cli=cli,
+    smoke=("algorithm.emitters=2", "algorithm.pop_size=4", "problem.hold_s=0.2",
+           ),
+)

@@ -1,0 +1,126 @@
+"""Using a repertoire: ``pick`` the step nearest a requested one, ``walk-to`` a target pose.
+
+``pick``: the filled cell whose *measured* (dx, dy, dtheta) is nearest the request, distances
+normalised by each measure's archive range.
+
+``walk-to``: a best-first (A*) search over sequences of repertoire steps. A state is the
+planar pose (x, y, theta) after some steps; a step moves it by its measured displacement,
+rotated by the current heading. The cost of a plan is its number of steps; the heuristic is
+``max(distance / longest step, |heading error| / largest turn)`` (admissible: no step moves
+farther or turns more), and the search stops at the first pose within ``tol_m`` and
+``tol_deg`` of the target (or at the pose closest to it when ``max_expansions`` run out).
+Poses are merged on a 1 cm / 2 degree lattice. The chained motion (``ready.motion`` is not
+included: the steps start and end in the ready pose) is then played in simulation.
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+from pathlib import Path
+
+import numpy as np
+
+from evomotion.errors import InputError
+from evomotion.studies.humanoid_repertoire.artifacts import chain, read_cell, read_index
+
+
+def _measures(index: dict) -> tuple[np.ndarray, list[dict]]:
+    entries = index["entries"]
+    return np.array([[e["measured"]["dx_m"], e["measured"]["dy_m"],
+                      e["measured"]["dtheta_deg"]] for e in entries], float), entries
+
+
+def pick(run: Path, dx: float, dy: float, dtheta_deg: float) -> dict:
+    """The nearest filled cell to the request: ``{file, cell, measured, objective,
+    distance}`` (``file`` absolute)."""
+    folder, index = read_index(run)
+    m, entries = _measures(index)
+    scale = np.array([0.25, 0.16, 90.0])  # the archive's ranges (m, m, deg)
+    d = np.linalg.norm((m - [dx, dy, dtheta_deg]) / scale, axis=1)
+    i = int(np.argmin(d))
+    e = entries[i]
+    return {"file": str((folder / Path(e["file"]).name).resolve()), "cell": e["cell"],
+            "measured": e["measured"], "objective": e["objective"],
+            "requested": {"dx_m": dx, "dy_m": dy, "dtheta_deg": dtheta_deg},
+            "normalised_distance": float(d[i])}
+
+
+def _compose(pose: np.ndarray, step: np.ndarray) -> np.ndarray:
+    x, y, th = pose
+    c, s = math.cos(math.radians(th)), math.sin(math.radians(th))
+    return np.array([x + c * step[0] - s * step[1], y + s * step[0] + c * step[1],
+                     th + step[2]])
+
+
+def plan(steps: np.ndarray, target: np.ndarray, tol_m: float = 0.03, tol_deg: float = 5.0,
+         max_steps: int = 60, max_expansions: int = 20_000) -> tuple[list[int], np.ndarray]:
+    """Indices of repertoire ``steps[n, 3]`` (dx m, dy m, dtheta deg) to reach ``target`` (x,
+    y, theta deg) from the origin, and the planned final pose (A*, see the module doc)."""
+    reach = max(float(np.hypot(steps[:, 0], steps[:, 1]).max()), 1e-3)
+    turn = max(float(np.abs(steps[:, 2]).max()), 1e-3)
+
+    def err(p):
+        return float(np.hypot(*(p[:2] - target[:2]))), abs((p[2] - target[2] + 180) % 360 - 180)
+
+    def h(p):
+        dist, ang = err(p)
+        return max(dist / reach, ang / turn)
+
+    start = np.zeros(3)
+    heap = [(h(start), 0, 0, start, ())]
+    seen: set[tuple[int, int, int]] = set()
+    best = (math.inf, start, ())
+    tie = 0
+    for _ in range(max_expansions):
+        if not heap:
+            break
+        _, g, _, p, path = heapq.heappop(heap)
+        dist, ang = err(p)
+        score = dist + 0.01 * ang
+        if score < best[0]:
+            best = (score, p, path)
+        if dist <= tol_m and ang <= tol_deg:
+            return list(path), p
+        key = (round(p[0] / 0.01), round(p[1] / 0.01), round(p[2] / 2.0))
+        if key in seen or g >= max_steps:
+            continue
+        seen.add(key)
+        for i, s in enumerate(steps):
+            q = _compose(p, s)
+            tie += 1
+            heapq.heappush(heap, (g + 1 + h(q), g + 1, tie, q, path + (i,)))
+    return list(best[2]), best[1]
+
+
+def walk_to(run: Path, x: float, y: float, theta_deg: float, video: Path | None = None,
+            out: Path | None = None, hold_s: float = 2.0) -> dict:
+    """Plan, chain, play in simulation; the chained motion goes to ``out``."""
+    from evomotion.sim.nao.motion import format_motion
+    from evomotion.sim.nao.replay import replay_motion
+
+    folder, index = read_index(run)
+    m, entries = _measures(index)
+    target = np.array([x, y, theta_deg], float)
+    if not np.all(np.isfinite(target)):
+        raise InputError("walk-to: --x, --y and --theta must be finite numbers")
+    idx, planned = plan(m, target)
+    if not idx:
+        raise InputError("walk-to: the target is the start pose (nothing to do) or no "
+                         "step of the repertoire gets closer to it")
+    motion = chain([read_cell(folder, entries[i]) for i in idx])
+    out = out or Path(run) / f"walk_to_{x:+.2f}_{y:+.2f}_{theta_deg:+.0f}.motion"
+    out.write_text(format_motion(motion))
+    summary, skipped = replay_motion(motion, video, hold_s)
+    dx, dy = summary["displacement_m"]
+    th = math.degrees(summary["heading_change_rad"])
+    return {"target": {"x_m": x, "y_m": y, "theta_deg": theta_deg},
+            "steps": len(idx), "cells": [entries[i]["cell"] for i in idx],
+            "planned": {"x_m": float(planned[0]), "y_m": float(planned[1]),
+                        "theta_deg": float(planned[2])},
+            "reached": {"x_m": dx, "y_m": dy, "theta_deg": th},
+            "position_error_m": float(math.hypot(dx - x, dy - y)),
+            "heading_error_deg": float(abs((th - theta_deg + 180) % 360 - 180)),
+            "fell": bool(summary["fell"]), "motion": str(out),
+            "duration_s": motion.duration_s,
+            "video": str(video) if video is not None and skipped is None else None}
