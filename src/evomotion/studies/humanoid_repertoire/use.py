@@ -5,12 +5,18 @@ normalised by each measure's archive range.
 
 ``walk-to``: a best-first (A*) search over sequences of repertoire steps. A state is the
 planar pose (x, y, theta) after some steps; a step moves it by its measured displacement,
-rotated by the current heading. The cost of a plan is its number of steps; the heuristic is
-``max(distance / longest step, |heading error| / largest turn)`` (admissible: no step moves
-farther or turns more), and the search stops at the first pose within ``tol_m`` and
-``tol_deg`` of the target (or at the pose closest to it when ``max_expansions`` run out).
+rotated by the current heading. A step costs ``1 + risk_weight * (-objective)`` (1 to about 2:
+a step that tilts the torso more costs more, so plans prefer the stable steps); the
+heuristic is ``max(distance / longest step, |heading error| / largest turn)`` (admissible: no
+step moves farther or turns more, and none costs less than 1), weighted by ``greed`` (2:
+weighted A*, a plan at most twice the cheapest, found in far fewer expansions); the search
+stops at the
+first pose within ``tol_m`` and ``tol_deg`` of the target (or at the pose closest to it
+when ``max_expansions`` run out).
 Poses are merged on a 1 cm / 2 degree lattice. The chained motion (``ready.motion`` is not
-included: the steps start and end in the ready pose) is then played in simulation.
+included: the steps start and end in the ready pose) holds the ready pose ``settle_s`` (1 s)
+between steps, so each step starts from rest as when it was measured, and is then played in
+simulation.
 """
 
 from __future__ import annotations
@@ -54,7 +60,9 @@ def _compose(pose: np.ndarray, step: np.ndarray) -> np.ndarray:
 
 
 def plan(steps: np.ndarray, target: np.ndarray, tol_m: float = 0.03, tol_deg: float = 5.0,
-         max_steps: int = 60, max_expansions: int = 20_000) -> tuple[list[int], np.ndarray]:
+         max_steps: int = 60, max_expansions: int = 20_000,
+         objective: np.ndarray | None = None,
+         risk_weight: float = 1.0, greed: float = 2.0) -> tuple[list[int], np.ndarray]:
     """Indices of repertoire ``steps[n, 3]`` (dx m, dy m, dtheta deg) to reach ``target`` (x,
     y, theta deg) from the origin, and the planned final pose (A*, see the module doc)."""
     reach = max(float(np.hypot(steps[:, 0], steps[:, 1]).max()), 1e-3)
@@ -67,6 +75,8 @@ def plan(steps: np.ndarray, target: np.ndarray, tol_m: float = 0.03, tol_deg: fl
         dist, ang = err(p)
         return max(dist / reach, ang / turn)
 
+    cost = 1.0 + risk_weight * np.maximum(-np.asarray(objective, float), 0.0) \
+        if objective is not None else np.ones(len(steps))
     start = np.zeros(3)
     heap = [(h(start), 0, 0, start, ())]
     seen: set[tuple[int, int, int]] = set()
@@ -83,18 +93,35 @@ def plan(steps: np.ndarray, target: np.ndarray, tol_m: float = 0.03, tol_deg: fl
         if dist <= tol_m and ang <= tol_deg:
             return list(path), p
         key = (round(p[0] / 0.01), round(p[1] / 0.01), round(p[2] / 2.0))
-        if key in seen or g >= max_steps:
+        if key in seen or len(path) >= max_steps:
             continue
         seen.add(key)
         for i, s in enumerate(steps):
             q = _compose(p, s)
             tie += 1
-            heapq.heappush(heap, (g + 1 + h(q), g + 1, tie, q, path + (i,)))
+            heapq.heappush(heap, (g + cost[i] + greed * h(q), g + cost[i], tie, q,
+                                  path + (i,)))
     return list(best[2]), best[1]
 
 
+def with_pauses(motions: list, settle_s: float) -> list:
+    """Each motion followed by its last pose held ``settle_s`` (the last one not)."""
+    from evomotion.sim.nao.motion import Motion
+
+    if settle_s <= 0:
+        return motions
+    ms = int(round(settle_s * 1000 / 20)) * 20
+    out = []
+    for i, m in enumerate(motions):
+        if i < len(motions) - 1:
+            t = np.r_[m.times_ms, m.times_ms[-1] + ms]
+            m = Motion(m.joints, t, np.vstack([m.values, m.values[-1:]]))
+        out.append(m)
+    return out
+
+
 def walk_to(run: Path, x: float, y: float, theta_deg: float, video: Path | None = None,
-            out: Path | None = None, hold_s: float = 2.0) -> dict:
+            out: Path | None = None, hold_s: float = 2.0, settle_s: float = 1.0) -> dict:
     """Plan, chain, play in simulation; the chained motion goes to ``out``."""
     from evomotion.sim.nao.motion import format_motion
     from evomotion.sim.nao.replay import replay_motion
@@ -104,11 +131,11 @@ def walk_to(run: Path, x: float, y: float, theta_deg: float, video: Path | None 
     target = np.array([x, y, theta_deg], float)
     if not np.all(np.isfinite(target)):
         raise InputError("walk-to: --x, --y and --theta must be finite numbers")
-    idx, planned = plan(m, target)
+    idx, planned = plan(m, target, objective=np.array([e["objective"] for e in entries]))
     if not idx:
         raise InputError("walk-to: the target is the start pose (nothing to do) or no "
                          "step of the repertoire gets closer to it")
-    motion = chain([read_cell(folder, entries[i]) for i in idx])
+    motion = chain(with_pauses([read_cell(folder, entries[i]) for i in idx], settle_s))
     out = out or Path(run) / f"walk_to_{x:+.2f}_{y:+.2f}_{theta_deg:+.0f}.motion"
     out.write_text(format_motion(motion))
     summary, skipped = replay_motion(motion, video, hold_s)
