@@ -61,11 +61,12 @@ def _step_interp(grid, x, y):
     return out
 
 
-def _save(fig, out_stem: Path) -> list[Path]:
+def _save(fig, out_stem: Path, tight: bool = True) -> list[Path]:
     out_stem = Path(out_stem)
     out_stem.parent.mkdir(parents=True, exist_ok=True)
     paths = [out_stem.with_suffix(".png"), out_stem.with_suffix(".svg")]
-    fig.tight_layout()
+    if tight:
+        fig.tight_layout()
     for p in paths:
         fig.savefig(p, dpi=120)
     plt.close(fig)
@@ -138,12 +139,7 @@ def plot_archive(archive_npz: Path, out_stem: Path, title: str = "") -> list[Pat
         fig.colorbar(image, ax=axes.ravel().tolist(), label="objective", shrink=0.85,
                      extend="min" if a.objective.min() < vmin else "neither")
     fig.suptitle(title or f"archive: {a.objective.size} of {a.cells} cells filled")
-    paths = [Path(out_stem).with_suffix(".png"), Path(out_stem).with_suffix(".svg")]
-    Path(out_stem).parent.mkdir(parents=True, exist_ok=True)
-    for p in paths:  # constrained layout: no tight_layout
-        fig.savefig(p, dpi=120)
-    plt.close(fig)
-    return paths
+    return _save(fig, out_stem, tight=False)  # constrained layout already
 
 
 def _panel(ax, a, sel: np.ndarray, vmin: float, vmax: float):

@@ -48,3 +48,17 @@ class Study:
     best_record: Callable[[RunContext], dict[str, Any]] | None = None
     cli: Any = None
     smoke: tuple[str, ...] = ()
+
+
+def lazy_hook(module: str, name: str) -> Callable[[RunContext], Any]:
+    """A study hook that imports ``module`` (and its heavy dependencies: rendering, export)
+    only when the run loop first calls it; the wrapper carries the hook's name for the
+    run log's warnings."""
+
+    def hook(ctx: RunContext) -> Any:
+        import importlib
+
+        return getattr(importlib.import_module(module), name)(ctx)
+
+    hook.__name__ = hook.__qualname__ = name
+    return hook

@@ -107,3 +107,11 @@ def test_short_run_writes_a_repertoire_that_pick_and_walk_to_use(tmp_path):
     assert w["steps"] >= 1 and (tmp_path / "chain.motion").exists()
     with pytest.raises(InputError, match="index.json"):
         pick(tmp_path / "nothing", 0, 0, 0)
+    with pytest.raises(InputError, match="finite"):
+        pick(tmp_path, float("nan"), 0, 0)
+    bad = tmp_path / "bad"
+    (bad / "repertoire").mkdir(parents=True)
+    (bad / "repertoire" / "index.json").write_text(
+        '{"entries": [{"objective": 0, "file": "a.motion", "measured": {"dx_m": 0}}]}')
+    with pytest.raises(InputError, match="not a repertoire index"):
+        pick(bad, 0, 0, 0)

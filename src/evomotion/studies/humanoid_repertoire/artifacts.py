@@ -139,7 +139,7 @@ def read_index(run_or_folder: Path) -> tuple[Path, dict]:
         entries = index["entries"]
         for e in entries:
             float(e["objective"])
-            [float(v) for v in e["measured"].values()]
+            [float(e["measured"][k]) for k in ("dx_m", "dy_m", "dtheta_deg")]
             str(e["file"])
     except FileNotFoundError:
         raise InputError(f"{path}: no such file (a humanoid-repertoire run folder holds "

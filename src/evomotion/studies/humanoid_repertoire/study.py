@@ -7,7 +7,7 @@ from pathlib import Path
 
 import typer
 
-from evomotion.studies.base import Study
+from evomotion.studies.base import Study, lazy_hook
 from evomotion.studies.humanoid_repertoire.problem import (
     FALLEN_OBJECTIVE,
     HumanoidRepertoireConfig,
@@ -70,23 +70,7 @@ def walk_to_cmd(run: Path = typer.Argument(..., help="a humanoid-repertoire run 
                f"; {r['motion']}")
 
 
-def _finalize(ctx):
-    from evomotion.studies.humanoid_repertoire.artifacts import finalize
-
-    return finalize(ctx)
-
-
-def _on_checkpoint(ctx):
-    from evomotion.studies.humanoid_repertoire.artifacts import on_checkpoint
-
-    return on_checkpoint(ctx)
-
-
-def _best_record(ctx):
-    from evomotion.studies.humanoid_repertoire.artifacts import best_record
-
-    return best_record(ctx)
-
+ARTIFACTS = "evomotion.studies.humanoid_repertoire.artifacts"
 
 STUDY = Study(
     name="humanoid-repertoire",
@@ -104,9 +88,9 @@ STUDY = Study(
                                           "qd_offset": FALLEN_OBJECTIVE}}},
     preset_notes={"map_elites": "MAP-Elites (iso+line) instead of CMA-ME, same budget"},
     core_algorithms=("cma_me", "map_elites"),
-    on_checkpoint=_on_checkpoint,
-    finalize=_finalize,
-    best_record=_best_record,
+    on_checkpoint=lazy_hook(ARTIFACTS, "on_checkpoint"),
+    finalize=lazy_hook(ARTIFACTS, "finalize"),
+    best_record=lazy_hook(ARTIFACTS, "best_record"),
     cli=cli,
     smoke=("algorithm.emitters=2", "algorithm.pop_size=4", "problem.hold_s=0.2",
            ),

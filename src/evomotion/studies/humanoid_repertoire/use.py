@@ -40,6 +40,8 @@ def _measures(index: dict) -> tuple[np.ndarray, list[dict]]:
 def pick(run: Path, dx: float, dy: float, dtheta_deg: float) -> dict:
     """The nearest filled cell to the request: ``{file, cell, measured, objective,
     distance}`` (``file`` absolute)."""
+    if not np.all(np.isfinite([dx, dy, dtheta_deg])):
+        raise InputError("pick: --dx, --dy and --dtheta must be finite numbers")
     folder, index = read_index(run)
     m, entries = _measures(index)
     scale = np.array([0.25, 0.16, 90.0])  # the archive's ranges (m, m, deg)
@@ -126,11 +128,11 @@ def walk_to(run: Path, x: float, y: float, theta_deg: float, video: Path | None 
     from evomotion.sim.nao.motion import format_motion
     from evomotion.sim.nao.replay import replay_motion
 
-    folder, index = read_index(run)
-    m, entries = _measures(index)
     target = np.array([x, y, theta_deg], float)
     if not np.all(np.isfinite(target)):
         raise InputError("walk-to: --x, --y and --theta must be finite numbers")
+    folder, index = read_index(run)
+    m, entries = _measures(index)
     idx, planned = plan(m, target, objective=np.array([e["objective"] for e in entries]))
     if not idx:
         raise InputError("walk-to: the target is the start pose (nothing to do) or no "

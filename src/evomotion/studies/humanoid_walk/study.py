@@ -6,7 +6,7 @@ from pathlib import Path
 
 import typer
 
-from evomotion.studies.base import Study
+from evomotion.studies.base import Study, lazy_hook
 from evomotion.studies.humanoid_walk.problem import HumanoidWalkConfig, make_problem
 
 cli = typer.Typer(help="A NAO walk: 14 gait parameters evolved by CMA-ES.",
@@ -27,23 +27,7 @@ def compare_cmd(run: Path = typer.Argument(..., help="a humanoid-walk run folder
     compare_command(run, hold_s=hold, json_out=json_out, trials=trials, seed=seed)
 
 
-def _finalize(ctx):
-    from evomotion.studies.humanoid_walk.artifacts import finalize
-
-    return finalize(ctx)
-
-
-def _on_checkpoint(ctx):
-    from evomotion.studies.humanoid_walk.artifacts import on_checkpoint
-
-    return on_checkpoint(ctx)
-
-
-def _best_record(ctx):
-    from evomotion.studies.humanoid_walk.artifacts import best_record
-
-    return best_record(ctx)
-
+ARTIFACTS = "evomotion.studies.humanoid_walk.artifacts"
 
 STUDY = Study(
     name="humanoid-walk",
@@ -62,9 +46,9 @@ STUDY = Study(
                              "about 8x cheaper per generation and faster walks, which fall "
                              "in most perturbed worlds"},
     core_algorithms=("cmaes", "ga"),
-    on_checkpoint=_on_checkpoint,
-    finalize=_finalize,
-    best_record=_best_record,
+    on_checkpoint=lazy_hook(ARTIFACTS, "on_checkpoint"),
+    finalize=lazy_hook(ARTIFACTS, "finalize"),
+    best_record=lazy_hook(ARTIFACTS, "best_record"),
     cli=cli,
     smoke=(
         "algorithm.pop_size=4",
