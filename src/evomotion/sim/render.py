@@ -28,15 +28,27 @@ class RenderUnavailableError(RuntimeError):
     """No working OpenGL backend for offscreen rendering."""
 
 
+CAMERAS = ("follow", "kick")
+
+
 def render_video(qpos: np.ndarray, dt: float, out_path: str | Path, fps: int = 25,
-                 width: int = 480, height: int = 352, model_path: Path = MODEL_PATH) -> Path:
-    """Render ``qpos[T, nq]`` (one row per physics step of ``dt`` s) at ``fps`` to an MP4."""
+                 width: int = 480, height: int = 352, model_path: Path = MODEL_PATH,
+                 model_xml: str | None = None, camera: str = "follow") -> Path:
+    """Render ``qpos[T, nq]`` (one row per physics step of ``dt`` s) at ``fps`` to an MP4.
+
+    ``model_xml`` (MJCF text) replaces the model file (a scene built in memory, such as the
+    kick's NAO + ball). ``camera``: ``"follow"`` (the torso, from the robot's right) or
+    ``"kick"`` (robot and ball both in view: the camera looks at their midpoint and backs off
+    as the ball rolls away; needs a body named ``ball``)."""
     out_path = Path(out_path)
+    if camera not in CAMERAS:
+        raise ValueError(f"unknown camera {camera!r}; available: {', '.join(CAMERAS)}")
     buf = io.BytesIO()
     stride = max(1, int(round(1.0 / (fps * dt))))
-    np.save(buf, np.ascontiguousarray(qpos[::stride], dtype=np.float64))
+    xml = np.frombuffer((model_xml or "").encode(), dtype=np.uint8)
+    np.savez(buf, qpos=np.ascontiguousarray(qpos[::stride], dtype=np.float64), xml=xml)
     cmd = [sys.executable, "-m", "evomotion.sim.render", str(model_path), str(out_path),
-           str(fps), str(width), str(height)]
+           str(fps), str(width), str(height), camera]
     proc = subprocess.run(cmd, input=buf.getvalue(), capture_output=True, timeout=600)
     err = proc.stderr.decode(errors="replace")
     if proc.returncode != 0:
@@ -50,13 +62,13 @@ MARK_SPACING_M = 0.5  # floor marks across the +x direction: every 0.5 m, a post
 MARK_RANGE_M = (-2.0, 8.0)
 
 
-def _with_distance_marks(model_path: str):
+def _with_distance_marks(model_path: str, xml: str = ""):
     """The model with visual-only floor marks (no collisions, no mass): a line across the
     floor every 0.5 m along x, darker and with a post every metre, so a video shows progress
     while the camera follows the robot."""
     import mujoco
 
-    spec = mujoco.MjSpec.from_file(model_path)
+    spec = mujoco.MjSpec.from_string(xml) if xml else mujoco.MjSpec.from_file(model_path)
     world = spec.worldbody
     lo, hi = MARK_RANGE_M
     for i, x in enumerate(np.arange(lo, hi + 1e-9, MARK_SPACING_M)):
@@ -73,10 +85,11 @@ def _with_distance_marks(model_path: str):
     return spec.compile()
 
 
-def _render_frames(model_path: str, frames_q: np.ndarray, width: int, height: int):
+def _render_frames(model_path: str, frames_q: np.ndarray, width: int, height: int,
+                   camera: str = "follow", xml: str = ""):
     import mujoco
 
-    model = _with_distance_marks(model_path)
+    model = _with_distance_marks(model_path, xml)
     data = mujoco.MjData(model)
     try:
         renderer = mujoco.Renderer(model, height=height, width=width)
@@ -91,8 +104,16 @@ def _render_frames(model_path: str, frames_q: np.ndarray, width: int, height: in
         for q in frames_q:
             data.qpos[:] = q
             mujoco.mj_kinematics(model, data)
-            cam.lookat[:] = data.body("torso").xpos
-            cam.lookat[2] = 0.2
+            torso = data.body("torso").xpos
+            if camera == "kick":
+                ball = data.body("ball").xpos
+                mid = 0.5 * (torso[:2] + ball[:2])
+                cam.lookat[:] = [mid[0], mid[1], 0.18]
+                cam.distance = 1.3 + 0.7 * float(np.linalg.norm(ball[:2] - torso[:2]))
+                cam.azimuth, cam.elevation = -75.0, -15.0
+            else:
+                cam.lookat[:] = torso
+                cam.lookat[2] = 0.2
             renderer.update_scene(data, camera=cam)
             renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = False
             frames.append(renderer.render().copy())
@@ -104,10 +125,11 @@ def _render_frames(model_path: str, frames_q: np.ndarray, width: int, height: in
 def main(argv: list[str]) -> int:
     import evomotion.sim  # noqa: F401  (chooses MUJOCO_GL before mujoco is imported)
 
-    model_path, out_path, fps, width, height = argv
-    frames_q = np.load(io.BytesIO(sys.stdin.buffer.read()))
+    model_path, out_path, fps, width, height, camera = argv
+    data = np.load(io.BytesIO(sys.stdin.buffer.read()))
+    frames_q, xml = data["qpos"], data["xml"].tobytes().decode()
     try:
-        frames = _render_frames(model_path, frames_q, int(width), int(height))
+        frames = _render_frames(model_path, frames_q, int(width), int(height), camera, xml)
     except RenderUnavailableError as exc:
         print(f"{UNAVAILABLE}{exc}", file=sys.stderr)
         return 3

@@ -6,7 +6,7 @@ Apache-2.0) and is played as Webots' motion player does (linear interpolation of
 :func:`evomotion.sim.nao.replay.motion_targets`). The kicking foot is the one whose ankle (leg FK
 in the torso frame) reaches furthest forward during the motion; the ball is placed ``gap_m`` in
 front of that foot's toe in the motion's first pose, plus the given offsets. Execution time is
-the motion's duration.
+the motion's duration; the minimum ZMP margin is taken over it.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ from evomotion.sim.nao.motion import Motion, read_motion, shipped_motion
 from evomotion.sim.nao.replay import motion_targets
 from evomotion.sim.rollout import BatchSimulator, fall_step, torso_track
 from evomotion.studies.biped_kick import scene
-from evomotion.studies.biped_kick.problem import KickConfig
+from evomotion.studies.biped_kick.problem import KickConfig, support_margin_batch
 
 
 def shoot_motion(path: str | Path | None = None) -> Motion:
@@ -49,11 +49,16 @@ def keyframe_kicks(offsets_m: np.ndarray, path: str | Path | None = None,
     foot = kicking_foot(motion)
     ball0 = scene.default_ball_xy(model, pose=first, foot=foot)
     decel = scene.measured_deceleration(cfg.rolling_m)
-    out = {k: [] for k in ("distance_m", "lateral_m", "fell", "exec_time_s")}
+    out = {k: [] for k in ("distance_m", "lateral_m", "fell", "exec_time_s", "min_margin_m")}
+    sl = scene.sensor_slices(model)
     with BatchSimulator(model, cfg.nthread) as sim:
         for off in np.atleast_2d(offsets_m):
             ball = ball0 + off
-            states = sim.run(scene.initial_scene_state(model, ball, first), ctrl[None])
+            states, sensors = sim.run_with_sensors(
+                scene.initial_scene_state(model, ball, first), ctrl[None])
+            in_motion = dt * np.arange(1, nstep + 1) <= motion.duration_s
+            margin = support_margin_batch(sensors[0], sl)
+            out["min_margin_m"].append(float(np.min(margin[in_motion])))
             qb = nao.state_qpos(model, states[0, -1], scene.BALL_JOINT, 2)
             vb = nao.state_qvel(model, states[0, -1], scene.BALL_JOINT, 2)
             travel = qb + vb * np.linalg.norm(vb) / (2 * decel) - ball

@@ -26,6 +26,7 @@ turn in place to ``psi_d``, walk ``|d|`` straight, turn in place to ``psi_K``.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -116,3 +117,54 @@ def baseline_time(robot: np.ndarray, plan: KickPlan,
     turns = abs(float(wrap(psi_d - robot[2]))) + abs(float(wrap(plan.kick_heading - psi_d)))
     dist = float(np.linalg.norm(d))
     return dist, dist / walk.speed_m_s + turns / walk.turn_rad_s
+
+
+@dataclass(frozen=True)
+class AimedPlan:
+    """The stand pose for an aimed kick and the Bézier approach to it."""
+
+    aims_rad: np.ndarray  # [n] candidate aims (kick direction - robot heading)
+    stand: np.ndarray  # [n, 3] stand pose (x, y, heading) for each aim
+    cost: np.ndarray  # [n] C_kick
+    best: int
+    control_points: np.ndarray  # [4, 2] Bézier P0..P3 of the approach to stand[best]
+
+    @property
+    def aim_rad(self) -> float:
+        return float(self.aims_rad[self.best])
+
+    @property
+    def pose(self) -> np.ndarray:
+        return self.stand[self.best]
+
+
+def plan_aimed_kick(robot: np.ndarray, ball: np.ndarray, target: np.ndarray,
+                    ball_local: Callable[[np.ndarray], np.ndarray], max_aim_rad: float,
+                    n: int = 61, w_turn: float = 1.0, w_dist: float = 1.0,
+                    w_aim: float = 0.5) -> AimedPlan:
+    """Where to stand for an aimed kick (the seed's kick-point choice with the kick's aim as
+    the free variable): for aim ``a`` the robot faces ``psi = psi_T - a`` (``psi_T`` the
+    ball->target direction) and stands so that the ball lies at ``ball_local(a)`` (``[n, 2]``,
+    robot frame: x forward, y left). ``C_turn = |wrap(psi_d - theta)| + |wrap(psi - psi_d)|
+    + w_aim |a|`` (the aimed kick is less accurate than the straight one), ``C_dist = |d|``,
+    ``C_kick = w_turn C_turn + w_dist C_dist``; approach as :func:`plan_kick`."""
+    robot, ball, target = (np.asarray(v, dtype=float) for v in (robot, ball, target))
+    psi_t = float(np.arctan2(*(target - ball)[::-1]))
+    aims = np.linspace(-max_aim_rad, max_aim_rad, n)
+    psi = psi_t - aims
+    loc = np.asarray(ball_local(aims), dtype=float).reshape(n, 2)
+    c, s = np.cos(psi), np.sin(psi)
+    stand_xy = ball - np.stack([c * loc[:, 0] - s * loc[:, 1], s * loc[:, 0] + c * loc[:, 1]],
+                               axis=1)
+    d = stand_xy - robot[:2]
+    dist = np.linalg.norm(d, axis=1)
+    psi_d = np.where(dist > 1e-9, np.arctan2(d[:, 1], d[:, 0]), robot[2])
+    c_turn = (np.abs(wrap(psi_d - robot[2])) + np.abs(wrap(psi - psi_d)) + w_aim * np.abs(aims))
+    cost = w_turn * c_turn + w_dist * dist
+    j = int(np.argmin(cost))
+    p0 = robot[:2]
+    a = dist[j] / 3
+    h = np.array([np.cos(robot[2]), np.sin(robot[2])])
+    u = np.array([np.cos(psi[j]), np.sin(psi[j])])
+    ctrl = np.stack([p0, p0 + a * h, stand_xy[j] - a * u, stand_xy[j]])
+    return AimedPlan(aims, np.column_stack([stand_xy, psi]), cost, j, ctrl)

@@ -1,17 +1,26 @@
-"""The kick problem: batched MuJoCo rollouts of kick motions and their fitness (maximised).
+"""The kick problem: batched MuJoCo rollouts of aimed kicks, with the ZMP as a constraint.
 
-Fitness (m) = ball travel along the goal direction (+x) - ``w_lateral`` |lateral travel|
-- ``fall_penalty_m`` if the robot fell - ``zmp_penalty_m`` * (fraction of the kick's steps whose
-CoP margin is below ``zmp_margin_m``). Ball travel is the displacement at the end of the
-rollout (``roll_after_s`` after the motion ends) plus the remaining rolling distance
-``v |v| / (2 a)`` with ``a`` the rolling deceleration measured in the scene
-(:func:`scene.measured_deceleration`), so the rollout need not wait for the ball to stop.
+Every genome kicks once per training aim ``a`` in ``problem.aims_deg`` (from the foot's heading,
++ to the left), the ball placed where the kick wants it (:func:`motion.ball_offset`, plus
+``ball_dx_m``/``ball_dy_m``). Ball travel is the displacement at the end of the rollout
+(``roll_after_s`` after the motion) plus the remaining roll ``v |v| / (2 a_roll)`` with
+``a_roll`` the rolling deceleration measured in the scene (:func:`scene.measured_deceleration`).
 
-Stability (seed step 5): per physics step the CoP of the two soles' net contact forces (MuJoCo
-``contact`` sensors) and its margin inside the support polygon (the sole rectangles in contact),
-computed with the support function over 32 directions (exact for edges normal to one of them,
-otherwise within 0.5 % of the polygon size). A CoP within ``zmp_margin_m`` of the edge means the
-stance foot starts to tip. Steps without any sole contact count as violations.
+Objective (m, maximised) = mean over aims of [travel along ``a`` - ``w_angle_m_per_rad`` |angle
+error|] - ``w_time_m_per_s`` x execution time.
+
+Constraints (seed step 5: an unstable kick is rejected and the search goes on): during the
+kick, the centre of pressure of the soles' contact forces (MuJoCo ``contact`` sensors) stays at
+least ``zmp_margin_m`` inside the support polygon (the sole rectangles in contact; margin by the
+support function over 32 directions), at every physics step; the robot does not fall; every
+20 ms key pose of every aim is within the NAO's joint ranges and moves no faster than
+``speed_margin`` x its motor's no-load speed. Violation (>= 0, unitless) = mean over aims of
+[fell + ZMP deficit / 1 mm s] + the largest range excess over the aims / 0.01 rad + the
+largest speed excess / 0.01 s, where the ZMP deficit is ``sum_t min(max(0, zmp_margin_m -
+margin_t), zmp_margin_m + 5 cm) dt`` (a step without sole contact counts as
+``zmp_margin_m + 5 cm`` short). Selection is feasibility-first
+(:mod:`evomotion.core.constraints`, Deb 2000): fitness is the objective for feasible kicks and
+``FLOOR_M - 1 - violation`` otherwise.
 """
 
 from __future__ import annotations
@@ -23,28 +32,44 @@ from dataclasses import dataclass
 import numpy as np
 
 from evomotion.core.checks import check_fields, check_number
+from evomotion.core.constraints import feasibility_first
 from evomotion.core.problem import Evaluation, GenomeSpec
+from evomotion.errors import InputError
 from evomotion.sim import nao
-from evomotion.sim.rollout import BatchSimulator, fall_step, torso_track
+from evomotion.sim.rollout import BatchSimulator, fall_step, interpolate_controls, torso_track
 from evomotion.studies.biped_kick import scene
-from evomotion.studies.biped_kick.motion import GENES, SETTLE_S, execution_time_s, joint_targets
+from evomotion.studies.biped_kick.motion import (
+    BALL_GAP_M,
+    GENES,
+    MAX_AIM_DEG,
+    SETTLE_S,
+    START,
+    ball_offset,
+    execution_time_s,
+    joint_targets,
+    key_times,
+    limit_excess,
+)
 
-METRICS = ("distance_m", "lateral_m", "fell", "zmp_violation", "min_margin_m",
-           "exec_time_s")
+METRICS = ("distance_m", "angle_error_deg", "lateral_m", "fell", "feasible", "violation",
+           "zmp_deficit_mm_s", "min_margin_m", "speed_ratio", "exec_time_s")
 DIRECTIONS = np.stack([np.cos(np.arange(32) * np.pi / 16), np.sin(np.arange(32) * np.pi / 16)],
                       axis=1)
-
-
-#: ``problem.nthread`` at most (one MjData per thread); ``rolling_m`` at most (m, a rolling
-#: friction length); the ball's offset from its default place at most (m)
+#: no feasible kick scores below this (m): the ball does not roll 20 m backwards
+FLOOR_M = -20.0
+NO_SUPPORT_DEFICIT_M = 0.05
+ZMP_UNIT_M_S = 1e-3
+LIMIT_UNIT_RAD = 0.01
+SPEED_UNIT_S = 0.01
+#: ``problem.nthread`` at most; ``rolling_m`` at most (m); ball offset at most (m)
 MAX_THREADS = 1024
 MAX_ROLLING_M = 0.1
 MAX_BALL_OFFSET_M = 1.0
-#: the kick scene's physics step, for estimates before it is loaded
-KICK_TIMESTEP_S = 0.004
-#: doubles per individual and physics step: state (71), sensors (26), controls (22), the
-#: support-polygon analysis, rounded up
-ROLLOUT_DOUBLES_PER_STEP = 200
+MAX_AIMS = 16
+KICK_TIMESTEP_S = 0.004  # the kick scene's physics step, for estimates before it is loaded
+#: doubles per rollout and physics step: state (84), sensors (26), controls (22), support
+#: polygon temporaries, rounded up
+ROLLOUT_DOUBLES_PER_STEP = 220
 
 
 @dataclass(frozen=True)
@@ -52,20 +77,20 @@ class KickConfig:
     """The ``[problem]`` section of the biped-kick study."""
 
     rolling_m: float = 0.005
-    ball_dx_m: float = 0.0  # ball offset from its default place in front of the right toe
+    ball_dx_m: float = 0.0  # ball offset from where the kick wants it (m)
     ball_dy_m: float = 0.0
-    w_lateral: float = 0.5
-    fall_penalty_m: float = 3.0
-    zmp_penalty_m: float = 2.0
+    aims_deg: tuple[float, ...] = (-30.0, -15.0, 0.0, 15.0, 30.0)
+    w_angle_m_per_rad: float = 3.0
+    w_time_m_per_s: float = 0.05
     zmp_margin_m: float = 0.005
+    speed_margin: float = 1.0
     roll_after_s: float = 0.8
     fall_height_m: float = nao.FALL_HEIGHT_M
     fall_tilt_rad: float = nao.FALL_TILT_RAD
     nthread: int = 0  # mujoco.rollout threads; 0 = all cores
 
     def for_worker(self) -> KickConfig:
-        """The config of a one-core evaluator worker: ``nthread`` 0 (all cores) becomes 1;
-        an explicit thread count is kept."""
+        """The config of a one-core evaluator worker: ``nthread`` 0 (all cores) becomes 1."""
         return dataclasses.replace(self, nthread=1) if self.nthread == 0 else self
 
     def validate(self) -> None:
@@ -75,29 +100,41 @@ class KickConfig:
         for key in ("ball_dx_m", "ball_dy_m"):
             check_number(f"problem.{key}", getattr(self, key), lo=-MAX_BALL_OFFSET_M,
                          hi=MAX_BALL_OFFSET_M)
-        for key in ("w_lateral", "fall_penalty_m", "zmp_penalty_m", "roll_after_s"):
+        if not 1 <= len(self.aims_deg) <= MAX_AIMS:
+            raise InputError(f"problem.aims_deg: expected 1 to {MAX_AIMS} aims (degrees), got "
+                             f"{len(self.aims_deg)}")
+        lim = MAX_AIM_DEG
+        for i, a in enumerate(self.aims_deg):
+            check_number(f"problem.aims_deg[{i}]", a, lo=-lim, hi=lim)
+        for key in ("w_angle_m_per_rad", "w_time_m_per_s", "roll_after_s", "zmp_margin_m"):
             check_number(f"problem.{key}", getattr(self, key), lo=0.0)
+        check_number("problem.speed_margin", self.speed_margin, lo=0.0, hi=1.0, lo_open=True)
         check_number("problem.fall_height_m", self.fall_height_m, lo=0.0, lo_open=True)
         check_number("problem.fall_tilt_rad", self.fall_tilt_rad, lo=0.0, hi=math.pi,
                      lo_open=True)
         check_number("problem.nthread", self.nthread, lo=0, hi=MAX_THREADS, integer=True)
 
     def genome_dim(self) -> int:
-        """The genome's length (for the memory check before the problem is built)."""
         return len(GENES)
 
-    memory_keys = ("roll_after_s",)  # what memory_bytes depends on (for its message)
+    memory_keys = ("roll_after_s", "aims_deg")  # what memory_bytes depends on
 
     def memory_bytes(self, pop_size: int) -> int:
-        """Bytes of one batch's rollout at the longest kick: recorded states, sensors,
-        controls and support-polygon temporaries (doubles) per physics step, twice."""
+        """Bytes of one batch's rollouts at the longest kick, twice."""
         longest = SETTLE_S + execution_time_s(np.array([[g[2] for g in GENES]]))[0]
         steps = math.ceil((longest + self.roll_after_s) / KICK_TIMESTEP_S)
-        return 2 * 8 * pop_size * steps * ROLLOUT_DOUBLES_PER_STEP
+        return 2 * 8 * pop_size * len(self.aims_deg) * steps * ROLLOUT_DOUBLES_PER_STEP
 
 
 def support_margin_batch(sensors: np.ndarray, sl: dict[str, slice]) -> np.ndarray:
     """CoP margin (m) inside the support polygon per step, ``[..., T]`` (-inf: no support)."""
+    return support_analysis(sensors, sl)[0]
+
+
+def support_analysis(sensors: np.ndarray, sl: dict[str, slice]
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(margin ``[..., T]`` (m, -inf: no support), CoP ``[..., T, 2]`` (world, m), sole
+    corners ``[..., T, 8, 2]`` (NaN for a sole not in contact))."""
     corners, weights, points = [], [], []
     for side in ("l", "r"):
         c = sensors[..., sl[f"{side}_contact"]]
@@ -119,11 +156,15 @@ def support_margin_batch(sensors: np.ndarray, sl: dict[str, slice]) -> np.ndarra
     C = np.stack(corners, axis=-2)  # [..., 8, 2]
     h = np.nanmax(np.where(np.isnan(C[..., 0])[..., None], -np.inf, C @ DIRECTIONS.T), axis=-2)
     margin = np.min(h - cop @ DIRECTIONS.T, axis=-1)
-    return np.where(total > 0, margin, -np.inf)
+    return np.where(total > 0, margin, -np.inf), np.where((total > 0)[..., None], cop, np.nan), C
+
+
+def wrap(a: np.ndarray) -> np.ndarray:
+    return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
 
 
 class KickProblem:
-    """Maximise the ball's travel to the goal with a stable, non-falling kick."""
+    """Maximise the ball's travel along the requested aims with a stable, feasible kick."""
 
     sense = "max"
     metric_names = METRICS
@@ -137,40 +178,97 @@ class KickProblem:
         self.sl = scene.sensor_slices(self.model)
         self.decel = scene.measured_deceleration(cfg.rolling_m)
         self.sim = BatchSimulator(self.model, cfg.nthread)
+        self.aims_rad = np.radians(np.asarray(cfg.aims_deg, dtype=float))
+        self._toe = scene.default_ball_xy(self.model, gap_m=0.0) - [scene.BALL_RADIUS_M, 0.0]
 
-    def ball_xy(self) -> np.ndarray:
-        return scene.default_ball_xy(self.model) + np.array([self.cfg.ball_dx_m,
-                                                             self.cfg.ball_dy_m])
+    def initial_population(self, n: int, rng: np.random.Generator) -> np.ndarray:
+        """The hand-set kick :data:`.motion.START` (CMA-ES starts its mean there) and ``n - 1``
+        copies jittered by 5 % of each gene's range (for the GA)."""
+        n = max(int(n), 1)
+        span = self.genome.upper - self.genome.lower
+        start = np.array([START[g[0]] for g in GENES])
+        x = start + 0.05 * span * rng.standard_normal((n, span.size))
+        x[0] = start
+        return np.clip(x, self.genome.lower, self.genome.upper)
 
-    def evaluate(self, genomes: np.ndarray, ball_xy: np.ndarray | None = None) -> Evaluation:
+    def ball_xy(self, genomes: np.ndarray, aims_rad: np.ndarray) -> np.ndarray:
+        """Where each kick wants the ball (world, m) plus the configured offset ``[B, 2]``."""
+        y = ball_offset(genomes, aims_rad)
+        x = np.full_like(y, self._toe[0] + scene.BALL_RADIUS_M + BALL_GAP_M)
+        return np.stack([x + self.cfg.ball_dx_m, self._toe[1] + y + self.cfg.ball_dy_m], axis=1)
+
+    def kicks(self, genomes: np.ndarray, aims_rad: np.ndarray, ball_xy: np.ndarray,
+              keep: bool = False) -> dict[str, np.ndarray]:
+        """One rollout per row: genome ``[n, d]``, aim ``[n]`` (rad), ball ``[n, 2]`` (world).
+        Per-kick results; with ``keep`` also ``states``, ``sensors``, ``margin``, ``end``."""
         g = np.atleast_2d(np.asarray(genomes, dtype=float))
+        aims = np.broadcast_to(np.asarray(aims_rad, dtype=float), (len(g),))
+        ball0 = np.asarray(ball_xy, dtype=float).reshape(len(g), 2)
         exec_t = execution_time_s(g)
-        # each individual is measured at its own end step, so that its result does not
-        # depend on the other members of the batch (which only set how long the batch runs)
+        # each kick is measured at its own end step, so that its result does not depend on
+        # the other members of the batch (which only set how long the batch runs)
         end = np.ceil((SETTLE_S + exec_t + self.cfg.roll_after_s) / self.dt).astype(int)
         nstep = int(end.max())
-        times = self.dt * np.arange(1, nstep + 1)
-        ctrl = joint_targets(g, times)
-        ball0 = self.ball_xy() if ball_xy is None else np.asarray(ball_xy, dtype=float)
-        state0 = scene.initial_scene_state(self.model, ball0)
+        kt = key_times(g)
+        keys = joint_targets(g, kt, aims)
+        ctrl = interpolate_controls(kt, keys, self.dt, nstep)
+        state0 = np.stack([scene.initial_scene_state(self.model, b) for b in ball0])
         states, sensors = self.sim.run_with_sensors(state0, ctrl)
         last = states[np.arange(len(g)), end - 1]
         qb = nao.state_qpos(self.model, last, scene.BALL_JOINT, 2)
         vb = nao.state_qvel(self.model, last, scene.BALL_JOINT, 2)
-        final = qb + vb * np.linalg.norm(vb, axis=1, keepdims=True) / (2 * self.decel)
-        travel = final - ball0
+        travel = qb + vb * np.linalg.norm(vb, axis=1, keepdims=True) / (2 * self.decel) - ball0
+        u = np.stack([np.cos(aims), np.sin(aims)], axis=1)
+        along = (travel * u).sum(1)
+        lateral = u[:, 0] * travel[:, 1] - u[:, 1] * travel[:, 0]
+        angle_err = wrap(np.arctan2(travel[:, 1], travel[:, 0]) - aims)
         fell = fall_step(torso_track(states), self.cfg.fall_height_m,
                          self.cfg.fall_tilt_rad) < end
         margin = support_margin_batch(sensors, self.sl)
+        times = self.dt * np.arange(1, nstep + 1)
         in_kick = (times[None, :] >= SETTLE_S) & (times[None, :] <= SETTLE_S + exec_t[:, None])
-        bad = (margin < self.cfg.zmp_margin_m) & in_kick
-        viol = bad.sum(1) / np.maximum(in_kick.sum(1), 1)
-        min_margin = np.min(np.where(in_kick, margin, np.inf), axis=1)
-        fitness = (travel[:, 0] - self.cfg.w_lateral * np.abs(travel[:, 1])
-                   - self.cfg.fall_penalty_m * fell - self.cfg.zmp_penalty_m * viol)
-        return Evaluation(fitness, {"distance_m": travel[:, 0], "lateral_m": travel[:, 1],
-                                    "fell": fell.astype(float), "zmp_violation": viol,
-                                    "min_margin_m": min_margin, "exec_time_s": exec_t})
+        short = np.minimum(np.maximum(self.cfg.zmp_margin_m - margin, 0.0),
+                           self.cfg.zmp_margin_m + NO_SUPPORT_DEFICIT_M)
+        # a sequential sum: the steps after a kick's end add exact zeros (batch-independent)
+        deficit = np.cumsum(np.where(in_kick, short, 0.0), axis=1)[:, -1] * self.dt
+        range_x, speed_x, speed_ratio = limit_excess(keys, self.cfg.speed_margin)
+        out = {"travel": travel, "along_m": along, "lateral_m": lateral,
+               "angle_error_rad": angle_err, "fell": fell, "zmp_deficit_m_s": deficit,
+               "min_margin_m": np.min(np.where(in_kick, margin, np.inf), axis=1),
+               "range_excess_rad": range_x, "speed_excess_s": speed_x,
+               "speed_ratio": speed_ratio, "exec_time_s": exec_t, "ball0": ball0,
+               "rest_xy": ball0 + travel,
+               "roll_s": np.linalg.norm(vb, axis=1) / self.decel}
+        if keep:
+            out.update(states=states, sensors=sensors, margin=margin, end=end, times=times)
+        return out
+
+    def evaluate(self, genomes: np.ndarray) -> Evaluation:
+        g = np.atleast_2d(np.asarray(genomes, dtype=float))
+        n, na = len(g), len(self.aims_rad)
+        rows = np.repeat(g, na, axis=0)
+        aims = np.tile(self.aims_rad, n)
+        k = self.kicks(rows, aims, self.ball_xy(rows, aims))
+
+        def per(name: str) -> np.ndarray:
+            return np.asarray(k[name], dtype=float).reshape(n, na)
+
+        cfg = self.cfg
+        exec_t = execution_time_s(g)
+        objective = (per("along_m") - cfg.w_angle_m_per_rad * np.abs(per("angle_error_rad"))
+                     ).mean(1) - cfg.w_time_m_per_s * exec_t
+        violation = ((per("fell") + per("zmp_deficit_m_s") / ZMP_UNIT_M_S).mean(1)
+                     + per("range_excess_rad").max(1) / LIMIT_UNIT_RAD
+                     + per("speed_excess_s").max(1) / SPEED_UNIT_S)
+        fitness = feasibility_first(objective, violation, self.sense, FLOOR_M)
+        return Evaluation(fitness, {
+            "distance_m": per("along_m").mean(1),
+            "angle_error_deg": np.degrees(np.abs(per("angle_error_rad"))).mean(1),
+            "lateral_m": np.abs(per("lateral_m")).mean(1),
+            "fell": per("fell").max(1), "feasible": (violation <= 0).astype(float),
+            "violation": violation, "zmp_deficit_mm_s": per("zmp_deficit_m_s").mean(1) * 1e3,
+            "min_margin_m": per("min_margin_m").min(1), "speed_ratio": per("speed_ratio").max(1),
+            "exec_time_s": exec_t})
 
 
 def make_problem(cfg: KickConfig) -> KickProblem:

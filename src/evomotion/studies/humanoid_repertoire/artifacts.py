@@ -17,14 +17,13 @@ from typing import Any
 
 import numpy as np
 
-from evomotion.errors import InputError
 from evomotion.run.context import RunContext
 from evomotion.run.folder import atomic_write_text
 from evomotion.sim import nao
 from evomotion.sim.nao.motion import Motion, format_motion
+from evomotion.sim.nao.repertoire import INDEX, chain, read_cell, read_index  # noqa: F401
 from evomotion.studies.humanoid_repertoire import step
 
-INDEX = "index.json"
 READY_S = 0.6
 
 
@@ -127,47 +126,3 @@ def spread(entries: list[dict], k: int) -> list[dict]:
         chosen.append(int(np.argmax(d)))
         d = np.minimum(d, np.linalg.norm(z - z[chosen[-1]], axis=1))
     return [entries[i] for i in chosen]
-
-
-def read_index(run_or_folder: Path) -> tuple[Path, dict]:
-    """``(repertoire folder, index)`` of a run folder (or its ``repertoire/``)."""
-    p = Path(run_or_folder)
-    folder = p / "repertoire" if (p / "repertoire").is_dir() else p
-    path = folder / INDEX
-    try:
-        index = json.loads(path.read_text())
-        entries = index["entries"]
-        for e in entries:
-            float(e["objective"])
-            [float(e["measured"][k]) for k in ("dx_m", "dy_m", "dtheta_deg")]
-            str(e["file"])
-    except FileNotFoundError:
-        raise InputError(f"{path}: no such file (a humanoid-repertoire run folder holds "
-                         "repertoire/index.json)") from None
-    except (ValueError, KeyError, TypeError, AttributeError, UnicodeDecodeError) as e:
-        raise InputError(f"{path}: not a repertoire index ({type(e).__name__}: {e})") from None
-    if not entries:
-        raise InputError(f"{path}: the repertoire is empty")
-    return folder, index
-
-
-def read_cell(folder: Path, entry: dict) -> Motion:
-    from evomotion.sim.nao.motion import read_motion
-
-    name = Path(str(entry["file"])).name  # no path outside the folder
-    return read_motion(folder / name)
-
-
-def chain(motions: list[Motion]) -> Motion:
-    """Motions that end and start in the same pose, one after the other (each later one
-    without its first pose, its times shifted to start where the previous one ended)."""
-    times, poses, end = [], [], 0
-    for i, m in enumerate(motions):
-        t = np.asarray(m.times_ms, dtype=np.int64)
-        q = np.asarray(m.values, dtype=float)
-        if i:
-            t, q = t[1:] - t[0] + end, q[1:]
-        times.append(t)
-        poses.append(q)
-        end = int(t[-1])
-    return Motion(motions[0].joints, np.concatenate(times), np.concatenate(poses))

@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from evomotion.errors import InputError
-from evomotion.studies.humanoid_repertoire.artifacts import chain, read_cell, read_index
+from evomotion.sim.nao.repertoire import chain, read_cell, read_index
 
 
 def _measures(index: dict) -> tuple[np.ndarray, list[dict]]:

@@ -1,0 +1,81 @@
+"""biped-kick figures (issue 15) from a finished run folder.
+
+1. ``evomotion replay RUN/best.motion`` (the kick alone, no ball, the same code): fell or not.
+2. Aimed kicks: 100 kicks at -20, 0 and +20 deg from ball positions perturbed by U(+-2 cm):
+   median absolute angle error, share within +-10 deg, fall rate, mean distance along the aim.
+3. ``play`` from five ball positions 1-2 m from the robot (at the origin, facing +x), target the
+   goal centre (4.5, 0): ball-at-rest error to the target line, falls, total time; with the
+   walking model, and with ``--walk REPERTOIRE_RUN`` also walking with that repertoire's steps
+   in the same simulation. ``--videos DIR`` writes one MP4 per play.
+
+    python benchmarks/kick_check.py RUN_DIR [--walk REPERTOIRE_RUN] [--videos DIR] [--json]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+from evomotion.sim.nao.motion import read_motion
+from evomotion.sim.nao.replay import simulate_motion
+from evomotion.studies.biped_kick.experiment import accuracy, perturbed_kicks
+from evomotion.studies.biped_kick.play import play, read_kick
+from evomotion.studies.biped_kick.problem import KickConfig, KickProblem
+
+BALLS = [(1.0, 0.3), (1.5, -0.5), (1.2, 1.0), (2.0, 0.0), (0.8, -1.2)]
+TARGET = (4.5, 0.0)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("run", type=Path)
+    ap.add_argument("--walk", type=Path, default=None)
+    ap.add_argument("--videos", type=Path, default=None)
+    ap.add_argument("--json", action="store_true")
+    args = ap.parse_args()
+    out: dict = {}
+    rep = simulate_motion(read_motion(args.run / "best.motion"), hold_s=1.0)["summary"]
+    out["replay"] = {"fell": rep["fell"], "displacement_m": rep["displacement_m"]}
+    genome, _ = read_kick(args.run)
+    problem = KickProblem(KickConfig())
+    offsets = np.random.default_rng(12345).uniform(-0.02, 0.02, (100, 2))
+    out["aimed"] = {f"{a:+d}": accuracy(perturbed_kicks(problem, genome, offsets, a))
+                    for a in (-20, 0, 20)}
+    walks = [("model", None)] + ([("repertoire", args.walk)] if args.walk else [])
+    out["play"] = []
+    for label, rep_dir in walks:
+        for i, ball in enumerate(BALLS):
+            video = None
+            if args.videos:
+                args.videos.mkdir(parents=True, exist_ok=True)
+                video = args.videos / f"play_{label}_{i}.mp4"
+            t0 = time.perf_counter()
+            r = play(problem, genome, np.zeros(3), np.array(ball), np.array(TARGET), video,
+                     repertoire=rep_dir)
+            r.update(walk_kind=label, ball=list(ball), wall_s=time.perf_counter() - t0)
+            out["play"].append(r)
+    if args.json:
+        print(json.dumps(out, indent=2))
+        return
+    print(f"replay best.motion (no ball): {'FELL' if out['replay']['fell'] else 'stayed up'}")
+    print("\n| aim (deg) | median abs. angle error (deg) | within +-10 deg | falls | "
+          "mean distance (m) |\n|---|---|---|---|---|")
+    for a, s in out["aimed"].items():
+        print(f"| {a} | {s['median_abs_angle_error_deg']:.1f} | {s['within_10deg']:.0%} | "
+              f"{s['fall_rate']:.0%} | {s['mean_distance_m']:.2f} |")
+    print("\n| walk | ball (m) | aim (deg) | ball at rest (m) | error to target line (m) | "
+          "fell | total time (s) | walk steps | placement error (cm) |\n"
+          "|---|---|---|---|---|---|---|---|---|")
+    for r in out["play"]:
+        print(f"| {r['walk_kind']} | ({r['ball'][0]:.1f}, {r['ball'][1]:.1f}) | "
+              f"{r['aim_deg']:+.0f} | ({r['ball_rest_m'][0]:.2f}, {r['ball_rest_m'][1]:.2f}) | "
+              f"{r['target_error_m']:.2f} | {'yes' if r['fell'] else 'no'} | {r['time_s']:.1f} | "
+              f"{r.get('walk_steps', '-')} | {100 * r['ball_placement_error_m']:.1f} |")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,114 @@
+"""Run-folder artifacts of ``biped-kick``.
+
+- ``best.motion``: the whole straight kick (stand, shift, lift, kick, retract, shift back), 22
+  joints, 20 ms poses, exactly the key poses that were simulated; ``kicks/aim_+20.motion`` and
+  the rest: the same kick aimed from -30 to +30 degrees (ball placed as ``best_kicks.json`` says);
+- ``best_naoqi.py`` / ``best_keyframes.json``: exports for a real NAO when the kick passes the
+  joint-range and motor-speed checks;
+- ``best.mp4``: the straight kick with the ball, camera on robot and ball;
+- ``plots/kick_foot.png`` (foot trajectory), ``plots/kick_zmp.png`` (CoP margin and path
+  over the support polygons) and ``plots/kick_progress.png`` (the search, feasible kicks only);
+- ``best_kicks.json``: one kick per aim (-30..+30 deg, step 10): distance, angle error, fall,
+  minimum ZMP margin, ``stable`` (no fall, ZMP margin kept; the joint limits are checked on
+  the motion files), where the ball must lie relative to the right sole;
+- ``best.json`` key ``genes``: the genes by name.
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+import numpy as np
+
+from evomotion.run.context import RunContext
+from evomotion.run.folder import atomic_write_text
+from evomotion.sim.nao.motion import format_motion
+from evomotion.studies.biped_kick.motion import ball_offset, kick_motion, named
+
+AIMS_DEG = (-30, -20, -10, 0, 10, 20, 30)
+
+
+def _ok(genome: Any) -> bool:
+    return genome is not None and np.all(np.isfinite(genome))
+
+
+def best_record(ctx: RunContext) -> dict[str, Any]:
+    if not _ok(ctx.best_genome):
+        return {}
+    return {"genes": named(ctx.best_genome),
+            "feasible": bool(ctx.best_metrics.get("feasible", 0.0) > 0)}
+
+
+def write_motions(ctx: RunContext) -> None:
+    if not _ok(ctx.best_genome):
+        return
+    atomic_write_text(ctx.out_dir / "best.motion", format_motion(kick_motion(ctx.best_genome)))
+    (ctx.out_dir / "kicks").mkdir(exist_ok=True)
+    for a in AIMS_DEG:
+        motion = kick_motion(ctx.best_genome, np.radians(a))
+        atomic_write_text(ctx.out_dir / "kicks" / f"aim_{a:+d}.motion", format_motion(motion))
+
+
+def on_checkpoint(ctx: RunContext) -> None:
+    write_motions(ctx)
+
+
+def aim_table(problem: Any, genome: np.ndarray) -> list[dict[str, float]]:
+    """One nominal kick per aim of :data:`AIMS_DEG`."""
+    aims = np.radians(np.array(AIMS_DEG, dtype=float))
+    g = np.repeat(np.atleast_2d(genome), len(aims), axis=0)
+    k = problem.kicks(g, aims, problem.ball_xy(g, aims))
+    feasible = ~k["fell"] & (k["zmp_deficit_m_s"] <= 0)
+    return [{"aim_deg": float(a), "distance_along_m": float(k["along_m"][i]),
+             "angle_error_deg": float(np.degrees(k["angle_error_rad"][i])),
+             "fell": bool(k["fell"][i]), "min_margin_m": float(k["min_margin_m"][i]),
+             "stable": bool(feasible[i]),
+             "ball_offset_y_m": float(ball_offset(genome[None], aims[i])[0])}
+            for i, a in enumerate(AIMS_DEG)]
+
+
+def finalize(ctx: RunContext) -> None:
+    """Motions, exports, the per-aim table, the plots and the video of the best kick."""
+    from evomotion.sim.nao.export import write_run_exports
+    from evomotion.sim.render import RenderUnavailableError, render_video
+    from evomotion.studies.biped_kick import scene
+    from evomotion.studies.biped_kick.kick_plots import plot_foot, plot_progress, plot_zmp
+    from evomotion.studies.biped_kick.problem import FLOOR_M, support_analysis
+
+    if not _ok(ctx.best_genome):
+        return
+    write_motions(ctx)
+    g = np.asarray(ctx.best_genome, dtype=float)
+    if not ctx.best_metrics.get("feasible", 0.0):
+        ctx.log("best kick is not feasible (ZMP, fall or NAO limits violated); "
+                "give the search more evaluations")
+    write_run_exports(kick_motion(g), ctx.out_dir, ctx.log)
+    p = ctx.problem
+    rows = aim_table(p, g)
+    atomic_write_text(ctx.out_dir / "best_kicks.json", json.dumps(rows, indent=2) + "\n")
+    k = p.kicks(g[None], np.zeros(1), p.ball_xy(g[None], np.zeros(1)), keep=True)
+    end = int(k["end"][0])
+    times = k["times"][:end]
+    sens = k["sensors"][0, :end]
+    margin, cop, corners = support_analysis(sens, p.sl)
+    plot_foot(g, 0.0, times, sens[:, p.sl["r_sole"]], ctx.plots_dir / "kick_foot")
+    plot_zmp(g, times, margin, cop, corners, p.cfg.zmp_margin_m, ctx.plots_dir / "kick_zmp")
+    if (ctx.out_dir / "stats.csv").exists():
+        plot_progress(ctx.out_dir / "stats.csv", FLOOR_M, ctx.plots_dir / "kick_progress")
+    from evomotion.sim import nao
+
+    qpos = nao.state_qpos_all(p.model, k["states"][0, :end])
+    video = ctx.out_dir / "best.mp4"
+    try:
+        render_video(qpos, p.dt, video, model_xml=scene.kick_scene_xml(rolling_m=p.cfg.rolling_m),
+                     camera="kick")
+    except RenderUnavailableError as exc:
+        ctx.log(f"best.mp4 skipped: {exc}")
+        video = None
+    straight = rows[AIMS_DEG.index(0)]
+    ctx.log(f"best kick: {straight['distance_along_m']:.2f} m straight, "
+            f"{'fell' if straight['fell'] else 'stayed up'}, min ZMP margin "
+            f"{1000 * straight['min_margin_m']:.1f} mm; aimed -30..+30 deg: mean angle error "
+            f"{np.mean([abs(r['angle_error_deg']) for r in rows]):.1f} deg"
+            + (f"; video {video.name}" if video else ""))

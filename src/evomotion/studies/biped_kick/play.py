@@ -1,0 +1,176 @@
+"""``evomotion biped-kick play``: plan the kick point, approach, kick, and follow the ball until
+it rests (seed 002's whole chain for one ball and target, field frame, metres, radians).
+
+1. **Plan** (:func:`planning.plan_aimed_kick`): the aim ``a`` in [-30, +30] deg and the stand
+   pose that puts the ball where the evolved kick wants it for that aim; the cubic Bézier
+   approach from the robot's pose to it.
+2. **Walk**, in one MuJoCo simulation (NAO + ball, field frame) with the kick: given a
+   ``humanoid-repertoire`` run (``--walk RUN``), the robot walks there with its steps, closed
+   loop (:mod:`.walk_play`); otherwise with the walking model of :mod:`planning` (0.20 m/s,
+   0.6 rad/s on curves), which gives the approach time while the robot is placed at the stand
+   pose (the approach is not simulated). The output's ``walk`` key says which.
+3. **Kick** from where the robot really stands: the aim is recomputed from its heading (within
+   +-30 deg), the kick's motion for that aim is played (:func:`motion.joint_targets`), then the
+   ball rolls on; the roll left after the rollout is ``v |v| / (2 a_roll)`` and lasts
+   ``|v| / a_roll``.
+
+Reported: where the ball rests, its distance to the target and to the ball->target line
+(``target_error_m``), the times, and whether the robot fell.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from evomotion.errors import FileFormatError, InputError
+from evomotion.sim.rollout import interpolate_controls
+from evomotion.studies.biped_kick.motion import (
+    GENES,
+    MAX_AIM_DEG,
+    SETTLE_S,
+    execution_time_s,
+    joint_targets,
+    key_times,
+)
+from evomotion.studies.biped_kick.planning import WalkModel, bezier_time, plan_aimed_kick
+from evomotion.textio import decode_utf8, read_file_bytes
+
+#: the kick shipped with evomotion (evolved by ``evomotion run biped-kick``, see its docs)
+DEFAULT_KICK = Path(__file__).with_name("default_kick.json")
+WALK_MODEL = WalkModel()
+MAX_KICK_BYTES = 1 << 20
+
+
+def read_kick(path: Path | None) -> tuple[np.ndarray, str]:
+    """The genome of a kick: a biped-kick run folder (its ``best.json``), a ``best.json``, or
+    the shipped default. One-line errors name the file and what was expected."""
+    if path is None:
+        path = DEFAULT_KICK
+    path = Path(path)
+    f = path / "best.json" if path.is_dir() else path
+    if not f.exists():
+        raise InputError(f"{f}: no such file (expected a biped-kick run folder or its "
+                         "best.json)")
+    text = decode_utf8(read_file_bytes(f, "kick (best.json)", MAX_KICK_BYTES), f)
+    try:
+        rec = json.loads(text)
+    except (json.JSONDecodeError, RecursionError) as exc:
+        raise FileFormatError(f, getattr(exc, "lineno", None), "a JSON object") from None
+    if not isinstance(rec, dict) or rec.get("study", "biped-kick") != "biped-kick":
+        raise FileFormatError(f, None, "the best.json of a biped-kick run")
+    g = rec.get("genome")
+    if (not isinstance(g, list) or len(g) != len(GENES)
+            or not all(isinstance(v, int | float) and not isinstance(v, bool)
+                       and np.isfinite(v) for v in g)):
+        raise FileFormatError(f, None, f"key 'genome': a list of {len(GENES)} finite numbers "
+                                       "(the kick's genes)")
+    for v, (name, lo, hi) in zip(g, GENES, strict=True):
+        if not lo <= v <= hi:
+            raise FileFormatError(f, None, f"gene {name} in [{lo}, {hi}], got {v}")
+    return np.asarray(g, dtype=float), str(f)
+
+
+def field_state(problem: Any, pose: np.ndarray, ball: np.ndarray) -> np.ndarray:
+    """Kick-scene state with the robot's torso at the field pose (x, y, heading) in its crouch
+    and the ball resting at ``ball``."""
+    import mujoco
+
+    from evomotion.sim import nao
+    from evomotion.studies.biped_kick import scene
+
+    m = problem.model
+    data = nao.initial_data(m)
+    i = nao.qpos_address(m)
+    data.qpos[i:i + 2] = pose[:2]
+    data.qpos[i + 3:i + 7] = [np.cos(pose[2] / 2), 0.0, 0.0, np.sin(pose[2] / 2)]
+    b = scene.ball_qpos_index(m)
+    data.qpos[b:b + 7] = [ball[0], ball[1], scene.BALL_RADIUS_M + 1e-4, 1, 0, 0, 0]
+    mujoco.mj_forward(m, data)
+    return nao.get_state(m, data)
+
+
+def _wrap(a: float) -> float:
+    return float((a + np.pi) % (2 * np.pi) - np.pi)
+
+
+def play(problem: Any, genome: np.ndarray, robot: np.ndarray, ball: np.ndarray,
+         target: np.ndarray, video: Path | None = None,
+         repertoire: Path | None = None) -> dict[str, Any]:
+    """Plan, walk, kick and roll; the report (and ``video`` of the whole simulation)."""
+    from evomotion.sim import nao
+    from evomotion.studies.biped_kick import scene
+    from evomotion.studies.biped_kick.walk_play import SceneRun, walk
+
+    g = np.asarray(genome, dtype=float)
+    robot, ball, target = (np.asarray(v, dtype=float) for v in (robot, ball, target))
+    root0 = nao.state_qpos(problem.model, nao.initial_state(problem.model), nao.ROOT_JOINT, 2)
+
+    def ball_local(aims: np.ndarray) -> np.ndarray:
+        rows = np.repeat(g[None], len(np.atleast_1d(aims)), axis=0)
+        return problem.ball_xy(rows, np.atleast_1d(aims)) - root0
+
+    max_aim = np.radians(MAX_AIM_DEG)
+    plan = plan_aimed_kick(robot, ball, target, ball_local, max_aim)
+    path_m, model_s = bezier_time(plan.control_points, WALK_MODEL)
+    report: dict[str, Any] = {"walk_path_m": path_m}
+    if repertoire is None:
+        run = SceneRun(problem, field_state(problem, plan.pose, ball))
+        report.update(walk=f"walking model ({WALK_MODEL.speed_m_s} m/s, "
+                           f"{WALK_MODEL.turn_rad_s} rad/s); the approach is not simulated",
+                      walk_time_s=model_s)
+    else:
+        run = SceneRun(problem, field_state(problem, robot, ball))
+        w = walk(run, repertoire, plan.control_points, plan.pose)
+        report.update(walk=f"repertoire {repertoire} (closed-loop steps, simulated)",
+                      walk_time_s=run.time_s, walk_steps=w["steps"],
+                      walk_position_error_m=w["position_error_m"],
+                      walk_heading_error_deg=w["heading_error_deg"])
+    walk_s = run.time_s if repertoire is not None else model_s
+    pose = run.pose()
+    ball_now = nao.state_qpos(problem.model, run.state, scene.BALL_JOINT, 2)
+    psi_t = float(np.arctan2(*(target - ball_now)[::-1]))  # the walk may have nudged the ball
+    aim = float(np.clip(_wrap(psi_t - pose[2]), -max_aim, max_aim))
+    c, s = np.cos(pose[2]), np.sin(pose[2])
+    d = ball_now - pose[:2]
+    local = np.array([c * d[0] + s * d[1], -s * d[0] + c * d[1]])
+    placement = float(np.linalg.norm(local - ball_local(np.array([aim]))[0]))
+    exec_s = float(SETTLE_S + execution_time_s(g[None])[0])
+    kt = key_times(g[None])
+    keys = joint_targets(g[None], kt, aim)[0]
+    nstep = int(np.ceil((exec_s + problem.cfg.roll_after_s) / problem.dt))
+    states = run.play(interpolate_controls(kt, keys, problem.dt, nstep))
+    v = nao.state_qvel(problem.model, states[-1], scene.BALL_JOINT, 2)
+    pos = nao.state_qpos(problem.model, states[-1], scene.BALL_JOINT, 2)
+    rest = pos + v * np.linalg.norm(v) / (2 * problem.decel)
+    roll_s = float(np.linalg.norm(v) / problem.decel)
+    u = (target - ball) / max(np.linalg.norm(target - ball), 1e-12)
+    r = rest - ball
+    report.update({
+        "ball_rest_m": [float(rest[0]), float(rest[1])],
+        "target_error_m": float(abs(u[0] * r[1] - u[1] * r[0])),
+        "target_distance_m": float(np.linalg.norm(rest - target)),
+        "time_s": float(walk_s + nstep * problem.dt + roll_s),
+        "fell": bool(run.fell),
+        "aim_deg": float(np.degrees(aim)),
+        "planned_stand_pose": [float(plan.pose[0]), float(plan.pose[1]),
+                               _wrap(float(plan.pose[2]))],
+        "stand_pose": [float(x) for x in pose],
+        "ball_placement_error_m": placement,
+        "kick_time_s": float(nstep * problem.dt), "roll_time_s": roll_s,
+        "kick_distance_m": float(np.linalg.norm(r)),
+    })
+    if video is not None:
+        from evomotion.sim.render import RenderUnavailableError, render_video
+
+        try:
+            render_video(np.concatenate(run.qpos), problem.dt, video, camera="kick",
+                         model_xml=scene.kick_scene_xml(rolling_m=problem.cfg.rolling_m))
+            report["video"] = str(video)
+        except (RenderUnavailableError, RuntimeError) as exc:
+            report["video"] = None
+            report["video_skipped"] = str(exc)
+    return report

@@ -1,0 +1,178 @@
+"""``evomotion biped-kick play``: kick file reading, aimed kick-point planning, the whole chain."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from evomotion.errors import InputError
+from evomotion.studies.biped_kick.motion import GENES, START
+from evomotion.studies.biped_kick.planning import plan_aimed_kick
+from evomotion.studies.biped_kick.play import DEFAULT_KICK, play, read_kick
+from evomotion.studies.biped_kick.problem import KickConfig, KickProblem
+
+X0 = [START[g[0]] for g in GENES]
+
+
+def test_read_kick_default_run_folder_and_errors(tmp_path):
+    g, src = read_kick(None)
+    assert g.shape == (len(GENES),) and src == str(DEFAULT_KICK)
+    (tmp_path / "best.json").write_text(json.dumps({"study": "biped-kick", "genome": X0}))
+    assert np.allclose(read_kick(tmp_path)[0], X0)
+    for text, what in (("{", "JSON"), (json.dumps({"genome": [1, 2]}), "finite numbers"),
+                       (json.dumps({"study": "arm-ik", "genome": X0}), "biped-kick"),
+                       (json.dumps({"genome": [float("nan")] * len(GENES)}), "finite"),
+                       (json.dumps({"genome": [True] * len(GENES)}), "finite numbers"),
+                       (json.dumps({"genome": [0.0] * len(GENES)}), "gene shift_y_m in")):
+        f = tmp_path / "bad.json"
+        f.write_text(text)
+        with pytest.raises(InputError, match=what) as e:
+            read_kick(f)
+        assert "bad.json" in str(e.value) and "\n" not in str(e.value)
+    with pytest.raises(InputError, match="no such file"):
+        read_kick(tmp_path / "nothing")
+
+
+def test_aimed_plan_puts_the_ball_where_the_kick_wants_it():
+    def local(aims):
+        return np.stack([np.full(len(aims), 0.16), 0.1 * aims], axis=1)
+
+    ball, target = np.array([1.5, 0.5]), np.array([4.5, 0.0])
+    for robot in (np.array([0.0, 0.0, 0.0]), np.array([2.5, 1.5, 3.0]), np.array([1.0, -1, 1.5])):
+        plan = plan_aimed_kick(robot, ball, target, local, np.radians(30))
+        x, y, psi = plan.pose
+        c, s = np.cos(psi), np.sin(psi)
+        d = ball - [x, y]
+        assert np.allclose([c * d[0] + s * d[1], -s * d[0] + c * d[1]],
+                           local(np.array([plan.aim_rad]))[0])
+        # the kick direction (heading + aim) points at the target
+        psi_t = np.arctan2(*(target - ball)[::-1])
+        assert np.isclose(np.cos(psi + plan.aim_rad - psi_t), 1.0)
+        assert abs(plan.aim_rad) <= np.radians(30) + 1e-12
+        assert np.allclose(plan.control_points[0], robot[:2])
+        assert np.allclose(plan.control_points[-1], [x, y])
+    # behind the ball on the target line, facing the target: the straight kick is cheapest
+    u = (target - ball) / np.linalg.norm(target - ball)
+    robot = np.array([*(ball - 1.0 * u), np.arctan2(u[1], u[0])])
+    assert abs(plan_aimed_kick(robot, ball, target, local, np.radians(30)).aim_rad) < 0.06
+
+
+def test_play_reports_the_whole_chain(tmp_path):
+    p = KickProblem(KickConfig(nthread=2))
+    res = play(p, np.array(X0), np.array([0.0, 0.0, 0.0]), np.array([1.0, 0.3]),
+               np.array([3.0, 0.0]))
+    for key in ("ball_rest_m", "target_error_m", "time_s", "fell", "walk", "aim_deg"):
+        assert key in res
+    assert "walking model" in res["walk"] and res["walk_time_s"] > 0
+    assert res["ball_placement_error_m"] < 1e-3  # placed exactly by the walking model
+    assert res["time_s"] > res["walk_time_s"] + res["kick_time_s"] - 1e-9
+    assert np.linalg.norm(np.subtract(res["ball_rest_m"], [1.0, 0.3])) > 0.1  # it was kicked
+
+
+def _cli(*args, cwd):
+    import subprocess
+    import sys
+
+    return subprocess.run([sys.executable, "-m", "evomotion.cli", "biped-kick", "play", *args],
+                          capture_output=True, text=True, cwd=cwd, timeout=300)
+
+
+@pytest.mark.parametrize("args,msg", [
+    (["--ball", "nan", "0"], "--ball: expected finite"),
+    (["--ball", "1", "0", "--target", "1", "0"], "--target: expected at least 0.1 m"),
+    (["--kick", "missing"], "no such file"),
+    (["--video", "out.gif"], "expected a .mp4 path"),
+    (["--walk", "missing"], "index.json"),
+    (["--robot", "1.4", "0.45", "0"], "at least 0.3 m from the ball"),
+    (["--video", "nofolder/out.mp4"], "its folder does not exist"),
+])
+def test_play_bad_input_is_one_line(tmp_path, args, msg):
+    r = _cli(*args, cwd=tmp_path)
+    lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
+    assert r.returncode == 2 and len(lines) == 1 and msg in lines[0], r.stderr
+
+
+def test_play_json(tmp_path):
+    r = _cli("--ball", "1.2", "0.4", "--target", "3", "0", "--json", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    res = json.loads(r.stdout)
+    assert {"ball_rest_m", "target_error_m", "time_s", "fell"} <= set(res)
+
+
+def test_the_shipped_kick_alone_stays_up():
+    """``evomotion replay`` of the shipped kick's motion (no ball): the robot does not fall."""
+    from evomotion.sim.nao.replay import simulate_motion
+    from evomotion.studies.biped_kick.motion import kick_motion
+
+    g, _ = read_kick(None)
+    for aim in (-30, 0, 30):
+        assert simulate_motion(kick_motion(g, np.radians(aim)), hold_s=1.0)["summary"][
+            "fell"] is False
+
+
+def test_play_walks_with_a_repertoire_in_the_same_simulation(tmp_path):
+    """A small repertoire (a 3-generation run) carries the robot towards the stand pose; the
+    kick is then played from where it really stands."""
+    from evomotion.run.config import resolve_config
+    from evomotion.run.runner import run_study
+    from evomotion.studies import get_study
+
+    s = get_study("humanoid-repertoire")
+    cfg = resolve_config(s, None, list(s.smoke) + ["run.generations=3"])
+    assert run_study(s, cfg, tmp_path, quiet=True).exit_code == 0
+    p = KickProblem(KickConfig(nthread=2))
+    g, _ = read_kick(None)
+    res = play(p, g, np.array([0.0, 0.0, 0.0]), np.array([0.45, 0.05]), np.array([3.0, 0.0]),
+               repertoire=tmp_path)
+    assert "repertoire" in res["walk"] and res["walk_steps"] >= 0
+    assert res["walk_time_s"] > 0.6  # at least the ready motion and back, simulated
+    assert np.isfinite(res["ball_placement_error_m"]) and isinstance(res["fell"], bool)
+
+
+def test_a_broken_repertoire_is_refused_before_walking(tmp_path):
+    from evomotion.sim.nao.repertoire import read_index
+
+    rep = tmp_path / "repertoire"
+    rep.mkdir()
+    entry = {"file": "cell-0001.motion", "cell": 1, "objective": -1.0,
+             "measured": {"dx_m": "0.1", "dy_m": 0.0, "dtheta_deg": 0.0}}
+    (rep / "index.json").write_text(json.dumps({"entries": [entry]}))
+    with pytest.raises(InputError, match="finite numbers"):
+        read_index(tmp_path)
+    entry["measured"]["dx_m"] = 0.1
+    (rep / "index.json").write_text(json.dumps({"entries": [entry]}))
+    p = KickProblem(KickConfig(nthread=1))
+    with pytest.raises(InputError, match="no such file"):
+        play(p, np.array(X0), np.zeros(3), np.array([1.0, 0.0]), np.array([3.0, 0.0]),
+             repertoire=tmp_path)
+    f = tmp_path / "file"
+    f.write_text("x")
+    with pytest.raises(InputError, match="cannot be read|no such file"):
+        read_index(f)
+
+
+@settings(max_examples=60, deadline=None)
+@given(data=st.binary(max_size=300) | st.builds(
+    lambda g, extra: json.dumps({"study": "biped-kick", "genome": g, **extra}).encode(),
+    st.lists(st.floats(allow_nan=True, allow_infinity=True) | st.integers() | st.booleans()
+             | st.text(max_size=3), max_size=len(GENES) + 1),
+    st.dictionaries(st.text(max_size=4), st.integers(), max_size=2)))
+def test_read_kick_accepts_or_one_line_error(data):
+    import tempfile
+    from pathlib import Path
+
+    with tempfile.TemporaryDirectory() as d:
+        f = Path(d) / "best.json"
+        f.write_bytes(data)
+        try:
+            g, _ = read_kick(f)
+        except InputError as e:
+            assert "\n" not in str(e) and str(e).startswith(str(f))
+            return
+        lo = np.array([x[1] for x in GENES])
+        hi = np.array([x[2] for x in GENES])
+        assert g.shape == (len(GENES),) and np.all((g >= lo) & (g <= hi))
