@@ -176,3 +176,35 @@ def test_read_kick_accepts_or_one_line_error(data):
         lo = np.array([x[1] for x in GENES])
         hi = np.array([x[2] for x in GENES])
         assert g.shape == (len(GENES),) and np.all((g >= lo) & (g <= hi))
+
+
+def test_the_kick_does_not_depend_on_the_robots_heading_in_the_world():
+    """Elliptic friction cones: the same kick from the robot turned 0 and 45 deg sends the ball
+    in the same direction relative to the robot (pyramidal cones did not: +13.7 deg at 21)."""
+    from evomotion.sim import nao
+    from evomotion.sim.rollout import interpolate_controls
+    from evomotion.studies.biped_kick import scene
+    from evomotion.studies.biped_kick.motion import (
+        SETTLE_S,
+        execution_time_s,
+        joint_targets,
+        key_times,
+    )
+    from evomotion.studies.biped_kick.play import field_state
+
+    p = KickProblem(KickConfig(nthread=2))
+    g, _ = read_kick(None)
+    root0 = nao.state_qpos(p.model, nao.initial_state(p.model), nao.ROOT_JOINT, 2)
+    local = p.ball_xy(g[None], np.zeros(1))[0] - root0
+    kt = key_times(g[None])
+    n = int((SETTLE_S + execution_time_s(g[None])[0] + 0.4) / p.dt)
+    ctrl = interpolate_controls(kt, joint_targets(g[None], kt, 0.0)[0], p.dt, n)
+    dirs = []
+    for psi in (0.0, np.radians(45)):
+        c, s = np.cos(psi), np.sin(psi)
+        ball = np.array([c * local[0] - s * local[1], s * local[0] + c * local[1]])
+        end = p.sim.run(field_state(p, np.array([0.0, 0.0, psi]), ball), ctrl[None])[0, -1]
+        d = nao.state_qpos(p.model, end, scene.BALL_JOINT, 2) - ball
+        assert np.linalg.norm(d) > 0.1
+        dirs.append(np.degrees(np.arctan2(d[1], d[0]) - psi))
+    assert abs(dirs[0] - dirs[1]) < 1.0

@@ -43,7 +43,7 @@ VARIANTS: dict[str, object] = {
     "cmaes+levy": CMAESConfig(sigma0=SIGMA0, levy=True),
 }
 LABELS = {"cmaes+tent+levy": "optimised: improved CMA-ES (Tent + Lévy, the seed's)",
-          "cmaes": "plain CMA-ES (our default)", "ga-blx": "GA (BLX-alpha, pop 20)",
+          "cmaes": "plain CMA-ES (the default optimiser)", "ga-blx": "GA (BLX-alpha, pop 20)",
           "cmaes+tent": "CMA-ES + Tent", "cmaes+levy": "CMA-ES + Lévy"}
 DEFAULT_VARIANTS = ("cmaes+tent+levy", "cmaes", "ga-blx")
 ACCURACY_AIMS_DEG = (-20.0, 0.0, 20.0)

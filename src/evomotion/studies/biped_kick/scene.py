@@ -44,7 +44,13 @@ def kick_scene_xml(ball_xy: tuple[float, float] = (0.2, -0.05), rolling_m: float
 
 @lru_cache(maxsize=4)
 def load_scene(rolling_m: float = 0.005) -> mujoco.MjModel:
-    return mujoco.MjModel.from_xml_string(kick_scene_xml(rolling_m=rolling_m))
+    """The kick scene with **elliptic** friction cones: MuJoCo's default pyramidal cones align
+    their edges with each contact's frame (the floor's x/y axes), so friction, and with it the
+    direction a ball is kicked, depended on the robot's heading in the world (a 0 deg kick went
+    +13.7 deg with the robot turned 21 deg); elliptic cones are rotation invariant."""
+    model = mujoco.MjModel.from_xml_string(kick_scene_xml(rolling_m=rolling_m))
+    model.opt.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
+    return model
 
 
 def ball_qpos_index(model: mujoco.MjModel) -> int:
