@@ -130,6 +130,12 @@ def play(problem: Any, genome: np.ndarray, robot: np.ndarray, ball: np.ndarray,
                       walk_position_error_m=w["position_error_m"],
                       walk_heading_error_deg=w["heading_error_deg"])
     walk_s = run.time_s if repertoire is not None else model_s
+    if run.fell:  # fell while walking: there is nothing to kick with
+        rest = nao.state_qpos(problem.model, run.state, scene.BALL_JOINT, 2)
+        report.update(ball_rest_m=[float(rest[0]), float(rest[1])],
+                      target_error_m=None, time_s=float(walk_s), fell=True,
+                      kicked=False, target_distance_m=float(np.linalg.norm(rest - target)))
+        return _with_video(report, run, problem, video)
     pose = run.pose()
     ball_now = nao.state_qpos(problem.model, run.state, scene.BALL_JOINT, 2)
     psi_t = float(np.arctan2(*(target - ball_now)[::-1]))  # the walk may have nudged the ball
@@ -163,6 +169,14 @@ def play(problem: Any, genome: np.ndarray, robot: np.ndarray, ball: np.ndarray,
         "kick_time_s": float(nstep * problem.dt), "roll_time_s": roll_s,
         "kick_distance_m": float(np.linalg.norm(r)),
     })
+    report["kicked"] = True
+    return _with_video(report, run, problem, video)
+
+
+def _with_video(report: dict[str, Any], run: Any, problem: Any, video: Path | None
+                ) -> dict[str, Any]:
+    from evomotion.studies.biped_kick import scene
+
     if video is not None:
         from evomotion.sim.render import RenderUnavailableError, render_video
 

@@ -117,7 +117,7 @@ class KickConfig:
     def genome_dim(self) -> int:
         return len(GENES)
 
-    memory_keys = ("roll_after_s", "aims_deg")  # what memory_bytes depends on
+    memory_keys = ("aims_deg", "roll_after_s")  # what memory_bytes depends on
 
     def memory_bytes(self, pop_size: int) -> int:
         """Bytes of one batch's rollouts at the longest kick, twice."""

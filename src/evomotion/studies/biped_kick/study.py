@@ -73,6 +73,10 @@ def play_cmd(
     if json_out:
         typer.echo(json.dumps(res, indent=2))
         return
+    if not res["kicked"]:
+        typer.echo(f"kick: {source}\nwalk: {res['walk']}: FELL after {res.get('walk_steps', 0)} "
+                   f"steps ({res['time_s']:.1f} s); no kick")
+        raise typer.Exit(1)
     typer.echo(f"kick: {source}\nwalk: {res['walk']}, {res['walk_path_m']:.2f} m path, "
                f"{res['walk_time_s']:.1f} s, to ({res['stand_pose'][0]:.2f}, "
                f"{res['stand_pose'][1]:.2f}) facing {math.degrees(res['stand_pose'][2]):.0f} deg"
