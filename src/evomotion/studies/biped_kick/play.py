@@ -27,16 +27,8 @@ from typing import Any
 import numpy as np
 
 from evomotion.errors import FileFormatError, InputError
-from evomotion.sim.rollout import interpolate_controls
-from evomotion.studies.biped_kick.motion import (
-    GENES,
-    MAX_AIM_DEG,
-    SETTLE_S,
-    execution_time_s,
-    joint_targets,
-    key_times,
-)
-from evomotion.studies.biped_kick.planning import WalkModel, bezier_time, plan_aimed_kick
+from evomotion.studies.biped_kick.motion import GENES, MAX_AIM_DEG
+from evomotion.studies.biped_kick.planning import WalkModel, bezier_time, plan_aimed_kick, wrap
 from evomotion.textio import decode_utf8, read_file_bytes
 
 #: the kick shipped with evomotion (evolved by ``evomotion run biped-kick``, see its docs)
@@ -94,7 +86,7 @@ def field_state(problem: Any, pose: np.ndarray, ball: np.ndarray) -> np.ndarray:
 
 
 def _wrap(a: float) -> float:
-    return float((a + np.pi) % (2 * np.pi) - np.pi)
+    return float(wrap(a))
 
 
 def play(problem: Any, genome: np.ndarray, robot: np.ndarray, ball: np.ndarray,
@@ -144,15 +136,11 @@ def play(problem: Any, genome: np.ndarray, robot: np.ndarray, ball: np.ndarray,
     d = ball_now - pose[:2]
     local = np.array([c * d[0] + s * d[1], -s * d[0] + c * d[1]])
     placement = float(np.linalg.norm(local - ball_local(np.array([aim]))[0]))
-    exec_s = float(SETTLE_S + execution_time_s(g[None])[0])
-    kt = key_times(g[None])
-    keys = joint_targets(g[None], kt, aim)[0]
-    nstep = int(np.ceil((exec_s + problem.cfg.roll_after_s) / problem.dt))
-    states = run.play(interpolate_controls(kt, keys, problem.dt, nstep))
-    v = nao.state_qvel(problem.model, states[-1], scene.BALL_JOINT, 2)
-    pos = nao.state_qpos(problem.model, states[-1], scene.BALL_JOINT, 2)
-    rest = pos + v * np.linalg.norm(v) / (2 * problem.decel)
-    roll_s = float(np.linalg.norm(v) / problem.decel)
+    _, ctrl, end = problem.controls(g[None], np.array([aim]))
+    nstep = int(end[0])
+    states = run.play(ctrl[0])
+    rest, roll = problem.ball_rest(states[-1])
+    roll_s = float(roll)
     u = (target - ball) / max(np.linalg.norm(target - ball), 1e-12)
     r = rest - ball
     report.update({

@@ -50,6 +50,7 @@ from evomotion.studies.biped_kick.motion import (
     key_times,
     limit_excess,
 )
+from evomotion.studies.biped_kick.planning import wrap
 
 METRICS = ("distance_m", "angle_error_deg", "lateral_m", "fell", "feasible", "violation",
            "zmp_deficit_mm_s", "min_margin_m", "speed_ratio", "exec_time_s")
@@ -159,10 +160,6 @@ def support_analysis(sensors: np.ndarray, sl: dict[str, slice]
     return np.where(total > 0, margin, -np.inf), np.where((total > 0)[..., None], cop, np.nan), C
 
 
-def wrap(a: np.ndarray) -> np.ndarray:
-    return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
-
-
 class KickProblem:
     """Maximise the ball's travel along the requested aims with a stable, feasible kick."""
 
@@ -197,6 +194,27 @@ class KickProblem:
         x = np.full_like(y, self._toe[0] + scene.BALL_RADIUS_M + BALL_GAP_M)
         return np.stack([x + self.cfg.ball_dx_m, self._toe[1] + y + self.cfg.ball_dy_m], axis=1)
 
+    def controls(self, genomes: np.ndarray, aims_rad: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(20 ms key poses ``[n, K, 22]``, physics-step targets ``[n, nstep, 22]``, each kick's
+        end step ``[n]``: the motion plus ``roll_after_s``). Each kick is measured at its own
+        end step, so its result does not depend on the other members of the batch (which only
+        set how long the batch runs)."""
+        end = np.ceil((SETTLE_S + execution_time_s(genomes) + self.cfg.roll_after_s)
+                      / self.dt).astype(int)
+        kt = key_times(genomes)
+        keys = joint_targets(genomes, kt, aims_rad)
+        return keys, interpolate_controls(kt, keys, self.dt, int(end.max())), end
+
+    def ball_rest(self, states: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Where the ball of recorded ``states[..., nstate]`` comes to rest (``[..., 2]``, m:
+        its place plus the remaining roll ``v |v| / (2 a_roll)``) and how long it still rolls
+        (``|v| / a_roll``, s)."""
+        q = nao.state_qpos(self.model, states, scene.BALL_JOINT, 2)
+        v = nao.state_qvel(self.model, states, scene.BALL_JOINT, 2)
+        speed = np.linalg.norm(v, axis=-1)
+        return q + v * speed[..., None] / (2 * self.decel), speed / self.decel
+
     def kicks(self, genomes: np.ndarray, aims_rad: np.ndarray, ball_xy: np.ndarray,
               keep: bool = False) -> dict[str, np.ndarray]:
         """One rollout per row: genome ``[n, d]``, aim ``[n]`` (rad), ball ``[n, 2]`` (world).
@@ -205,19 +223,12 @@ class KickProblem:
         aims = np.broadcast_to(np.asarray(aims_rad, dtype=float), (len(g),))
         ball0 = np.asarray(ball_xy, dtype=float).reshape(len(g), 2)
         exec_t = execution_time_s(g)
-        # each kick is measured at its own end step, so that its result does not depend on
-        # the other members of the batch (which only set how long the batch runs)
-        end = np.ceil((SETTLE_S + exec_t + self.cfg.roll_after_s) / self.dt).astype(int)
-        nstep = int(end.max())
-        kt = key_times(g)
-        keys = joint_targets(g, kt, aims)
-        ctrl = interpolate_controls(kt, keys, self.dt, nstep)
+        keys, ctrl, end = self.controls(g, aims)
+        nstep = ctrl.shape[1]
         state0 = np.stack([scene.initial_scene_state(self.model, b) for b in ball0])
         states, sensors = self.sim.run_with_sensors(state0, ctrl)
-        last = states[np.arange(len(g)), end - 1]
-        qb = nao.state_qpos(self.model, last, scene.BALL_JOINT, 2)
-        vb = nao.state_qvel(self.model, last, scene.BALL_JOINT, 2)
-        travel = qb + vb * np.linalg.norm(vb, axis=1, keepdims=True) / (2 * self.decel) - ball0
+        rest, roll_s = self.ball_rest(states[np.arange(len(g)), end - 1])
+        travel = rest - ball0
         u = np.stack([np.cos(aims), np.sin(aims)], axis=1)
         along = (travel * u).sum(1)
         lateral = u[:, 0] * travel[:, 1] - u[:, 1] * travel[:, 0]
@@ -237,8 +248,7 @@ class KickProblem:
                "min_margin_m": np.min(np.where(in_kick, margin, np.inf), axis=1),
                "range_excess_rad": range_x, "speed_excess_s": speed_x,
                "speed_ratio": speed_ratio, "exec_time_s": exec_t, "ball0": ball0,
-               "rest_xy": ball0 + travel,
-               "roll_s": np.linalg.norm(vb, axis=1) / self.decel}
+               "rest_xy": rest, "roll_s": roll_s}
         if keep:
             out.update(states=states, sensors=sensors, margin=margin, end=end, times=times)
         return out

@@ -33,7 +33,7 @@ from evomotion.sim.nao.motion import Motion
 from evomotion.sim.nao.repertoire import read_cell, read_index
 from evomotion.sim.nao.replay import motion_targets
 from evomotion.sim.rollout import fall_step, torso_track
-from evomotion.studies.biped_kick.planning import bezier
+from evomotion.studies.biped_kick.planning import bezier, wrap
 
 HEADING_M_PER_DEG = 0.01
 RISK_M = 0.05  # metres of pose error a step's tilt costs per unit of its (negative) objective
@@ -72,7 +72,7 @@ class SceneRun:
 
 
 def _wrap(a: float) -> float:
-    return (a + math.pi) % (2 * math.pi) - math.pi
+    return float(wrap(a))
 
 
 def waypoints(ctrl: np.ndarray, goal: np.ndarray, spacing_m: float = 0.15) -> np.ndarray:
@@ -123,7 +123,7 @@ def walk(run: SceneRun, repertoire: Path, ctrl: np.ndarray, goal: np.ndarray,
 
         def cost(p: np.ndarray, g: np.ndarray = goals[k]) -> np.ndarray:
             return (np.hypot(g[0] - p[..., 0], g[1] - p[..., 1])
-                    + HEADING_M_PER_DEG * np.degrees(np.abs(_wrap_arr(g[2] - p[..., 2]))))
+                    + HEADING_M_PER_DEG * np.degrees(np.abs(wrap(g[2] - p[..., 2]))))
 
         now = float(cost(pose))
         close = (math.hypot(*(goals[k][:2] - pose[:2])) < (tol_m if last else 0.08)
@@ -169,7 +169,3 @@ def ready_offset(model: Any, ready_pose: np.ndarray) -> np.ndarray:
         feet = 0.5 * (d.site("l_sole_site").xpos[:2] + d.site("r_sole_site").xpos[:2])
         mid.append(d.body("torso").xpos[:2] - feet)
     return mid[1] - mid[0]
-
-
-def _wrap_arr(a: np.ndarray) -> np.ndarray:
-    return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
