@@ -12,6 +12,7 @@ from evomotion.studies.arm_ik.scenario import MAX_ABS, SCENARIO_DIR, load_scenar
 from evomotion.studies.grid_path.maps import MAX_MAP_CELLS, read_map
 from evomotion.studies.quadruped_plan.checker import PlanViolationError, check_plan
 from evomotion.studies.quadruped_plan.plan import read_plan
+from evomotion.studies.quadruped_plan.world import WORLD_DIR, read_world
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "fuzz" / "data"
@@ -60,8 +61,20 @@ def check_plan_file(path: Path) -> None:
         assert "\n" not in str(e)
 
 
+def check_world(path: Path) -> None:
+    w = read_world(path)
+    x0, y0, x1, y1 = w.bounds
+    assert x0 < x1 and y0 < y1 and w.goal_tolerance > 0 and w.view > 0
+    assert x0 < w.start[0] < x1 and y0 < w.start[1] < y1 and np.isfinite(w.start).all()
+    assert x0 < w.goal[0] < x1 and y0 < w.goal[1] < y1
+    for p in w.polygons:
+        assert p.kind in ("nostep", "obstacle", "hidden") and p.points.ndim == 2
+        assert p.points.shape[0] >= 3 and p.points.shape[1] == 2
+        assert np.isfinite(p.points).all()
+
+
 READERS = {"motion": check_motion, "scenario": check_scenario, "movingai": check_map,
-           "binary": check_map, "plan": check_plan_file}
+           "binary": check_map, "plan": check_plan_file, "world": check_world}
 
 
 def seeds(reader: str) -> list[Path]:
@@ -74,6 +87,8 @@ def seeds(reader: str) -> list[Path]:
         return sorted(MAPS.glob("*.map"))
     if reader == "binary":
         return sorted(DATA.glob("*.txt"))
+    if reader == "world":
+        return sorted(WORLD_DIR.glob("*.world"))
     return sorted(DATA.glob("*.json"))
 
 

@@ -62,10 +62,11 @@ def test_cli_reports_one_error_line(args, name, tmp_path):
     assert EXPECTED[name]["contains"] in lines[0] and "Traceback" not in r.stderr
 
 
-def test_cli_directory_instead_of_plan(tmp_path):
+def test_cli_directory_without_a_plan(tmp_path):
     r = _cli("quadruped-plan", "check", str(tmp_path))
-    assert r.returncode == 2 and r.stderr.strip() == f"error: {tmp_path}: expected a plan.json " \
-        "file, got a directory"
+    assert r.returncode == 2 and r.stderr.strip().startswith(
+        f"error: {tmp_path}: expected a plan file or a run folder with plan.json or "
+        "mission.json"), r.stderr
 
 
 @pytest.mark.parametrize("reader", sorted(READERS))
@@ -82,7 +83,8 @@ def test_directory_missing_and_oversize_files(reader, tmp_path, monkeypatch):
     real = textio.read_file_bytes
     monkeypatch.setattr(textio, "read_file_bytes", lambda p, what, _max: real(p, what, 10))
     for mod in ("evomotion.sim.nao.motion", "evomotion.studies.arm_ik.scenario",
-                "evomotion.studies.grid_path.maps", "evomotion.studies.quadruped_plan.plan"):
+                "evomotion.studies.grid_path.maps", "evomotion.studies.quadruped_plan.plan",
+                "evomotion.textio"):
         monkeypatch.setattr(f"{mod}.read_file_bytes", textio.read_file_bytes)
     with pytest.raises(FileFormatError, match="of at most 10 bytes, got 100 bytes"):
         READERS[reader](big)

@@ -5,7 +5,7 @@ lines, truncation, inserted NaN / inf / huge numbers, NULs, CRs and non-UTF-8 by
 The only exception that may escape a reader is the project's FileFormatError (InputError for a
 map's blocked or cut-off endpoints), as one line naming the file; whatever is accepted is valid
 (finite numbers, consistent shapes, see ``fuzz_readers``). Inputs per run: READERS x
-(MUTATION_EXAMPLES + PROPERTY_EXAMPLES) = 5 x (1,000 + 600) = 8,000 (derandomized, no
+(MUTATION_EXAMPLES + PROPERTY_EXAMPLES) = 6 x (1,000 + 600) = 9,600 (derandomized, no
 database; the seed files once more each), printed at the end of the module (``pytest -s``).
 """
 
@@ -30,7 +30,7 @@ PROPERTY_EXAMPLES = 600 * SCALE  # per reader
 FUZZ = dict(deadline=None, database=None, derandomize=SCALE == 1,
             suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 SUFFIX = {"motion": ".motion", "scenario": ".scen", "movingai": ".map", "binary": ".txt",
-          "plan": ".json"}
+          "plan": ".json", "world": ".world"}
 SEEDS = {r: [p.read_bytes() for p in seeds(r)] for r in READERS}
 TOKENS = [b"nan", b"NaN", b"inf", b"-inf", b"Infinity", b"1e999", b"-1e400", b"99999999999",
           b"9" * 40, b"0", b"-1", b"1.5", b"*", b"\xff", b"\xc3", b"\xed\xa0\x80", b"\x00",
@@ -186,8 +186,20 @@ def plan_text(draw) -> bytes:
     return json.dumps(doc, allow_nan=True).encode()
 
 
+@st.composite
+def world_text(draw) -> bytes:
+    words = ["name", "bounds", "start", "goal", "view", "nostep", "obstacle", "hidden", "x", ""]
+    rows = []
+    for _ in range(draw(st.integers(0, 8))):
+        key = draw(st.sampled_from(words))
+        vals = draw(st.lists(st.one_of(number_text, st.integers(-20, 20).map(str)),
+                             max_size=10))
+        rows.append(" ".join([key, *vals]) + draw(st.sampled_from(["", " # c", "\r"])))
+    return "\n".join(rows).encode() + draw(st.sampled_from([b"", b"\n", b"\xfe"]))
+
+
 GRAMMARS = {"motion": motion_text(), "scenario": scenario_text(), "movingai": movingai_text(),
-            "binary": binary_text(), "plan": plan_text()}
+            "binary": binary_text(), "plan": plan_text(), "world": world_text()}
 
 
 @pytest.mark.parametrize("reader", sorted(READERS))

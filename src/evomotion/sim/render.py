@@ -28,7 +28,7 @@ class RenderUnavailableError(RuntimeError):
     """No working OpenGL backend for offscreen rendering."""
 
 
-CAMERAS = ("follow", "kick")
+CAMERAS = ("follow", "kick", "overview")
 
 
 def render_video(qpos: np.ndarray, dt: float, out_path: str | Path, fps: int = 25,
@@ -39,7 +39,9 @@ def render_video(qpos: np.ndarray, dt: float, out_path: str | Path, fps: int = 2
     ``model_xml`` (MJCF text) replaces the model file (a scene built in memory, such as the
     kick's NAO + ball). ``camera``: ``"follow"`` (the torso, from the robot's right) or
     ``"kick"`` (robot and ball both in view: the camera looks at their midpoint and backs off
-    as the ball rolls away; needs a body named ``ball``)."""
+    as the ball rolls away; needs a body named ``ball``) or ``"overview"`` (the torso from
+    higher up and farther away, for a small robot walking in the plane, such as the
+    quadruped of :mod:`evomotion.sim.quadruped`, about 0.6 m across)."""
     out_path = Path(out_path)
     if camera not in CAMERAS:
         raise ValueError(f"unknown camera {camera!r}; available: {', '.join(CAMERAS)}")
@@ -111,6 +113,9 @@ def _render_frames(model_path: str, frames_q: np.ndarray, width: int, height: in
                 cam.lookat[:] = [mid[0], mid[1], 0.18]
                 cam.distance = 1.3 + 0.7 * float(np.linalg.norm(ball[:2] - torso[:2]))
                 cam.azimuth, cam.elevation = -75.0, -15.0
+            elif camera == "overview":
+                cam.lookat[:] = [torso[0], torso[1], 0.05]
+                cam.distance, cam.azimuth, cam.elevation = 1.6, -60.0, -45.0
             else:
                 cam.lookat[:] = torso
                 cam.lookat[2] = 0.2

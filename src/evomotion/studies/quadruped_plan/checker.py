@@ -14,6 +14,8 @@ from typing import Any
 import numpy as np
 from scipy.spatial import ConvexHull
 
+from evomotion.studies.quadruped_plan.world_check import WorldGeometry
+
 TOL = 1e-6  # [units] / [rad]
 PATH_SAMPLES = 64
 MAX_SLACK = 1e-3  # rules 1 and 3 must go as far as allowed: 1e-3 further must be infeasible
@@ -49,11 +51,13 @@ class _Geometry:
         off = np.angle(np.exp(1j * (np.arctan2(rel[:, 1], rel[:, 0]) - self.nominal)))
         return length, off
 
-    def outside(self, p: np.ndarray) -> int | None:
-        """First leg whose body-frame foot is outside its sector, else None."""
+    def outside(self, p: np.ndarray, tol: float = TOL) -> int | None:
+        """First leg whose body-frame foot is outside its sector, else None. (The
+        "stops short" tests use ``tol = 0``: 1e-3 beyond a tangent exit, a foot is only
+        ~1e-6 outside the circle.)"""
         length, off = self.polar(p)
-        bad = (length < self.lmin - TOL) | (length > self.lmax + TOL) | (np.abs(off) >
-                                                                         self.hw + TOL)
+        bad = (length < self.lmin - tol) | (length > self.lmax + tol) | (np.abs(off) >
+                                                                         self.hw + tol)
         return int(np.argmax(bad)) if bad.any() else None
 
     def rear_offset(self, leg: int) -> float:
@@ -86,8 +90,12 @@ def check_plan(doc: dict[str, Any]) -> dict[str, float]:
     feet = [np.array(s["feet"], dtype=float) for s in states]
     legs = 0
     travel = 0.0
+    wg = WorldGeometry(doc["world"], g.a, g.b) if doc.get("world") else None
+    executed = bool(doc.get("executed"))
+    moved_max = float(doc.get("disturbance_max", 0.0))
     for i, st in enumerate(states):
-        where = f"state {i} (rule {st['rule']})"
+        event = st.get("event", "") if executed else ""
+        where = f"state {i} (rule {st['rule']}{', ' + event if event else ''})"
         p = g.body_feet(bodies[i], feet[i])
         leg = g.outside(p)
         if leg is not None:
@@ -97,16 +105,33 @@ def check_plan(doc: dict[str, Any]) -> dict[str, float]:
             if np.linalg.norm(bodies[i][:2] - zc) < zone["radius"] - TOL or np.any(
                     np.linalg.norm(feet[i] - zc, axis=1) < zone["radius"] - TOL):
                 raise PlanViolationError(f"{where}: body or foot inside the exclusion zone")
+        if wg is not None:
+            wg.check_feet(feet[i], i, where, PlanViolationError)
+            wg.check_body(bodies[i][None], i, where, PlanViolationError)
         rule = st["rule"]
+        target = np.array(st.get("target", doc["goal"]), dtype=float)
         if i == 0:
             if rule != 0:
                 raise PlanViolationError(f"{where}: the start state must have rule 0")
             margin = hull_margin(feet[0], bodies[0][:2])
+        elif rule == 0 and event:
+            _check_disturbance(bodies[i - 1], feet[i - 1], bodies[i], feet[i], moved_max,
+                               event, where)
+            margin = hull_margin(feet[i], bodies[i][:2])
+        elif 28 <= rule <= 32 and executed or 28 <= rule <= 31 and doc.get("shifts"):
+            _check_extra_move(g, bodies[i - 1], feet[i - 1], bodies[i], feet[i], rule, sense,
+                              where)
+            if wg is not None:
+                wg.check_body(wg.poses(bodies[i - 1], bodies[i]), i, where, PlanViolationError)
+            travel += float(np.linalg.norm(bodies[i][:2] - bodies[i - 1][:2]))
+            margin = hull_margin(feet[i], bodies[i][:2])
         elif not 1 <= rule <= n_rules:
             raise PlanViolationError(f"{where}: no such rule in set {doc['rule_set']}")
         elif rule <= 3:
-            _check_body_move(g, bodies[i - 1], feet[i - 1], bodies[i], feet[i], rule, goal,
+            _check_body_move(g, bodies[i - 1], feet[i - 1], bodies[i], feet[i], rule, target,
                              sense, zone, where)
+            if wg is not None:
+                wg.check_body(wg.poses(bodies[i - 1], bodies[i]), i, where, PlanViolationError)
             travel += float(np.linalg.norm(bodies[i][:2] - bodies[i - 1][:2]))
             margin = hull_margin(feet[i], bodies[i][:2])
         else:
@@ -130,6 +155,53 @@ def check_plan(doc: dict[str, Any]) -> dict[str, float]:
             "leg_moves_per_unit": legs / travel if travel > 0 else math.inf}
 
 
+def _check_disturbance(b0: np.ndarray, f0: np.ndarray, b1: np.ndarray, f1: np.ndarray,
+                       moved_max: float, event: str, where: str) -> None:
+    """A landing error or a slip: the body stays, one foot moves by at most ``moved_max``."""
+    if event != "landing" and not event.startswith("slip"):
+        raise PlanViolationError(f"{where}: unknown event {event!r}")
+    if np.max(np.abs(b1 - b0)) > TOL:
+        raise PlanViolationError(f"{where}: the body moved during a {event}")
+    moved = np.linalg.norm(f1 - f0, axis=1)
+    if np.count_nonzero(moved > TOL) > 1:
+        raise PlanViolationError(f"{where}: more than one foot moved in a {event}")
+    if moved.max() > moved_max + TOL:
+        raise PlanViolationError(f"{where}: a foot moved {moved.max():.3f} in a {event} "
+                                 f"(at most {moved_max:g})")
+
+
+SHIFT_MAX = 0.3  # [units] the longest body shift (rules 28-31)
+
+
+def _check_extra_move(g: _Geometry, b0: np.ndarray, f0: np.ndarray, b1: np.ndarray,
+                      f1: np.ndarray, rule: int, sense: int, where: str) -> None:
+    """A body shift freeing leg rule - 28 (28-31) or a step back (32): feet fixed, no
+    rotation, every foot in its sector along the straight path."""
+    if np.max(np.abs(f1 - f0)) > TOL:
+        raise PlanViolationError(f"{where}: a foot moved during a body move")
+    if abs(_wrap(b1[2] - b0[2])) > TOL:
+        raise PlanViolationError(f"{where}: rule {rule} rotated the body")
+    d = b1[:2] - b0[:2]
+    if rule == 32:
+        axis = np.array([-math.sin(b0[2]), math.cos(b0[2])])
+        along = float(d @ axis)
+        if np.linalg.norm(d - along * axis) > TOL or along * (-1 if sense < 0 else 1) > TOL \
+                or abs(along) > g.b / 3 + TOL:
+            raise PlanViolationError(f"{where}: a step back must go at most b/3 against the "
+                                     "walking sense along the body Y axis")
+    else:
+        leg = rule - 28
+        if np.linalg.norm(d) > SHIFT_MAX + TOL:
+            raise PlanViolationError(f"{where}: a shift of {np.linalg.norm(d):.3f} "
+                                     f"(at most {SHIFT_MAX:g})")
+        if hull_margin(np.delete(f1, leg, axis=0), b1[:2]) < g.min_margin - 1e-9:
+            raise PlanViolationError(f"{where}: rule {rule} does not free leg {leg}")
+    for t in np.linspace(0.0, 1.0, PATH_SAMPLES):
+        leg = g.outside(g.body_feet(b0 + t * (b1 - b0), f0))
+        if leg is not None:
+            raise PlanViolationError(f"{where}: foot {leg} leaves its workspace during the move")
+
+
 def _check_body_move(g: _Geometry, b0: np.ndarray, f0: np.ndarray, b1: np.ndarray,
                      f1: np.ndarray, rule: int, goal: np.ndarray, sense: int,
                      zone: dict | None, where: str) -> None:
@@ -149,7 +221,8 @@ def _check_body_move(g: _Geometry, b0: np.ndarray, f0: np.ndarray, b1: np.ndarra
             raise PlanViolationError(f"{where}: the rotation does not reduce the heading error")
         path = [np.array([b0[0], b0[1], b0[2] + t * turn]) for t in ts]
         if abs(turn) < abs(before) - MAX_SLACK and g.outside(g.body_feet(
-                np.array([b0[0], b0[1], b0[2] + turn + np.sign(turn) * MAX_SLACK]), f0)) is None:
+                np.array([b0[0], b0[1], b0[2] + turn + np.sign(turn) * MAX_SLACK]), f0),
+                0.0) is None:
             raise PlanViolationError(f"{where}: rule 1 stops short of the workspace limit")
     else:
         d = b1[:2] - b0[:2]
@@ -166,7 +239,7 @@ def _check_body_move(g: _Geometry, b0: np.ndarray, f0: np.ndarray, b1: np.ndarra
         path = [np.array([b0[0] + t * d[0], b0[1] + t * d[1], b0[2]]) for t in ts]
         further = np.array([*(b1[:2] + np.sign(along) * MAX_SLACK * axis), b0[2]])
         if rule == 3 and abs(along) < abs(float((goal - b0[:2]) @ axis)) - MAX_SLACK and \
-                g.outside(g.body_feet(further, f0)) is None:
+                g.outside(g.body_feet(further, f0), 0.0) is None:
             raise PlanViolationError(f"{where}: rule 3 stops short of the workspace limit")
     for b in path:
         leg = g.outside(g.body_feet(b, f0))

@@ -53,7 +53,7 @@ def seed_evaluation(function: int, k: tuple[float, float, float], goal: tuple[fl
     if function == 1:  # a leg move leaves vzd and dev (hence f) unchanged
         def absolute(pf: Any, pg: Any, ps: Any, child: tuple[float, ...], rule: Any,
                      cost: float) -> float:
-            return pf if rule and rule >= 4 else direct(child)
+            return pf if rule and rule >= 4 and rule <= 27 else direct(child)
 
         absolute.leg_delta = 0.0  # type: ignore[attr-defined]  # see walk_search
         return absolute
@@ -62,8 +62,11 @@ def seed_evaluation(function: int, k: tuple[float, float, float], goal: tuple[fl
                    cost: float) -> float:
         if pf is None:
             return direct(child)
-        if rule >= 4:  # a leg move leaves vzd and dev unchanged
-            return pf + k3
+        if rule >= 4:
+            if rule <= 27:  # a leg move leaves vzd and dev unchanged
+                return pf + k3
+            # a body shift (rules 28-31, beyond the seed) costs a step like a leg move
+            return pf + direct(child) - direct(ps) + k3
         return pf + direct(child) - direct(ps)
 
     cumulative.leg_delta = k3  # type: ignore[attr-defined]  # f(child) - f(parent), leg rules

@@ -50,6 +50,7 @@ def _polar_span(model: QuadrupedModel, leg: int, samples: int = 4000) -> float:
     return max(offs) - min(offs) + 1e-3
 
 
+@lru_cache(maxsize=8)
 def heuristic_constants(model: QuadrupedModel) -> tuple[float, float, float]:
     """(T, D, G): the longest single translation; the longest centre travel per foot stance;
     the most one rotation can add to the summed foot room (module docstring)."""
@@ -112,45 +113,47 @@ def foot_room(model: QuadrupedModel, state: tuple[float, ...], sense: int) -> fl
 
 
 def plan_length_heuristic(model: QuadrupedModel, goal: tuple[float, float],
-                          goal_tolerance: float, sense: int = -1, gain: str = "analytic"
-                          ) -> Callable[[tuple[float, ...]], float]:
-    """Lower bound on the transitions still needed (see the module docstring)."""
+                          goal_tolerance: float, sense: int = -1, gain: str = "analytic",
+                          shifts: bool = False) -> Callable[[tuple[float, ...]], float]:
+    """Lower bound on the transitions still needed (see the module docstring).
+
+    ``shifts``: the problem also has the body shifts of :mod:`.shifts` (at most
+    ``SHIFT_MAX`` each): a shift lowers 4 d - Phi by at most 8 SHIFT_MAX (so the per-move
+    gain is max(T, G, 8 SHIFT_MAX)) and covers at most SHIFT_MAX of the distance, so with
+    L the leg/rotation/shift bound the translations are at least (d - SHIFT_MAX L) / T."""
+    from evomotion.studies.quadruped_plan.shifts import SHIFT_MAX
+
     if gain not in GAINS:
         raise ValueError(f"unknown rotation gain {gain!r}; available: {', '.join(GAINS)}")
+    if shifts and sense == 0:
+        raise ValueError("body shifts need a walking sense of -1 or +1")
     chord, stance, gain_value = heuristic_constants(model)
     if gain == "sampled":
         gain_value = sampled_rotation_gain(model)
-    per_move = max(chord, gain_value)
+    per_move = max(chord, gain_value, 8 * SHIFT_MAX if shifts else 0.0)
+    cover = SHIFT_MAX if shifts else 0.0
     gx, gy = goal
     # foot_room(s) = room0 + sense * (sum of the feet's body y)
     room0 = 4 * model.l_max * math.sin(model.sector_half_width) - sense * sum(
         hy for _, hy in model.hips)
     ceil, hypot = math.ceil, math.hypot
 
-    def h(s: tuple[float, ...]) -> float:
-        d = hypot(gx - s[0], gy - s[1]) - goal_tolerance
+    def bound(d: float, ysum: float) -> float:
         if d <= 0:
             return 0.0
-        trans = ceil(d / chord - 1e-9)
         if sense == 0:
-            return trans + 4 * max(0, ceil(d / stance - 1e-9) - 1)
-        room = room0 + sense * (s[4] + s[6] + s[8] + s[10])
-        need = (4 * d - room) / per_move
-        return trans + max(0, ceil(need - 1e-9))
+            return ceil(d / chord - 1e-9) + 4 * max(0, ceil(d / stance - 1e-9) - 1)
+        legs = max(0, ceil((4 * d - (room0 + sense * ysum)) / per_move - 1e-9))
+        return ceil(max(0.0, d - cover * legs) / chord - 1e-9) + legs
+
+    def h(s: tuple[float, ...]) -> float:
+        return bound(hypot(gx - s[0], gy - s[1]) - goal_tolerance, s[4] + s[6] + s[8] + s[10])
 
     def after_leg(s: tuple[float, ...], leg: int, fy: float) -> float:
         """h of ``s`` with foot ``leg`` moved to body y ``fy`` (same arithmetic as h)."""
-        d = hypot(gx - s[0], gy - s[1]) - goal_tolerance
-        if d <= 0:
-            return 0.0
-        trans = ceil(d / chord - 1e-9)
-        if sense == 0:
-            return trans + 4 * max(0, ceil(d / stance - 1e-9) - 1)
         y = [s[4], s[6], s[8], s[10]]
         y[leg] = fy
-        room = room0 + sense * (y[0] + y[1] + y[2] + y[3])
-        need = (4 * d - room) / per_move
-        return trans + max(0, ceil(need - 1e-9))
+        return bound(hypot(gx - s[0], gy - s[1]) - goal_tolerance, y[0] + y[1] + y[2] + y[3])
 
     h.after_leg = after_leg  # type: ignore[attr-defined]  # used by walk_search
     return h

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 TWO_PI = 2.0 * math.pi
 EPS = 1e-9  # geometric tolerance [units]
@@ -61,7 +62,7 @@ class QuadrupedModel:
         object.__setattr__(self, "_trans", tuple(trans))
         object.__setattr__(self, "_rot", tuple(rot))
 
-    @property
+    @cached_property
     def hips(self) -> tuple[tuple[float, float], ...]:
         a2, b2 = self.a / 2, self.b / 2
         return ((-a2, b2), (-a2, -b2), (a2, -b2), (a2, b2))

@@ -38,27 +38,33 @@ LEG_NAMES = ("front-left", "rear-left", "rear-right", "front-right")
 
 
 def state_margin(prev: tuple[float, ...] | None, state: tuple[float, ...], rule: int) -> float:
-    if rule >= 4 and prev is not None:
+    if 4 <= rule <= 27 and prev is not None:
         return lift_margin(prev, rule_leg(rule))
     return support_margin(state)
 
 
 def plan_document(model: QuadrupedModel, states: list[tuple], rules: list[int | None],
                   goal: tuple[float, float], goal_tolerance: float, sense: int, rule_set: str,
-                  zone: ExclusionZone | None, search: dict[str, Any]) -> dict[str, Any]:
-    """The plan.json document for a found plan (``rules[0]`` is the start, None or 0)."""
+                  zone: ExclusionZone | None, search: dict[str, Any],
+                  world: dict[str, Any] | None = None,
+                  extras: list[dict[str, Any]] | None = None) -> dict[str, Any]:
+    """The plan.json document for a found plan (``rules[0]`` is the start, None or 0).
+
+    ``world``: the world's polygons and clearances (:func:`world_section`); ``extras``: keys
+    added to each state (an executed walk's ``event`` and ``target``)."""
     out_states = []
     prev = None
-    for state, rule in zip(states, rules, strict=True):
+    for k, (state, rule) in enumerate(zip(states, rules, strict=True)):
         r = int(rule or 0)
         out_states.append({
             "body": [state[0], state[1], state[2]],
             "feet": [list(f) for f in world_feet(state)],
             "rule": r,
             "margin": state_margin(prev, state, r),
+            **(extras[k] if extras else {}),
         })
         prev = state
-    return {
+    doc = {
         "format": FORMAT,
         "model": {"a": model.a, "b": model.b, "l_min": model.l_min, "l_max": model.l_max,
                   "sector_half_width": model.sector_half_width,
@@ -70,6 +76,24 @@ def plan_document(model: QuadrupedModel, states: list[tuple], rules: list[int | 
         "search": search,
         "states": out_states,
     }
+    if world is not None:
+        doc["world"] = world
+    return doc
+
+
+def world_section(world: Any, body_clearance: float, foot_clearance: float,
+                  polygons: list[tuple[str, list, int]] | None = None) -> dict[str, Any]:
+    """The ``world`` key of plan.json: bounds, clearances and polygons ``{"kind", "points",
+    "from"}`` (``from``: the state index from which an obstacle exists or is known; hidden
+    obstacles are real from the start, 0)."""
+    polys = [{"kind": "obstacle" if p.kind == "hidden" else p.kind,
+              "hidden": p.kind == "hidden", "points": p.points.tolist(), "from": 0}
+             for p in world.polygons]
+    for kind, points, index in polygons or []:
+        polys.append({"kind": kind, "hidden": False, "points": points, "from": index})
+    return {"name": world.name, "bounds": list(world.bounds),
+            "body_clearance": body_clearance, "foot_clearance": foot_clearance,
+            "polygons": polys}
 
 
 def write_plan(path: str | Path, doc: dict[str, Any]) -> None:
@@ -169,6 +193,13 @@ def _check_document(path: Path, doc: Any) -> None:
         c.number(c.get(zone, "radius", "zone"), "zone.radius", 0.0)
     if "search" in doc:
         c.obj(doc["search"], "search")
+    if doc.get("world") is not None:
+        _check_world(c, c.obj(doc["world"], "world"))
+    for key in ("executed", "shifts"):
+        if key in doc and not isinstance(doc[key], bool):
+            raise c.fail(key, "true or false", doc[key])
+    if "disturbance_max" in doc:
+        c.number(doc["disturbance_max"], "disturbance_max", 0.0)
     states = c.get(doc, "states", "plan")
     if not (isinstance(states, list) and 1 <= len(states) <= MAX_STATES):
         raise c.fail("states", f"a list of 1 to {MAX_STATES:,} states", states)
@@ -185,6 +216,33 @@ def _check_document(path: Path, doc: Any) -> None:
         if isinstance(rule, bool) or not isinstance(rule, int) or not 0 <= rule <= 1000:
             raise c.fail(f"{where}.rule", "a rule number (an integer in [0, 1000])", rule)
         c.number(c.get(st, "margin", where), f"{where}.margin")
+        if "event" in st and not (isinstance(st["event"], str) and len(st["event"]) <= 40):
+            raise c.fail(f"{where}.event", "a short string", st["event"])
+        if "target" in st:
+            c.point(st["target"], f"{where}.target", 2, "[x, y]")
+
+
+def _check_world(c: _Checker, w: dict) -> None:
+    c.point(c.get(w, "bounds", "world"), "world.bounds", 4, "[xmin, ymin, xmax, ymax]")
+    for key in ("body_clearance", "foot_clearance"):
+        if key in w:
+            c.number(w[key], f"world.{key}", 0.0)
+    polys = c.get(w, "polygons", "world")
+    if not (isinstance(polys, list) and len(polys) <= 10_000):
+        raise c.fail("world.polygons", "a list of at most 10,000 polygons", polys)
+    for k, p in enumerate(polys):
+        where = f"world.polygons[{k}]"
+        c.obj(p, where)
+        if c.get(p, "kind", where) not in ("nostep", "obstacle"):
+            raise c.fail(f"{where}.kind", "'nostep' or 'obstacle'", p["kind"])
+        pts = c.get(p, "points", where)
+        if not (isinstance(pts, list) and 3 <= len(pts) <= 10_000):
+            raise c.fail(f"{where}.points", "a list of 3 or more [x, y]", pts)
+        for j, q in enumerate(pts):
+            c.point(q, f"{where}.points[{j}]", 2, "[x, y]")
+        frm = p.get("from", 0)
+        if isinstance(frm, bool) or not isinstance(frm, int) or frm < 0:
+            raise c.fail(f"{where}.from", "a state index >= 0", frm)
 
 
 def read_plan(path: str | Path) -> dict[str, Any]:

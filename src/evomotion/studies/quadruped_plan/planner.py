@@ -9,11 +9,11 @@ bound (``heuristic``).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from evomotion.core.checks import check_fields, check_number, inf_ok
 from evomotion.core.search import SearchResult
-from evomotion.errors import InputError
+from evomotion.errors import FileFormatError, InputError
 from evomotion.studies.quadruped_plan.evaluation import (
     SEED_CONSTANTS,
     seed_evaluation,
@@ -26,7 +26,9 @@ from evomotion.studies.quadruped_plan.rules import (
     ExclusionZone,
     WalkProblem,
 )
+from evomotion.studies.quadruped_plan.terrain import Terrain
 from evomotion.studies.quadruped_plan.walk_search import walk_astar, walk_best_first
+from evomotion.studies.quadruped_plan.world import World, load_world
 
 METHODS = ("best-first", "astar", "weighted-astar")
 
@@ -45,7 +47,9 @@ class QuadrupedPlanConfig:
     ``sense``: walking direction, -1 = body -Y (default, see docs), +1 = +Y, 0 = either.
     ``pos_grid`` [units] / ``angle_grid`` [rad]: the duplicate-detection grids (docs).
     ``max_seconds = inf``: no time limit (the only float that may be infinite); coordinates
-    are at most ``MAX_COORD`` in magnitude.
+    are at most ``MAX_COORD`` in magnitude. ``world``: start, goal and tolerance come from the
+    world file (``start_*``/``goal_*``/``goal_tolerance`` must then stay unset), and plans
+    keep ``body_clearance`` / ``foot_clearance`` from its obstacles and no-step zones.
     """
 
     start_x: float = 0.0
@@ -76,6 +80,10 @@ class QuadrupedPlanConfig:
     zone_x: float = 0.0
     zone_y: float = 0.0
     zone_radius: float = 0.0
+    world: str = ""  # a bundled world (corridor, field, gaps) or a .world file; "" = none
+    body_clearance: float = 0.05  # [units] least body-obstacle distance in a world
+    foot_clearance: float = 0.05  # [units] least foot distance to no-step zones, obstacles
+    shifts: bool = False  # add the body shifts, rules 28-31 (beyond the seed; docs)
     gif_max_frames: int = 150
 
     def validate(self) -> None:
@@ -123,6 +131,20 @@ def validate(cfg: QuadrupedPlanConfig) -> None:
                          "min_margin)") from None
     if cfg.goal_tolerance <= 0:
         raise InputError("problem.goal_tolerance: expected > 0")
+    if not isinstance(cfg.shifts, bool):
+        raise InputError(f"problem.shifts: expected true or false, got {cfg.shifts!r}")
+    if cfg.shifts and cfg.sense == 0:
+        raise InputError("problem.shifts: body shifts need problem.sense = -1 or 1")
+    check_number("problem.body_clearance", cfg.body_clearance, lo=0.0, hi=100.0)
+    check_number("problem.foot_clearance", cfg.foot_clearance, lo=0.0, hi=100.0)
+    if cfg.world:
+        base = QuadrupedPlanConfig()
+        given = [k for k in ("start_x", "start_y", "start_phi", "goal_x", "goal_y",
+                             "goal_tolerance", "zone_radius")
+                 if getattr(cfg, k) != getattr(base, k)]
+        if given:
+            raise InputError(f"problem.{given[0]}: the world file gives start, goal and "
+                             "obstacles; unset it or remove problem.world")
 
 
 def constants(cfg: QuadrupedPlanConfig) -> tuple[float, float, float]:
@@ -145,16 +167,40 @@ def make_zone(cfg: QuadrupedPlanConfig) -> ExclusionZone | None:
         else None
 
 
+def load_config_world(cfg: QuadrupedPlanConfig) -> World | None:
+    return load_world(cfg.world) if cfg.world else None
+
+
+def with_world(cfg: QuadrupedPlanConfig) -> tuple[QuadrupedPlanConfig, World | None]:
+    """``cfg`` with the world's start and goal filled in (and the world)."""
+    world = load_config_world(cfg)
+    if world is None:
+        return cfg, None
+    (sx, sy, sphi), (gx, gy) = world.start, world.goal
+    return replace(cfg, start_x=sx, start_y=sy, start_phi=sphi, goal_x=gx, goal_y=gy,
+                   goal_tolerance=world.goal_tolerance), world
+
+
 def make_problem(cfg: QuadrupedPlanConfig) -> WalkProblem:
-    """The search problem: start with the legs in their nominal positions."""
+    """The search problem: start with the legs in their nominal positions (from the world's
+    start, with its obstacles and no-step zones, when ``problem.world`` is set)."""
     validate(cfg)
+    cfg, world = with_world(cfg)
     model = make_model(cfg)
     zone = make_zone(cfg)
     if zone is not None and zone.contains(cfg.start_x, cfg.start_y):
         raise InputError("problem.zone_*: the start lies inside the exclusion zone")
     start = model.nominal_state(cfg.start_x, cfg.start_y, cfg.start_phi)
+    terrain = None
+    if world is not None:
+        terrain = Terrain(world, model, None, cfg.body_clearance, cfg.foot_clearance)
+        why = terrain.stance_problem(start)
+        if why is not None:
+            raise FileFormatError(world.source, world.start_line, "start: the robot cannot "
+                                  f"stand there in its nominal stance ({why})")
     return WalkProblem(model, start, (cfg.goal_x, cfg.goal_y), cfg.rule_set,
-                       cfg.goal_tolerance, cfg.sense, zone, cfg.pos_grid, cfg.angle_grid)
+                       cfg.goal_tolerance, cfg.sense, zone, cfg.pos_grid, cfg.angle_grid,
+                       terrain, shifts=cfg.shifts)
 
 
 def unreachable_reason(cfg: QuadrupedPlanConfig) -> str | None:
@@ -174,10 +220,10 @@ def solve(cfg: QuadrupedPlanConfig, problem: WalkProblem | None = None,
     problem = problem or make_problem(cfg)
     secs = cfg.max_seconds if max_seconds is None else max_seconds
     if cfg.method == "best-first":
-        ev = seed_evaluation(cfg.function, constants(cfg), (cfg.goal_x, cfg.goal_y), cfg.sense)
+        ev = seed_evaluation(cfg.function, constants(cfg), problem.goal, cfg.sense)
         return walk_best_first(problem, ev, cfg.max_expansions, secs)
-    h = plan_length_heuristic(problem.model, (cfg.goal_x, cfg.goal_y), cfg.goal_tolerance,
-                              cfg.sense, cfg.heuristic_gain)
+    h = plan_length_heuristic(problem.model, problem.goal, problem.goal_tolerance,
+                              cfg.sense, cfg.heuristic_gain, problem.shifts)
     weight = 1.0 if cfg.method == "astar" else cfg.weight
     return exact_plan(problem, walk_astar(problem, h, weight, cfg.max_expansions, secs))
 
@@ -215,13 +261,13 @@ def replay(problem: WalkProblem, rules: list, finish_expansions: int = 50_000
     if problem.is_goal(s):
         return states, out_rules
     h = plan_length_heuristic(problem.model, problem.goal, problem.goal_tolerance,
-                              problem.sense, "sampled")
+                              problem.sense, "sampled", problem.shifts)
     ev = seed_evaluation(3, SEED_CONSTANTS[(3, problem.rule_set)], problem.goal, problem.sense)
     n = len(states)
     for cut in sorted({max(1, n - back) for back in (0, 4, 8, 16, 32)}, reverse=True):
         rest = WalkProblem(problem.model, states[cut - 1][:11], problem.goal,
                            problem.rule_set, problem.goal_tolerance, problem.sense,
-                           problem.zone)
+                           problem.zone, terrain=problem.terrain, shifts=problem.shifts)
         tail = walk_astar(rest, h, 3.0, finish_expansions)
         if not tail.found:  # the seed's best-first search with its function (3)
             tail = walk_best_first(rest, ev, finish_expansions)

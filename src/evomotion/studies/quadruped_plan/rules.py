@@ -14,7 +14,9 @@ coordinate kept). The walking sense (``sense``) is body -Y by default; see the d
 
 A leg may move only when the other three feet hold the body with a stability margin of at
 least ``model.min_margin``. A rule that leaves the state unchanged is not applicable.
-Rules 1-3 are body moves, rules >= 4 leg moves (the seed's ``step`` = 1).
+Rules 1-3 are body moves, rules 4-27 leg moves (the seed's ``step`` = 1). Beyond the seed,
+``shifts=True`` adds the body shifts 28-31 of :mod:`.shifts` (for the receding-horizon
+walker); 32 (step back, :mod:`.recovery`) is never searched, only executed.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ from __future__ import annotations
 import math
 from collections.abc import Hashable
 from dataclasses import dataclass
+from typing import Any
 
 from evomotion.studies.quadruped_plan.model import (
     EPS,
@@ -30,6 +33,7 @@ from evomotion.studies.quadruped_plan.model import (
     rotation_limit,
     translation_limit,
 )
+from evomotion.studies.quadruped_plan.shifts import shift_moves, shifted
 
 RULE_SETS = {"A": 11, "B": 27}
 MIN_MOVE = 1e-4  # a body move shorter than this [units or rad] is not applicable
@@ -46,7 +50,8 @@ OPTIONS_CACHE = 200_000  # memoised foot positions per leg (the cache is cleared
 
 
 def is_leg_rule(rule: int) -> bool:
-    return rule >= 4
+    """Rules 4-27 move a leg; 1-3, the shifts 28-31 and the step back 32 move the body."""
+    return 4 <= rule <= 27
 
 
 def rule_leg(rule: int) -> int:
@@ -96,7 +101,9 @@ class WalkProblem:
     def __init__(self, model: QuadrupedModel, start: tuple[float, ...],
                  goal: tuple[float, float], rule_set: str = "A", goal_tolerance: float = 0.25,
                  sense: int = -1, zone: ExclusionZone | None = None,
-                 pos_grid: float = POS_GRID, angle_grid: float = ANGLE_GRID) -> None:
+                 pos_grid: float = POS_GRID, angle_grid: float = ANGLE_GRID,
+                 terrain: Any = None, options_cache: list[dict] | None = None,
+                 shifts: bool = False) -> None:
         if rule_set not in RULE_SETS:
             raise ValueError(f"unknown rule set {rule_set!r}; available: A, B")
         self.model, self.goal, self.rule_set = model, goal, rule_set
@@ -104,6 +111,11 @@ class WalkProblem:
         if sense not in (-1, 0, 1):
             raise ValueError(f"walking sense must be -1, 0 or +1, got {sense}")
         self.goal_tolerance, self.sense, self.zone = goal_tolerance, sense, zone
+        self.terrain = terrain  # a :class:`.terrain.Terrain` (no-step zones, obstacles) or None
+        if shifts and sense == 0:
+            raise ValueError("body shifts need a walking sense of -1 or +1")
+        self.shifts = shifts  # rules 28-31 (:mod:`.shifts`), beyond the seed
+        self._shift_cache: dict = {}  # body-frame feet -> shifts (see ``options_cache``)
         if not (pos_grid > 0 and angle_grid > 0):
             raise ValueError("duplicate grids must be > 0")
         self.pos_grid, self.angle_grid = pos_grid, angle_grid
@@ -122,7 +134,14 @@ class WalkProblem:
                 self._fixed.append((leg, rule0 + leg, *model.foot_at(leg, length, angle(leg))))
         self._stable = model.min_margin - STABILITY_TOL
         self.parts = (0, 1, 2) if self.n_rules == 27 else (0, 1)
-        self._options: list[dict] = [{}, {}, {}, {}]  # per leg: foot position -> moves
+        # per leg: foot position -> moves; they depend on the model, rule set and grid only, so
+        # problems of the same robot (a receding-horizon walker's replans) may share it
+        self._options: list[dict] = options_cache if options_cache is not None else \
+            [{}, {}, {}, {}]
+        if options_cache is not None:  # a fifth entry memoises the body shifts
+            if len(options_cache) == 4:
+                options_cache.append({})
+            self._shift_cache = options_cache[4]
 
     def _with_key(self, v: tuple[float, ...]) -> tuple:
         """The state tuple: the 11 floats followed by the duplicate key (see :meth:`key`)."""
@@ -131,6 +150,10 @@ class WalkProblem:
         for i in (0, 1, 3, 4, 5, 6, 7, 8, 9, 10):
             key += round(v[i] * q) * KEY_WEIGHT[i]
         return (*v[:11], key)
+
+    def make_state(self, values: tuple[float, ...]) -> tuple:
+        """A state tuple (11 floats and the duplicate key) from the 11 values."""
+        return self._with_key(tuple(float(v) for v in values[:11]))
 
     def start(self) -> tuple:
         return self._start
@@ -155,6 +178,8 @@ class WalkProblem:
         nx, ny = s[0] - sn * dist, s[1] + c * dist
         if self.zone is not None and self.zone.hits_segment(s[0], s[1], nx, ny):
             return None
+        if self.terrain is not None and not self.terrain.translation_ok(s, nx, ny):
+            return None
         return self._with_key((nx, ny, s[2], s[3], s[4] - dist, s[5], s[6] - dist, s[7],
                                s[8] - dist, s[9], s[10] - dist))
 
@@ -165,7 +190,8 @@ class WalkProblem:
         if abs(delta) > MIN_MOVE:
             direction = 1.0 if delta > 0 else -1.0
             turn = direction * min(abs(delta), rotation_limit(model, s, direction))
-            if abs(turn) > MIN_MOVE:
+            if abs(turn) > MIN_MOVE and (self.terrain is None or
+                                         self.terrain.rotation_ok(s, turn)):
                 c, sn = math.cos(turn), math.sin(turn)  # feet turn by -turn in body frame
                 feet = []
                 for i in range(4):
@@ -185,6 +211,12 @@ class WalkProblem:
             child = self._translate(s, sign * reach)
             if child is not None:
                 out.append((3, child, 1.0))
+        if self.shifts:
+            terrain = self.terrain
+            for rule, dx, dy in shift_moves(model, s, _liftable(s, self._stable),
+                                            self._shift_cache):
+                if terrain is None or terrain.translation_ok(s, s[0] + dx, s[1] + dy):
+                    out.append((rule, self._with_key(shifted(s, dx, dy)), 1.0))
         return out
 
     # -- leg moves --------------------------------------------------------------------------
@@ -217,6 +249,13 @@ class WalkProblem:
             out = [(leg, tuple(tuple(m for m in part
                                      if not inside(x + c * m[1] - sn * m[2],
                                                    y + sn * m[1] + c * m[2]))
+                               for part in moves)) for leg, moves in out]
+        terrain = self.terrain
+        if terrain is not None and out and not terrain.feet_open(s[0], s[1]):
+            c, sn = math.cos(s[2]), math.sin(s[2])
+            x, y, ok = s[0], s[1], terrain.foot_ok
+            out = [(leg, tuple(tuple(m for m in part
+                                     if ok(x + c * m[1] - sn * m[2], y + sn * m[1] + c * m[2]))
                                for part in moves)) for leg, moves in out]
         return out
 

@@ -68,10 +68,10 @@ class SearchDriver(Driver):
     def _evaluate(self):
         cfg = self.cfg
         if cfg.method == "best-first":
-            return seed_evaluation(cfg.function, constants(cfg), (cfg.goal_x, cfg.goal_y),
-                                   cfg.sense)
-        h = plan_length_heuristic(self.problem.model, (cfg.goal_x, cfg.goal_y),
-                                  cfg.goal_tolerance, cfg.sense, cfg.heuristic_gain)
+            return seed_evaluation(cfg.function, constants(cfg), self.problem.goal, cfg.sense)
+        h = plan_length_heuristic(self.problem.model, self.problem.goal,
+                                  self.problem.goal_tolerance, cfg.sense, cfg.heuristic_gain,
+                                  self.problem.shifts)
         return astar_evaluate(h, self.weight)
 
     def init(self, rng: np.random.Generator) -> SearchState:

@@ -11,6 +11,7 @@ Exit codes: 0 plan found; 1 no plan (unreachable goal, budget spent) or a violat
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -20,7 +21,14 @@ from evomotion.errors import InputError
 from evomotion.studies.base import Study
 from evomotion.studies.quadruped_plan.checker import PlanViolationError, check_plan
 from evomotion.studies.quadruped_plan.experiment import format_table, seed_table
-from evomotion.studies.quadruped_plan.plan import plan_document, read_plan, write_plan
+from evomotion.studies.quadruped_plan.mission_driver import RecedingConfig
+from evomotion.studies.quadruped_plan.mission_driver import make_driver as make_receding_driver
+from evomotion.studies.quadruped_plan.plan import (
+    plan_document,
+    read_plan,
+    world_section,
+    write_plan,
+)
 from evomotion.studies.quadruped_plan.planner import (
     QuadrupedPlanConfig,
     constants,
@@ -48,14 +56,27 @@ def _outcome(ctx: Any) -> tuple[Any, dict | None]:
                       "angle_grid": cfg.angle_grid}
             if cfg.method != "best-first":  # proved: least plan length >= lower_bound
                 search["lower_bound"] = res.lower_bound
+            world = None
+            if problem.terrain is not None:
+                world = world_section(problem.terrain.world, cfg.body_clearance,
+                                      cfg.foot_clearance)
             doc = plan_document(problem.model, res.states, res.rules, problem.goal,
-                                cfg.goal_tolerance, cfg.sense, cfg.rule_set, problem.zone,
-                                search)
+                                problem.goal_tolerance, cfg.sense, cfg.rule_set, problem.zone,
+                                search, world)
+            doc["shifts"] = problem.shifts
         ctx.cache["plan"] = (res, doc)
     return ctx.cache["plan"]
 
 
+def _receding(ctx: Any) -> bool:
+    return ctx.config.algorithm.name == "receding"
+
+
 def best_record(ctx: Any) -> dict[str, Any]:
+    if _receding(ctx):
+        from evomotion.studies.quadruped_plan.mission import summary
+
+        return summary(ctx.state)
     res, _ = _outcome(ctx)
     return {"found": res.found, "states": len(res.states), "search_stop": res.stop_reason,
             "expansions": res.expansions, "lower_bound": res.lower_bound}
@@ -66,6 +87,8 @@ def finalize(ctx: Any) -> int:
     from evomotion.studies.quadruped_plan.views import animate_plan, plot_plan
 
     cfg = ctx.config.problem
+    if _receding(ctx):
+        return _finalize_mission(ctx)
     res, doc = _outcome(ctx)
     ctx.log(f"quadruped-plan {cfg.method} rule set {cfg.rule_set}"
             + (f" function ({cfg.function}) k={constants(cfg)}" if cfg.method == "best-first"
@@ -86,6 +109,38 @@ def finalize(ctx: Any) -> int:
     plot_plan(doc, ctx.out_dir / "plan.png")
     animate_plan(doc, ctx.out_dir / "plan.gif", max_frames=cfg.gif_max_frames)
     return 0
+
+
+def _finalize_mission(ctx: Any) -> int:
+    """mission.json (the executed walk), its pictures and the checker's verdict."""
+    from evomotion.studies.quadruped_plan.mission import summary
+    from evomotion.studies.quadruped_plan.mission_doc import mission_document
+    from evomotion.studies.quadruped_plan.views import animate_plan, plot_plan
+
+    mission, state = ctx.driver.mission, ctx.state
+    doc = mission_document(mission, state)
+    write_plan(ctx.out_dir / "mission.json", doc)
+    s = summary(state)
+    ctx.log(f"receding-horizon walk in {mission.world.name}: {state.done or 'unfinished'}; "
+            f"{s['transitions']} transitions, {s['replans']} replans, planning "
+            f"{s['plan_ms_median']:.1f} ms median / {s['plan_ms_max']:.1f} ms max per replan, "
+            f"{s['events']} disturbances")
+    if s["time_bound_replans"]:
+        ctx.log(f"note: {s['time_bound_replans']} replans were cut by algorithm.replan_ms: "
+                "this walk depends on the machine's speed and is not reproducible")
+    ok = True
+    try:
+        check_plan(doc)
+        ctx.log("checker: ok, every executed state, rule and disturbance verified")
+    except PlanViolationError as e:
+        if state.done == "reached":
+            ctx.log(f"checker: {e}")
+            ok = False
+        else:  # an unfinished walk does not end at the goal; everything else must hold
+            ctx.log(f"checker (walk not finished): {e}")
+    plot_plan(doc, ctx.out_dir / "plan.png")
+    animate_plan(doc, ctx.out_dir / "plan.gif", max_frames=ctx.config.problem.gif_max_frames)
+    return 0 if state.done == "reached" and ok else NO_PLAN
 
 
 cli = typer.Typer(add_completion=False, no_args_is_help=True,
@@ -113,9 +168,91 @@ def study_cmd(
         raise typer.Exit(1)
 
 
+@cli.command("missions")
+def missions_cmd(
+    seeds: Annotated[int, typer.Option(help="Disturbance seeds per world and setting")] = 20,
+    worlds: Annotated[str, typer.Option(help="Comma-separated worlds")] = "corridor,gaps,field",
+    rule_sets: Annotated[str, typer.Option(help="Rule sets, e.g. AB")] = "AB",
+    heuristics: Annotated[str, typer.Option(
+        help="ARA* heuristic gains: analytic,sampled")] = "analytic,sampled",
+    shifts: Annotated[bool, typer.Option(help="Add the body shifts (rules 28-31)")] = False,
+    json_out: Annotated[Path | None, typer.Option("--json", help="Write the figures here")] = None,
+) -> None:
+    """Receding-horizon walks vs one-shot plans in the bundled worlds (docs)."""
+    import json
+
+    from evomotion.studies.quadruped_plan.heuristic import GAINS
+    from evomotion.studies.quadruped_plan.mission_experiment import format_rows, run_row
+    from evomotion.studies.quadruped_plan.world import load_world
+
+    if not 1 <= seeds <= 10_000:
+        raise InputError(f"--seeds: expected 1 to 10000, got {seeds}")
+    names = [w.strip() for w in worlds.split(",") if w.strip()]
+    for name in names:
+        load_world(name)
+    if not rule_sets or any(r not in "AB" for r in rule_sets):
+        raise InputError(f"--rule-sets: expected letters A and/or B, got {rule_sets!r}")
+    gains = [h.strip() for h in heuristics.split(",") if h.strip()]
+    bad = [h for h in gains if h not in GAINS]
+    if bad or not gains:
+        raise InputError(f"--heuristics: expected some of {', '.join(GAINS)}, got {heuristics!r}")
+    rows = []
+    for name in names:
+        for rs in rule_sets:
+            for gain in gains:
+                rows.append(run_row(name, rs, gain, seeds, shifts))
+                typer.echo(format_rows(rows[-1:]).splitlines()[-1])
+    typer.echo(format_rows(rows))
+    if json_out is not None:
+        json_out.write_text(json.dumps([r.figures() for r in rows], indent=1) + "\n")
+    if any(r.check_failures for r in rows):
+        for r in rows:
+            for line in r.check_failures:
+                typer.echo(f"checker: {r.world} {r.rule_set}: {line}")
+        raise typer.Exit(1)
+
+
+@cli.command("simulate")
+def simulate_cmd(
+    plan: Annotated[Path, typer.Argument(help="plan.json / mission.json or a run folder")],
+    video: Annotated[Path | None, typer.Option(help="Also write an MP4 of the execution")] = None,
+    speed: Annotated[float, typer.Option(help="Video speed-up over real time")] = 8.0,
+    json_out: Annotated[bool, typer.Option("--json", help="Print the result as JSON")] = False,
+) -> None:
+    """Execute a plan on the simulated MuJoCo quadruped (exit 1 if the body falls)."""
+    import json
+
+    from evomotion.sim.render import RenderUnavailableError
+    from evomotion.studies.quadruped_plan.simulate import simulate_document
+
+    if not 0.1 <= speed <= 1000:
+        raise InputError(f"--speed: expected 0.1 to 1000, got {speed}")
+    doc = read_plan(plan_path(plan))
+    try:
+        out = simulate_document(doc, video, speed)
+    except RenderUnavailableError as e:
+        raise InputError(f"--video: {e}") from None
+    if json_out:
+        typer.echo(json.dumps(out, indent=1))
+    else:
+        typer.echo(f"{plan}: {out['message'] or ('body up' if out['body_up'] else 'fell')}; "
+                   f"least support margin {_mm(out['min_support_margin_m'])}, final error "
+                   f"{_mm(out['final_position_error_m'])} / "
+                   f"{math.degrees(out['final_heading_error_rad'] or 0):.1f} deg, "
+                   f"{out['duration_s']:.0f} s simulated in {out['wall_seconds']:.1f} s")
+    if not out["body_up"]:
+        raise typer.Exit(1)
+
+
+def _mm(v: float | None) -> str:
+    return "n/a" if v is None else f"{1000 * v:.1f} mm"
+
+
 @cli.command("check")
-def check_cmd(plan: Annotated[Path, typer.Argument(help="plan.json to verify")]) -> None:
+def check_cmd(plan: Annotated[Path, typer.Argument(
+        help="plan.json / mission.json, or a run folder holding one")]) -> None:
     """Re-verify every state and transition of a plan; exit 1 on the first violation."""
+    plan = plan_path(plan)
     doc = read_plan(plan)
     try:
         summary = check_plan(doc)
@@ -124,6 +261,17 @@ def check_cmd(plan: Annotated[Path, typer.Argument(help="plan.json to verify")])
         raise typer.Exit(1) from None
     typer.echo(f"{plan}: ok, {summary['states']} states, {summary['leg_moves']} leg moves, "
                f"{summary['travel']:.2f} units travelled")
+
+
+def plan_path(path: Path) -> Path:
+    """A plan file, or the plan.json / mission.json of a run folder (one-line errors)."""
+    if not path.is_dir():
+        return path
+    found = [path / n for n in ("mission.json", "plan.json") if (path / n).is_file()]
+    if not found:
+        raise InputError(f"{path}: expected a plan file or a run folder with plan.json or "
+                         "mission.json (a run that found no plan has none)")
+    return found[0]
 
 
 STUDY = Study(
@@ -137,7 +285,8 @@ STUDY = Study(
     preset_notes={"seed": "the seed's first experiment: best-first with its function (1), "
                           "rule set A (the default is function (3), rule set B)"},
     core_algorithms=(),
-    algorithms={"search": (SearchConfig, make_driver)},
+    algorithms={"search": (SearchConfig, make_driver),
+                "receding": (RecedingConfig, make_receding_driver)},
     finalize=finalize,
     best_record=best_record,
     cli=cli,

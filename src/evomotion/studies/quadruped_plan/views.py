@@ -1,6 +1,11 @@
 """Pictures of a walking plan: ``plan.png`` (the path) and ``plan.gif`` (the gait).
 
-Both read only the plan.json document, so they draw any plan that passes the checker.
+Both read only the plan.json / mission.json document, so they draw any plan that passes the
+checker: the world (obstacles grey, no-step zones hatched orange, hidden obstacles dashed,
+posts that appeared red), start and goal (and a goal that moved), the body path, the robot
+every few states, landing errors and slips, axes in the seed's units and a legend; the GIF
+steps state by state with the rule's name and the support polygon (the swing triangle
+during a leg move).
 """
 
 from __future__ import annotations
@@ -14,8 +19,32 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.patches import Patch, Polygon  # noqa: E402
 
 LEG_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red")
+LEG_SHORT = ("FL", "RL", "RR", "FR")
+
+
+def rule_name(rule: int, event: str = "") -> str:
+    """A rule of seed 003 (or a disturbance) in words."""
+    if event and event != "start":
+        return f"disturbance: {event}"
+    if rule == 0:
+        return "start"
+    if rule == 1:
+        return "1 rotate to the goal heading"
+    if rule == 2:
+        return "2 translate b/3"
+    if rule == 3:
+        return "3 translate max"
+    if 28 <= rule <= 31:
+        return f"{rule} shift the body to free leg {LEG_SHORT[rule - 28]}"
+    if rule == 32:
+        return "32 step back (recovery)"
+    leg = LEG_SHORT[(rule - 4) % 4]
+    what = ("max length, rear edge", "mid length, nominal angle", "max length",
+            "min length", "rear edge", "front edge")[(rule - 4) // 4]
+    return f"{rule} leg {leg}: {what}"
 
 
 def _corners(doc: dict[str, Any], body: list[float]) -> np.ndarray:
@@ -37,52 +66,131 @@ def _draw_state(ax: Any, doc: dict[str, Any], st: dict[str, Any], alpha: float =
                 alpha=alpha)
         ax.plot(*feet[leg], "o", color=LEG_COLOURS[leg], ms=4, alpha=alpha)
     b = st["body"]
-    # walking-direction arrow (body -Y for sense -1, +Y otherwise)
-    sense = -1.0 if doc.get("sense", -1) < 0 else 1.0
+    sense = -1.0 if doc.get("sense", -1) < 0 else 1.0  # walking direction: body -Y or +Y
     ax.arrow(b[0], b[1], -sense * 0.8 * math.sin(b[2]), sense * 0.8 * math.cos(b[2]),
              head_width=0.25, color="k", alpha=alpha)
     if support:
         rule = st["rule"]
-        idx = [k for k in range(4) if not (rule >= 4 and k == (rule - 4) % 4)]
+        idx = [k for k in range(4) if not (4 <= rule <= 27 and k == (rule - 4) % 4)]
         poly = feet[idx + [idx[0]]]
         ax.fill(poly[:, 0], poly[:, 1], color="tab:gray", alpha=0.2)
         ax.plot(poly[:, 0], poly[:, 1], color="tab:gray", lw=0.8)
 
 
+def _draw_world(ax: Any, doc: dict[str, Any], upto: int | None = None) -> list:
+    """Obstacles and no-step zones (those existing at state ``upto``); legend handles."""
+    world = doc.get("world")
+    handles = []
+    if not world:
+        return handles
+    kinds = set()
+    for p in world["polygons"]:
+        pts = np.array(p["points"])
+        appeared = p.get("from", 0) > 0
+        if upto is not None and p.get("from", 0) > upto:
+            continue
+        if p["kind"] == "nostep":
+            ax.add_patch(Polygon(pts, closed=True, facecolor="tab:orange", alpha=0.25,
+                                 hatch="//", edgecolor="tab:orange"))
+            kinds.add("nostep")
+        elif appeared:
+            ax.add_patch(Polygon(pts, closed=True, facecolor="tab:red", alpha=0.5))
+            kinds.add("appeared")
+        elif p.get("hidden"):
+            ax.add_patch(Polygon(pts, closed=True, facecolor="0.6", alpha=0.6, ls="--",
+                                 edgecolor="k"))
+            kinds.add("hidden")
+        else:
+            ax.add_patch(Polygon(pts, closed=True, facecolor="0.45", alpha=0.8))
+            kinds.add("obstacle")
+    labels = {"obstacle": ("0.45", "obstacle (body may not cross)"),
+              "hidden": ("0.6", "obstacle hidden until in view"),
+              "appeared": ("tab:red", "obstacle that appeared"),
+              "nostep": ("tab:orange", "no-step zone (feet)")}
+    for k in ("obstacle", "hidden", "appeared", "nostep"):
+        if k in kinds:
+            handles.append(Patch(color=labels[k][0], alpha=0.6, label=labels[k][1]))
+    return handles
+
+
 def _frame_limits(doc: dict[str, Any]) -> tuple[float, float, float, float]:
+    if doc.get("world"):
+        x0, y0, x1, y1 = doc["world"]["bounds"]
+        return x0, x1, y0, y1
     pts = np.array([f for st in doc["states"] for f in st["feet"]] + [doc["goal"]])
     lo, hi = pts.min(axis=0) - 1.5, pts.max(axis=0) + 1.5
     return float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1])
 
 
-def _decor(ax: Any, doc: dict[str, Any]) -> None:
-    gx, gy = doc["goal"]
+def _figsize(doc: dict[str, Any], width: float) -> tuple[float, float]:
+    """A figure as wide as ``width`` inches with the world's aspect (plus room for text)."""
+    x0, x1, y0, y1 = _frame_limits(doc)
+    return width, min(1.4 * width, max(0.45 * width, width * (y1 - y0) / (x1 - x0) + 1.2))
+
+
+def _decor(ax: Any, doc: dict[str, Any], upto: int | None = None) -> list:
+    handles = _draw_world(ax, doc, upto)
+    start = doc["states"][0]["body"]
+    handles.append(ax.plot(start[0], start[1], "s", color="tab:blue", ms=9,
+                           label="start")[0])
+    goals = doc.get("goal_history") or [{"goal": doc["goal"], "from": 0}]
+    current = [g for g in goals if upto is None or g["from"] <= upto][-1]
+    for g in goals:
+        if g is not current and (upto is None or g["from"] <= upto):
+            handles.append(ax.plot(*g["goal"], "*", color="0.6", ms=12,
+                                   label="goal before it moved")[0])
+    gx, gy = current["goal"]
     ax.add_patch(plt.Circle((gx, gy), doc["goal_tolerance"], color="tab:green", alpha=0.4))
-    ax.plot(gx, gy, "*", color="tab:green", ms=14)
+    handles.append(ax.plot(gx, gy, "*", color="tab:green", ms=14, label="goal")[0])
     zone = doc.get("zone")
     if zone:
         ax.add_patch(plt.Circle((zone["x"], zone["y"]), zone["radius"], color="tab:red",
                                 alpha=0.25))
+        handles.append(Patch(color="tab:red", alpha=0.25, label="exclusion zone"))
     x0, x1, y0, y1 = _frame_limits(doc)
     ax.set_xlim(x0, x1)
     ax.set_ylim(y0, y1)
     ax.set_aspect("equal")
     ax.grid(alpha=0.3)
+    ax.set_xlabel("x [seed units]")
+    ax.set_ylabel("y [seed units]")
+    return handles
 
 
 def plot_plan(doc: dict[str, Any], out_png: str | Path, every: int = 0) -> None:
     """The body path with the robot drawn every ``every`` states (0: about 12 drawings)."""
     states = doc["states"]
     every = every or max(1, len(states) // 12)
-    fig, ax = plt.subplots(figsize=(7, 7))
+    fig, ax = plt.subplots(figsize=_figsize(doc, 8.0))
+    handles = _decor(ax, doc)
     path = np.array([st["body"][:2] for st in states])
-    ax.plot(path[:, 0], path[:, 1], "-", color="tab:purple", lw=1.5, label="body centre")
+    handles.insert(0, ax.plot(path[:, 0], path[:, 1], "-", color="tab:purple", lw=1.5,
+                              label="body centre")[0])
     for i in [*range(0, len(states), every), len(states) - 1]:
         _draw_state(ax, doc, states[i], alpha=0.35 if i < len(states) - 1 else 1.0)
-    _decor(ax, doc)
-    legs = sum(1 for st in states if st["rule"] >= 4)
-    ax.set_title(f"{len(states)} states, {legs} leg moves (rule set {doc['rule_set']})")
-    ax.legend(loc="best")
+    events = [st for st in states if st.get("event") not in (None, "", "start")]
+    if events:
+        pts = np.array([st["body"][:2] for st in events])
+        handles.append(ax.plot(pts[:, 0], pts[:, 1], "x", color="tab:red", ms=6,
+                               label=f"landing error / slip ({len(events)})")[0])
+    counts: dict[int, int] = {}
+    for st in states[1:]:
+        if st["rule"]:
+            counts[st["rule"]] = counts.get(st["rule"], 0) + 1
+    top = sorted(counts.items(), key=lambda kv: (-kv[1], kv[0]))[:8]
+    text = "rules used\n" + "\n".join(f"{n:>3} x {rule_name(r)}" for r, n in top)
+    if len(counts) > len(top):
+        text += f"\n    ... {len(counts) - len(top)} more"
+    ax.text(0.99, 0.01, text, transform=ax.transAxes, ha="right", va="bottom", fontsize=6,
+            multialignment="left",
+            family="monospace", bbox={"facecolor": "white", "alpha": 0.8, "lw": 0.5})
+    legs = sum(1 for st in states if 4 <= st["rule"] <= 27)
+    moves = len(states) - 1 - len(events)
+    what = "executed walk" if doc.get("executed") else "plan"
+    ax.set_title(f"{what}: {moves} transitions, {legs} leg moves (rule set "
+                 f"{doc['rule_set']})" + (f" in {doc['world']['name']}" if doc.get("world")
+                                          else ""))
+    ax.legend(handles=handles, loc="upper left", fontsize=7, framealpha=0.85)
     fig.savefig(out_png, dpi=110, bbox_inches="tight")
     plt.close(fig)
 
@@ -90,7 +198,7 @@ def plot_plan(doc: dict[str, Any], out_png: str | Path, every: int = 0) -> None:
 def animate_plan(doc: dict[str, Any], out_gif: str | Path, max_frames: int = 150,
                  fps: float = 6.0) -> None:
     """The gait state by state: body, legs, support polygon (the swing triangle during a
-    leg move), path so far and goal."""
+    leg move), path so far, world and goal, the rule's name."""
     import imageio.v2 as imageio
 
     states = doc["states"]
@@ -98,16 +206,17 @@ def animate_plan(doc: dict[str, Any], out_gif: str | Path, max_frames: int = 150
     idx = [*range(0, len(states), step)]
     if idx[-1] != len(states) - 1:
         idx.append(len(states) - 1)
-    fig, ax = plt.subplots(figsize=(5, 5), dpi=80)
+    fig, ax = plt.subplots(figsize=_figsize(doc, 6.0), dpi=80)
     frames = []
     path = np.array([st["body"][:2] for st in states])
     for i in idx:
         ax.clear()
+        _decor(ax, doc, upto=i)
         ax.plot(path[: i + 1, 0], path[: i + 1, 1], "-", color="tab:purple", lw=1)
         _draw_state(ax, doc, states[i], support=True)
-        _decor(ax, doc)
-        ax.set_title(f"state {i}/{len(states) - 1}  rule {states[i]['rule']}  "
-                     f"margin {states[i]['margin']:.2f}", fontsize=9)
+        st = states[i]
+        ax.set_title(f"state {i}/{len(states) - 1}: {rule_name(st['rule'], st.get('event', ''))}"
+                     f"\nstability margin {st['margin']:.2f}", fontsize=9)
         fig.canvas.draw()
         frames.append(np.asarray(fig.canvas.buffer_rgba())[..., :3].copy())
     plt.close(fig)

@@ -59,6 +59,11 @@ class WalkSearch:
         self.goal_key: int | None = None
         self.last_f = f0  # f of the last state taken from OPEN
         self.seconds = 0.0
+        # ARA* (:mod:`.anytime`): improved closed nodes go here instead of being re-opened
+        self.incons: set[int] | None = None
+        # ties of f broken towards the deeper state (larger g) instead of the older one: the
+        # plan-length heuristic is integer-valued, so weighted A* meets long plateaus of f
+        self.deep_ties = False
 
     def run(self, max_expansions: int, max_seconds: float = float("inf")) -> str:
         """Expand until ``max_expansions`` in total; returns the stop reason of this batch."""
@@ -75,6 +80,8 @@ class WalkSearch:
         push, pop = heapq.heappush, heapq.heappop
         counter, expansions = self.counter, self.expansions
         generated, reopened = self.generated, self.reopened
+        incons, deep = self.incons, self.deep_ties
+        goal_flag = -float("inf") if deep else 0  # goals first among equal f
         reason = OPEN_EMPTY
         f = self.last_f
         try:
@@ -104,12 +111,17 @@ class WalkSearch:
                         nodes[kc] = [fc, g + step_cost, child, k, rule, False, step_cost]
                     elif fc < old[0] - min_improvement and not is_ancestor(nodes, kc, k):
                         if old[5]:
+                            if incons is not None:  # ARA*: no re-expansion this iteration
+                                old[:] = fc, g + step_cost, child, k, rule, True, step_cost
+                                incons.add(kc)
+                                continue
                             reopened += 1
                         old[:] = fc, g + step_cost, child, k, rule, False, step_cost
                     else:
                         continue
                     counter += 1
-                    push(heap, (fc, 0 if is_goal(child) else 1, counter, kc))
+                    push(heap, (fc, goal_flag if is_goal(child) else
+                                (-g - step_cost if deep else 1), counter, kc))
                 # leg moves keep the body: never a goal here (the parent was not one); cost 1.
                 # The same children, in the same order, as problem.leg_targets(state), unrolled.
                 opts = leg_options(state)
@@ -136,12 +148,17 @@ class WalkSearch:
                             elif fc < old[0] - min_improvement and \
                                     not is_ancestor(nodes, kc, k):
                                 if old[5]:
+                                    if incons is not None:
+                                        old[:] = fc, gc, _child(state, leg, fx, fy, kc), k, \
+                                            rule, True, 1.0
+                                        incons.add(kc)
+                                        continue
                                     reopened += 1
                                 old[:] = fc, gc, _child(state, leg, fx, fy, kc), k, rule, False, 1.0
                             else:
                                 continue
                             counter += 1
-                            push(heap, (fc, 1, counter, kc))
+                            push(heap, (fc, -gc if deep else 1, counter, kc))
         finally:
             self.counter, self.expansions = counter, expansions
             self.generated, self.reopened, self.last_f = generated, reopened, f

@@ -1,0 +1,179 @@
+"""The planner's view of a world: distance grids and conservative move checks.
+
+Two signed-distance grids (node spacing ``grid``) are computed once from the exact polygon
+distances (:mod:`.geometry`): to the obstacles (and the bounds) for the body and legs, and to
+the no-step zones, obstacles and bounds for the feet. A value read at the nearest node is off
+by at most ``grid / sqrt 2``, so the tests below are conservative:
+
+* a foot is placed only where the true distance to every no-step zone and obstacle is
+  >= ``foot_clearance``;
+* the body rectangle keeps >= ``body_clearance`` from every obstacle at every instant of a
+  body move (poses sampled so that no point of the body moves more than ``SPACING`` between
+  samples, the outline sampled every ``SPACING``, and the sampling error added to the
+  threshold), and no obstacle vertex lies inside the body.
+
+Obstacles bound the *body*: a leg may reach over one as long as the foot lands outside it
+(and outside the no-step zones) — obstacles are things a body cannot pass but a leg can
+step over or round. Quick tests first: a rotation sweeps the disc of radius ``r_hip``
+about the centre, a translation a chain of such discs; feet are checked one by one only when
+the centre is within ``r_robot`` (hip radius + reach) of a no-step zone or obstacle. This
+keeps the search near its obstacle-free speed.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+
+import numpy as np
+
+from evomotion.studies.quadruped_plan.geometry import signed_distance
+from evomotion.studies.quadruped_plan.model import QuadrupedModel
+from evomotion.studies.quadruped_plan.world import Polygon, World
+
+SPACING = 0.1  # [units] outline and pose sampling of the detailed checks
+CAP = 7.0  # [units] distances are exact up to CAP (enough for the quick tests)
+QUICK_STEP = 0.5  # [units] disc spacing of the quick translation test
+
+
+class Terrain:
+    """A world as the planner knows it: ``known`` obstacles (default: all but hidden)."""
+
+    def __init__(self, world: World, model: QuadrupedModel,
+                 known: Iterable[Polygon] | None = None, body_clearance: float = 0.05,
+                 foot_clearance: float = 0.05, grid: float = 0.1) -> None:
+        self.world, self.model = world, model
+        self.body_clearance, self.foot_clearance, self.grid = body_clearance, foot_clearance, grid
+        self.obstacles = list(world.of_kind("obstacle") if known is None else known)
+        x0, y0, x1, y1 = world.bounds
+        self.x0, self.y0, self.inv = x0, y0, 1.0 / grid
+        self.nx = int(math.ceil((x1 - x0) / grid)) + 1
+        self.ny = int(math.ceil((y1 - y0) / grid)) + 1
+        gx = x0 + grid * np.arange(self.nx)
+        gy = y0 + grid * np.arange(self.ny)
+        self._nodes = np.stack(np.meshgrid(gx, gy, indexing="ij"), axis=-1)
+        inner = np.minimum(np.minimum(self._nodes[..., 0] - x0, x1 - self._nodes[..., 0]),
+                           np.minimum(self._nodes[..., 1] - y0, y1 - self._nodes[..., 1]))
+        self.body_sdf = np.minimum(inner, CAP)
+        for p in self.obstacles:
+            self._carve(self.body_sdf, p.points)
+        self.foot_sdf = self.body_sdf.copy()
+        for p in world.of_kind("nostep"):
+            self._carve(self.foot_sdf, p.points)
+        err = grid * math.sqrt(0.5)
+        self.body_thr = body_clearance + err + SPACING
+        self.foot_thr = foot_clearance + err
+        hips = np.array(model.hips)
+        self.r_hip = float(np.max(np.hypot(hips[:, 0], hips[:, 1])))
+        self.r_robot = self.r_hip + model.l_max
+        self._refresh()
+
+    def _carve(self, sdf: np.ndarray, poly: np.ndarray) -> None:
+        lo = np.floor((poly.min(axis=0) - CAP - [self.x0, self.y0]) * self.inv).astype(int)
+        hi = np.ceil((poly.max(axis=0) + CAP - [self.x0, self.y0]) * self.inv).astype(int) + 1
+        i0, j0 = max(lo[0], 0), max(lo[1], 0)
+        i1, j1 = min(hi[0], self.nx), min(hi[1], self.ny)
+        if i0 >= i1 or j0 >= j1:
+            return
+        window = self._nodes[i0:i1, j0:j1]
+        sdf[i0:i1, j0:j1] = np.minimum(sdf[i0:i1, j0:j1], signed_distance(window, poly))
+
+    def _refresh(self) -> None:
+        self._body_rows = self.body_sdf.tolist()
+        self._foot_rows = self.foot_sdf.tolist()
+        verts = [p.points for p in self.obstacles]
+        self._verts = np.vstack(verts) if verts else np.zeros((0, 2))
+
+    def reveal(self, polygon: Polygon) -> None:
+        """Add an obstacle that has come into view (the grids are updated in place)."""
+        self.obstacles.append(polygon)
+        self._carve(self.body_sdf, polygon.points)
+        self._carve(self.foot_sdf, polygon.points)
+        self._refresh()
+
+    # -- scalar reads ---------------------------------------------------------------------
+    def body_distance(self, x: float, y: float) -> float:
+        i, j = int((x - self.x0) * self.inv + 0.5), int((y - self.y0) * self.inv + 0.5)
+        return self._body_rows[i][j] if 0 <= i < self.nx and 0 <= j < self.ny else -1.0
+
+    def foot_ok(self, x: float, y: float) -> bool:
+        i, j = int((x - self.x0) * self.inv + 0.5), int((y - self.y0) * self.inv + 0.5)
+        return 0 <= i < self.nx and 0 <= j < self.ny and self._foot_rows[i][j] >= self.foot_thr
+
+    def feet_open(self, x: float, y: float) -> bool:
+        """Can every foot of a robot centred at (x, y) go anywhere in its sector?"""
+        i, j = int((x - self.x0) * self.inv + 0.5), int((y - self.y0) * self.inv + 0.5)
+        return 0 <= i < self.nx and 0 <= j < self.ny and \
+            self._foot_rows[i][j] >= self.r_robot + self.foot_thr
+
+    def _points_clear(self, pts: np.ndarray) -> bool:
+        ij = np.rint((pts - [self.x0, self.y0]) * self.inv).astype(np.int64)
+        if np.any(ij < 0) or np.any(ij[..., 0] >= self.nx) or np.any(ij[..., 1] >= self.ny):
+            return False
+        return bool(np.all(self.body_sdf[ij[..., 0], ij[..., 1]] >= self.body_thr))
+
+    # -- the body's outline -----------------------------------------------------------------
+    def _outline(self, poses: np.ndarray) -> np.ndarray:
+        """Sample points of the body rectangle's outline at each pose ``[n, 3]``."""
+        m = self.model
+        a2, b2 = m.a / 2, m.b / 2
+        corners = np.array([[-a2, b2], [-a2, -b2], [a2, -b2], [a2, b2]])
+        rect = []
+        for k in range(4):
+            p, q = corners[k], corners[(k + 1) % 4]
+            t = np.linspace(0, 1, max(2, int(np.ceil(np.hypot(*(q - p)) / SPACING)) + 1))
+            rect.append(p + t[:, None] * (q - p))
+        local = np.vstack(rect)
+        c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
+        rot = np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)  # [n, 2, 2]
+        return (poses[:, None, :2] + np.einsum("nij,kj->nki", rot, local)).reshape(-1, 2)
+
+    def _no_vertex_inside(self, poses: np.ndarray) -> bool:
+        if not len(self._verts):
+            return True
+        d = self._verts[None, :, :] - poses[:, None, :2]
+        c, s = np.cos(poses[:, 2])[:, None], np.sin(poses[:, 2])[:, None]
+        u, v = c * d[..., 0] + s * d[..., 1], -s * d[..., 0] + c * d[..., 1]
+        return not np.any((np.abs(u) < self.model.a / 2) & (np.abs(v) < self.model.b / 2))
+
+    def _sweep_clear(self, poses: np.ndarray) -> bool:
+        return self._points_clear(self._outline(poses)) and self._no_vertex_inside(poses)
+
+    # -- move checks (state = (x, y, phi, 8 body-frame feet, ...)) ------------------------
+    @staticmethod
+    def world_feet(s: tuple) -> np.ndarray:
+        c, sn = math.cos(s[2]), math.sin(s[2])
+        return np.array([[s[0] + c * s[3 + 2 * i] - sn * s[4 + 2 * i],
+                          s[1] + sn * s[3 + 2 * i] + c * s[4 + 2 * i]] for i in range(4)])
+
+    def rotation_ok(self, s: tuple, turn: float) -> bool:
+        """May the body turn by ``turn`` [rad] about its centre? (It sweeps a disc.)"""
+        if self.body_distance(s[0], s[1]) >= self.r_hip + self.body_thr:
+            return True
+        n = int(math.ceil(abs(turn) * self.r_hip / SPACING)) + 1
+        phis = s[2] + np.linspace(0.0, turn, n)
+        return self._sweep_clear(np.stack([np.full(n, s[0]), np.full(n, s[1]), phis], axis=1))
+
+    def translation_ok(self, s: tuple, nx: float, ny: float) -> bool:
+        """May the body translate from its centre to (nx, ny)?"""
+        d = math.hypot(nx - s[0], ny - s[1])
+        k = int(math.ceil(d / QUICK_STEP))
+        r = self.r_hip + 0.5 * d / max(k, 1) + self.body_thr
+        dist = self.body_distance
+        if all(dist(s[0] + (nx - s[0]) * i / max(k, 1), s[1] + (ny - s[1]) * i / max(k, 1))
+               >= r for i in range(k + 1)):
+            return True
+        n = int(math.ceil(d / SPACING)) + 1
+        t = np.linspace(0.0, 1.0, n)
+        return self._sweep_clear(np.stack([s[0] + t * (nx - s[0]), s[1] + t * (ny - s[1]),
+                                           np.full(n, s[2])], 1))
+
+    def stance_problem(self, s: tuple) -> str | None:
+        """Why the robot cannot stand in state ``s``, or None."""
+        for k, (fx, fy) in enumerate(self.world_feet(s)):
+            if not self.foot_ok(fx, fy):
+                return f"foot {k} at ({fx:.2f}, {fy:.2f}) is in or near a no-step zone or " \
+                       "obstacle"
+        if not self._sweep_clear(np.array([s[:3]], dtype=float)):
+            return "the body is in or near an obstacle"
+        return None
