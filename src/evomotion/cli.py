@@ -14,10 +14,11 @@ from evomotion.studies import STUDIES, all_studies, get_study
 app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
                   help="Evolve and search robot motions: gaits, steps, kicks, reaches, plans.")
 
-#: the [run] keys a resume may change: limits, checkpointing and the evaluator
+#: the [run] keys a resume may change: limits, checkpointing, the evaluator and the loggers
 RESUME_KEYS = frozenset(f"run.{k}" for k in (
     "generations", "max_evaluations", "target", "stagnation_generations", "stagnation_eps",
-    "wall_seconds", "checkpoint_every", "evaluator", "workers", "chunks_per_worker", "address"))
+    "wall_seconds", "checkpoint_every", "evaluator", "workers", "chunks_per_worker", "address",
+    "loggers"))
 
 SetOpt = Annotated[list[str] | None, typer.Option("--set", help="Override, e.g. run.seed=3")]
 
@@ -107,9 +108,9 @@ def resume_cmd(
     for item in sets or []:
         key = item.partition("=")[0].strip()
         if key not in RESUME_KEYS:
-            raise InputError(f"--set {key}: resume only changes the limits and the evaluator "
-                             f"({', '.join(sorted(RESUME_KEYS))}); other keys would make the "
-                             "results differ from an uninterrupted run")
+            raise InputError(f"--set {key}: resume only changes the limits, the evaluator and "
+                             f"the loggers ({', '.join(sorted(RESUME_KEYS))}); other keys would "
+                             "make the results differ from an uninterrupted run")
         raw = apply_override(raw, item)
     cfg = config_from_dict(s, raw)
     if sets:
@@ -187,6 +188,38 @@ def export_cmd(
 
     for line in export_command(motion, naoqi, json_out, clip, speed_margin):
         typer.echo(line)
+
+
+@app.command("studio")
+def studio_cmd(
+    runs_dir: Annotated[Path, typer.Argument(help="Folder of run folders")] = Path("runs"),
+    port: Annotated[int, typer.Option(help="TCP port")] = 8765,
+    host: Annotated[str, typer.Option(help="Address to listen on (others: warned)")]
+    = "127.0.0.1",
+) -> None:
+    """Watch, compare, start and stop runs in the browser (needs the [studio] extra).
+
+    The URL printed at start carries the access token (or set EVOMOTION_STUDIO_TOKEN)."""
+    import os
+    import socket
+
+    if not 1 <= port <= 65535:
+        raise InputError(f"--port: expected 1..65535, got {port}")
+    if not runs_dir.is_dir():
+        raise InputError(f"{runs_dir}: no such folder of runs")
+    try:
+        import nicegui  # noqa: F401
+    except ImportError:
+        raise InputError("the studio needs NiceGUI: pip install 'evomotion[studio]'") from None
+    try:
+        with socket.create_server((host, port)):
+            pass
+    except OSError as e:
+        raise InputError(f"--host {host} --port {port}: cannot listen there "
+                         f"({e.strerror or e})") from None
+    from evomotion.studio.app import serve
+
+    serve(runs_dir, host, port, os.environ.get("EVOMOTION_STUDIO_TOKEN") or None)
 
 
 def _mount_study_app(argv: list[str]) -> None:

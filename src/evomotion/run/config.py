@@ -54,11 +54,13 @@ class RunSection:
     workers: int = 0
     chunks_per_worker: int = 4
     address: str = ""
+    history_every: int = 0  # population.bin every N generations (0: none; run/history.py)
+    loggers: tuple[str, ...] = ()  # extra loggers beside stats.csv (run/loggers/)
 
     def validate(self) -> None:
         check_fields(self, "run")
         for k in ("generations", "max_evaluations", "stagnation_generations", "workers",
-                  "checkpoint_every"):
+                  "checkpoint_every", "history_every"):
             if getattr(self, k) < 0:
                 raise InputError(f"run.{k} must be >= 0, got {getattr(self, k)}")
         if self.chunks_per_worker < 1:
@@ -73,6 +75,9 @@ class RunSection:
         from evomotion.run.evaluators import EVALUATORS
 
         lookup(EVALUATORS, "evaluator", self.evaluator)
+        from evomotion.run.loggers import check_names
+
+        check_names(self.loggers)
 
 
 @dataclass(frozen=True)

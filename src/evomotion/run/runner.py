@@ -37,8 +37,11 @@ from evomotion.run.folder import (
     holds_run,
     write_json,
 )
+from evomotion.run.history import NAME as HISTORY_NAME
+from evomotion.run.history import HistoryWriter
 from evomotion.run.limits import check_memory
 from evomotion.run.lock import RunLock
+from evomotion.run.loggers import make_loggers
 from evomotion.run.resume import config_record, restore
 from evomotion.run.runlog import RunLog, sigterm_as_interrupt
 from evomotion.run.stats import COLUMNS, MemoryStats, StatsWriter, diversity, population_stats
@@ -110,6 +113,7 @@ def _run(study: Any, config: Config, out_dir: Path | None, quiet: bool, resume: 
     if rc.evaluator != "serial" and not driver.uses_evaluator:
         raise InputError(f"run.evaluator: study {study.name!r} has no batch evaluation to "
                          f"distribute; use 'serial', got {rc.evaluator!r}")
+    loggers = make_loggers(rc.loggers if out_dir is not None else (), out_dir)  # before files
     if out_dir is not None:
         cleaned = clean_temporaries(out_dir)
         if not resume:
@@ -121,6 +125,8 @@ def _run(study: Any, config: Config, out_dir: Path | None, quiet: bool, resume: 
     columns = COLUMNS + tuple(driver.extra_columns)
     stats = StatsWriter(out_dir / "stats.csv", columns) if out_dir is not None \
         else MemoryStats(columns)
+    history = HistoryWriter(out_dir / HISTORY_NAME) if out_dir is not None and rc.history_every \
+        else None
 
     if resume:
         state, rng, c, notes = restore(out_dir, driver, config)
@@ -134,6 +140,8 @@ def _run(study: Any, config: Config, out_dir: Path | None, quiet: bool, resume: 
                                  "limit to continue, e.g. --set run.generations=N")
         c["stop_reason"] = None
         stats.truncate(c["stats_offset"])
+        if history is not None:
+            history.truncate(c.get("history_offset", 0))
         log.truncate(c["log_offset"])
         for line in notes:
             log(line)
@@ -143,7 +151,8 @@ def _run(study: Any, config: Config, out_dir: Path | None, quiet: bool, resume: 
         state = driver.init(rng)
         c = {"generation": -1, "evaluations": 0, "wall_s": 0.0, "failed_total": 0,
              "hist_best": [], "hist_mean": [], "best_metrics": {},
-             "stats_offset": stats.offset, "log_offset": log.offset}
+             "stats_offset": stats.offset, "log_offset": log.offset,
+             "history_offset": history.offset if history is not None else 0}
         log(f"run {study.name} seed {rc.seed} evaluator {rc.evaluator} -> {out_dir or '-'}")
     if stale_owner:
         log(f"note: took over the run folder's lock from {stale_owner}, which is no longer "
@@ -160,8 +169,10 @@ def _run(study: Any, config: Config, out_dir: Path | None, quiet: bool, resume: 
     def snapshot() -> tuple[dict, dict]:
         a, m = driver.state_arrays(state)
         meta = {"state." + k: v for k, v in m.items()}
+        hist = history.offset if history is not None else 0
         meta.update(rng=rng_state(rng), counters=dict(c, stats_offset=stats.offset,
-                                                       log_offset=log.offset),
+                                                       log_offset=log.offset,
+                                                       history_offset=hist),
                     config=record)
         return {"state." + k: v for k, v in a.items()}, meta
 
@@ -200,12 +211,16 @@ def _run(study: Any, config: Config, out_dir: Path | None, quiet: bool, resume: 
                 best_now = ps["max"] if sense == "max" else ps["min"]
                 div = diversity(rep.population, problem.genome.span) \
                     if rep.population is not None else float("nan")
-                stats.write({"generation": c["generation"], "evaluations": c["evaluations"],
-                             "best": best_now, **ps, "best_so_far": sgn * best_cost,
-                             "wall_s": round(c["wall_s"], 4),
-                             "evals_per_s": round(rep.evaluations / dt, 2) if dt > 0
-                             else float("nan"),
-                             "diversity": div, "failed": rep.failed, **rep.extras})
+                row = {"generation": c["generation"], "evaluations": c["evaluations"],
+                       "best": best_now, **ps, "best_so_far": sgn * best_cost,
+                       "wall_s": round(c["wall_s"], 4),
+                       "evals_per_s": round(rep.evaluations / dt, 2) if dt > 0 else float("nan"),
+                       "diversity": div, "failed": rep.failed, **rep.extras}
+                stats.write(row)
+                loggers.row(row)
+                if history is not None and rep.population is not None \
+                        and c["generation"] % rc.history_every == 0:
+                    history.write(c["generation"], rep.population, sgn * np.asarray(rep.cost))
                 reporter.update(c["generation"], sgn * best_cost, ps["mean"], c["evaluations"])
                 reason = stop_reason(driver, state, config, c, best_cost, ps["mean"] * sgn, sgn)
                 c["stop_reason"] = reason
@@ -234,6 +249,7 @@ def _run(study: Any, config: Config, out_dir: Path | None, quiet: bool, resume: 
         raise
     finally:
         reporter.close()
+        loggers.close()
     if own_evaluator:
         evaluator.close()
     if snap is not None:
@@ -261,6 +277,7 @@ def _run(study: Any, config: Config, out_dir: Path | None, quiet: bool, resume: 
             _hook(study.on_checkpoint, ctx, log)
         if code == 0:  # a second Ctrl-C should not wait for videos
             code = _hook(study.finalize, ctx, log) or 0
+        loggers.finish(ctx)  # after the study's artifacts (best.motion)
     driver.close()
     return RunResult(out_dir, reason, c["generation"], c["evaluations"], ctx.best_fitness,
                      ctx.best_genome, ctx.best_metrics, code, driver, state,

@@ -55,7 +55,7 @@ STUDY = Study(
     # generations are counted by the schedule (algorithm.whole_generations); the seed gives
     # a run 30 s of wall time
     defaults={"run": {"generations": 1_000_000, "wall_seconds": 30.0,
-                      "checkpoint_every": 50}},
+                      "checkpoint_every": 50, "history_every": 5}},
     presets={"seed": {"problem": {"matching": "greedy"},
                       "algorithm": {"survival": "tournament", "restart_after": 0,
                                     "circular_blend": False, "mutation_min_deg": 5.0,

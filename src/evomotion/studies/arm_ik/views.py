@@ -63,6 +63,22 @@ def save_board(prob: ArmIKProblem, best: np.ndarray, best_feasible: np.ndarray |
     plt.close(fig)
 
 
+def population_figure(prob: ArmIKProblem, pop: np.ndarray, best: np.ndarray, title: str = ""):
+    """The board with every limb of a population (grey) and its best (blue), as seed 001's GUI
+    showed a generation."""
+    fig, ax = _figure(prob)
+    _draw_board(ax, prob)
+    for g in pop:
+        pose = forward(prob.scn, prob.layout, g[None])
+        arm = pose.arm_joints[0]
+        ax.plot(arm[:, 0], arm[:, 1], "-", color="0.55", lw=0.8, alpha=0.5)
+    _draw_limb(ax, prob, best, "blue", "best of the generation")
+    ax.legend(loc="upper right", fontsize=7)
+    ax.set_title(title or prob.scn.name, fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
 def save_gif(prob: ArmIKProblem, history: np.ndarray, path: Path, frames: int = 30,
              fps: float = 5.0) -> None:
     """Animated GIF of the best limb at ``frames`` generations spread over ``history``."""

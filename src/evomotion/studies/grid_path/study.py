@@ -148,7 +148,7 @@ STUDY = Study(
                             "mutation_rate": 0.2},
               "problem": {"mode": "continuous", "m": 1.05, "repair": True,
                           "repair_radius": 5.0},
-              "run": {"generations": 50}},
+              "run": {"generations": 50, "history_every": 1}},
     presets={"seed": SEED_PRESET},
     preset_notes={"seed": "the seed's literal setting: discrete encoding, cGA L5 line sweep, "
                           "pc 0.05, pm 0.01, 100 x 50"},

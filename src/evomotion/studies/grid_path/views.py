@@ -20,6 +20,17 @@ STYLES = {"octile": ("tab:orange", (0, (5, 2))), "centres": ("tab:green", (0, (3
 def save_path_png(m: GridMap, best: np.ndarray, optima: dict[str, Solution], out: Path,
                   title: str = "", perpendiculars: np.ndarray | None = None) -> Path:
     """Draw ``best`` (``[k, 2]`` cell units) over the map with the optima; returns ``out``."""
+    fig = path_figure(m, best, optima, title, perpendiculars)
+    out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    return out
+
+
+def path_figure(m: GridMap, best: np.ndarray, optima: dict[str, Solution], title: str = "",
+                perpendiculars: np.ndarray | None = None):
+    """The figure of :func:`save_path_png` (the studio shows it per generation)."""
     size = max(4.0, min(9.0, 0.45 * max(m.width, m.height)))
     fig, ax = plt.subplots(figsize=(size, size * m.height / m.width + 0.4))
     ax.imshow(m.blocked, cmap="Greys", vmin=0, vmax=1.4, origin="lower",
@@ -46,8 +57,4 @@ def save_path_png(m: GridMap, best: np.ndarray, optima: dict[str, Solution], out
     ax.set_title(title or m.name, fontsize=10)
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.06), ncol=2, fontsize=8)
     fig.tight_layout()
-    out = Path(out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
-    return out
+    return fig

@@ -195,6 +195,24 @@ def plot_plan(doc: dict[str, Any], out_png: str | Path, every: int = 0) -> None:
     plt.close(fig)
 
 
+def step_figure(doc: dict[str, Any], k: int):
+    """State ``k`` of a plan or executed walk: the world, the path so far, the robot with its
+    support polygon, and the rule that led to it (the studio steps through these)."""
+    states = doc["states"]
+    k = max(0, min(int(k), len(states) - 1))
+    fig, ax = plt.subplots(figsize=_figsize(doc, 7.0))
+    handles = _decor(ax, doc, upto=k)
+    path = np.array([st["body"][:2] for st in states[:k + 1]])
+    handles.insert(0, ax.plot(path[:, 0], path[:, 1], "-", color="tab:purple", lw=1.5,
+                              label="body centre")[0])
+    _draw_state(ax, doc, states[k], support=True)
+    st = states[k]
+    what = rule_name(st["rule"], st.get("event", "")) if k else "start"
+    ax.set_title(f"state {k} of {len(states) - 1}: {what}", fontsize=10)
+    ax.legend(handles=handles, loc="upper left", fontsize=7, framealpha=0.85)
+    return fig
+
+
 def animate_plan(doc: dict[str, Any], out_gif: str | Path, max_frames: int = 150,
                  fps: float = 6.0) -> None:
     """The gait state by state: body, legs, support polygon (the swing triangle during a

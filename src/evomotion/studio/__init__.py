@@ -1,0 +1,1 @@
+"""evomotion studio: a local web app over run folders (``evomotion studio``; docs/studio.md)."""

@@ -1,0 +1,124 @@
+"""``evomotion studio``: the web app over a folder of runs (NiceGUI: Vue/Quasar, ECharts and
+three.js ship with it; nothing of a front end is kept in this repository).
+
+Security: the server binds 127.0.0.1 unless ``--host`` says otherwise (and then warns). A token
+is made at start and printed with the URL, as Jupyter does; every page and file request needs
+it (the first visit carries it in the URL, which sets a same-site cookie), and every request
+that changes anything (the ``/api`` routes) needs it in the ``X-Evomotion-Token`` header, so a
+page of another site in the same browser can neither read runs nor start or stop them. Files
+are served only from below RUNS_DIR (:func:`~evomotion.studio.data.safe_file`).
+"""
+
+from __future__ import annotations
+
+import hmac
+import secrets
+import sys
+from pathlib import Path
+from typing import Any
+
+from evomotion.errors import InputError
+
+COOKIE = "evomotion_token"
+HEADER = "X-Evomotion-Token"
+LOCAL_HOSTS = ("127.0.0.1", "localhost", "::1")
+#: NiceGUI's own assets and websocket (library files, nothing of RUNS_DIR)
+OPEN_PREFIXES = ("/_nicegui", "/favicon.ico")
+
+
+def _same(a: str | None, b: str) -> bool:
+    return a is not None and hmac.compare_digest(a.encode(), b.encode())
+
+
+def install_security(app: Any, token: str) -> None:
+    """The token check in front of every route but NiceGUI's static assets."""
+    from starlette.middleware.base import BaseHTTPMiddleware
+    from starlette.responses import PlainTextResponse
+
+    async def dispatch(request, call_next):
+        path = request.url.path
+        if path.startswith(OPEN_PREFIXES):
+            return await call_next(request)
+        if path.startswith("/api/"):
+            if not _same(request.headers.get(HEADER), token):
+                return PlainTextResponse(f"403: {HEADER} header missing or wrong", 403)
+            return await call_next(request)
+        from_query = _same(request.query_params.get("token"), token)
+        if not (from_query or _same(request.cookies.get(COOKIE), token)):
+            return PlainTextResponse("403: open the URL with the token that "
+                                     "'evomotion studio' printed", 403)
+        response = await call_next(request)
+        if from_query:
+            response.set_cookie(COOKIE, token, httponly=True, samesite="strict")
+        return response
+
+    app.add_middleware(BaseHTTPMiddleware, dispatch=dispatch)
+
+
+def add_api(app: Any, root: Path) -> None:
+    """JSON routes for scripts and for the page's own buttons' fallback; token-checked."""
+    from fastapi import Request
+    from fastapi.responses import FileResponse, JSONResponse, PlainTextResponse
+
+    from evomotion.studio import actions, data
+
+    def fail(e: Exception) -> Any:
+        return JSONResponse({"error": str(e)}, 400)
+
+    @app.get("/files")
+    def files(path: str):
+        try:
+            return FileResponse(data.safe_file(root, path))
+        except InputError as e:
+            return PlainTextResponse(str(e), 404)
+
+    @app.get("/api/runs")
+    def runs(study: str = ""):
+        return [r.row() for r in data.list_runs(root, study or None)]
+
+    @app.post("/api/stop")
+    def stop(name: str):
+        try:
+            return {"stopped": actions.stop_run(root, name)}
+        except InputError as e:
+            return fail(e)
+
+    @app.post("/api/resume")
+    def resume(name: str):
+        try:
+            return {"pid": actions.resume_run(root, name).pid}
+        except InputError as e:
+            return fail(e)
+
+    @app.post("/api/start")
+    async def start(request: Request):
+        body = await request.json()
+        try:
+            out, proc = actions.start_run(root, str(body.get("study", "")), body.get("preset"),
+                                          [str(s) for s in body.get("sets", [])])
+        except InputError as e:
+            return fail(e)
+        return {"name": out.relative_to(root).as_posix(), "pid": proc.pid}
+
+
+def serve(root: Path, host: str = "127.0.0.1", port: int = 8765,
+          token: str | None = None) -> None:
+    """Build the pages and serve until Ctrl-C."""
+    from nicegui import app, ui
+
+    from evomotion.studio import pages
+
+    root = Path(root)
+    if not root.is_dir():
+        raise InputError(f"{root}: no such folder of runs")
+    token = token or secrets.token_urlsafe(24)
+    if host not in LOCAL_HOSTS:
+        print(f"warning: the studio listens on {host}, reachable from other machines; "
+              "anyone with the token can start and stop runs", file=sys.stderr)
+    install_security(app, token)
+    add_api(app, root.resolve())
+    pages.build(root.resolve())
+    shown = "127.0.0.1" if host in ("0.0.0.0", "::") else host
+    print(f"evomotion studio over {root}: http://{shown}:{port}/?token={token}", flush=True)
+    ui.run(host=host, port=port, reload=False, show=False, title="evomotion studio",
+           show_welcome_message=False, uvicorn_logging_level="warning", favicon="🤖")

@@ -1,0 +1,131 @@
+"""The new-run page: a form generated from the study's config schema and presets.
+
+Every field is one ``--set`` key; values are checked as the user types by the same resolver as
+the CLI (:func:`evomotion.run.config.resolve_config`), and its one-line message is shown under
+the field it names. The run starts as ``evomotion run ...`` in its own process
+(:func:`evomotion.studio.actions.start_run`) and opens in its run page.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from urllib.parse import quote
+
+from evomotion.errors import InputError
+from evomotion.studio import actions
+
+
+def build(root: Path) -> None:
+    from nicegui import ui
+
+    from evomotion.run.config import default_algorithm, study_algorithms
+    from evomotion.studies import STUDIES, get_study
+    from evomotion.studio.pages import header
+
+    @ui.page("/new")
+    def new_page(study: str = "functions") -> None:
+        header(ui, "new run")
+        if study not in STUDIES:
+            study = "functions"
+        s = get_study(study)
+        with ui.row().classes("items-end"):
+            pick = ui.select(list(STUDIES), value=study, label="study").classes("w-56 new-study")
+            presets = {"": "default (best known)", **{p: f"{p}: {s.preset_notes.get(p, '')}"
+                                                      for p in s.presets}}
+            preset = ui.select(presets, value="", label="preset").classes("w-96 new-preset")
+            algs = list(study_algorithms(s))
+            alg = ui.select(algs, value=default_algorithm(s), label="algorithm.name") \
+                .classes("w-56 new-algorithm")
+        pick.on_value_change(lambda e: ui.navigate.to(f"/new?study={quote(e.value)}"))
+        fields_box = ui.column().classes("w-full")
+        error_top = ui.label().classes("text-red-700 form-error")
+        command = ui.code("", language="bash").classes("w-full new-command")
+        start = ui.button("start run", icon="rocket_launch").classes("start-button")
+        state: dict = {"fields": [], "inputs": {}, "errors": {}}
+
+        def current_sets() -> list[str]:
+            values = {k: (("true" if w.value else "false") if isinstance(w.value, bool)
+                          else str(w.value)) for k, w in state["inputs"].items()}
+            a = alg.value if alg.value != state["alg0"] else None
+            return actions.changed_sets(state["fields"], values, a)
+
+        def check() -> bool:
+            for lab in state["errors"].values():
+                lab.set_text("")
+            error_top.set_text("")
+            sets = current_sets()
+            p = preset.value or None
+            command.set_content("evomotion " + " ".join(
+                _quote(a) for a in actions.run_command(study, p, sets, Path("RUN_DIR"))))
+            try:
+                actions.check_new_run(study, p, sets)
+            except InputError as e:
+                key = actions.field_of_error(str(e), list(state["errors"]))
+                (state["errors"][key] if key else error_top).set_text(f"error: {e}")
+                start.disable()
+                return False
+            start.enable()
+            return True
+
+        def rebuild() -> None:
+            fields_box.clear()
+            p = preset.value or None
+            state["alg0"] = default_algorithm(s) if p is None else \
+                actions.check_new_run(study, p, []).algorithm.name
+            a = alg.value if alg.value != state["alg0"] else None
+            try:
+                state["fields"] = actions.form_fields(study, p, a)
+            except InputError as e:
+                error_top.set_text(f"error: {e}")
+                return
+            state["inputs"], state["errors"] = {}, {}
+            with fields_box:
+                for sec in ("run", "algorithm", "problem"):
+                    ui.label(f"[{sec}]").classes("font-mono font-bold mt-2")
+                    with ui.grid(columns=3).classes("w-full gap-x-6"):
+                        for f in (f for f in state["fields"] if f.key.startswith(sec + ".")):
+                            with ui.column().classes("gap-0"):
+                                if f.kind == "bool":
+                                    w = ui.checkbox(f.key, value=f.value == "true")
+                                else:
+                                    w = ui.input(f.key, value=f.value)
+                                w.classes("w-full").props(f"data-key={f.key}")
+                                w.on_value_change(lambda _: check())
+                                state["inputs"][f.key] = w
+                                state["errors"][f.key] = ui.label().classes(
+                                    "text-red-700 text-xs field-error")
+            check()
+
+        async def go() -> None:
+            from nicegui import run
+
+            if not check():
+                return
+            start.disable()
+            try:  # waits until the run wrote its config.toml: off the event loop
+                out, _proc = await run.io_bound(actions.start_run, root, study,
+                                                preset.value or None, current_sets())
+            except InputError as e:
+                start.enable()
+                error_top.set_text(f"error: {e}")
+                return
+            ui.navigate.to(f"/run?name={quote(out.relative_to(root).as_posix())}")
+
+        def preset_changed() -> None:
+            p = preset.value or None
+            name = actions.check_new_run(study, p, []).algorithm.name
+            if alg.value != name:
+                alg.set_value(name)  # its handler rebuilds the fields
+            else:
+                rebuild()
+
+        preset.on_value_change(lambda _: preset_changed())
+        alg.on_value_change(lambda _: rebuild())
+        start.on_click(go)
+        rebuild()
+
+
+def _quote(a: str) -> str:
+    import shlex
+
+    return shlex.quote(a)

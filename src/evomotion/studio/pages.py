@@ -1,0 +1,203 @@
+"""The studio's pages: the runs list, one run (live curves, config, log, stop/resume and the
+study's own view) and the comparison of runs; the new-run form is in :mod:`.form`."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from urllib.parse import quote
+
+from evomotion.errors import InputError
+from evomotion.studio import actions, data
+
+STATUS_COLOURS = {"running": "blue", "finished": "green", "interrupted": "orange",
+                  "failed": "red"}
+CURVES = (("best_so_far", "best so far"), ("best", "best of generation"), ("mean", "mean"),
+          ("min", "min"))
+
+
+def _run_url(name: str) -> str:
+    return f"/run?name={quote(name)}"
+
+
+def _fmt_row(r: data.RunSummary) -> dict:
+    d = r.row()
+    d["status_text"] = r.status + (f" ({r.stop_reason})" if r.stop_reason else "") \
+        + (", resumable" if r.resumable else "")
+    d["best_text"] = "" if d["best"] is None else f"{d['best']:.6g}"
+    d["started_text"] = time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(r.started))
+    d["duration_text"] = f"{r.duration_s:.1f} s"
+    return d
+
+
+def header(ui, title: str) -> None:
+    with ui.header().classes("items-center bg-slate-800"):
+        ui.link("evomotion studio", "/").classes("text-white text-lg font-bold no-underline")
+        ui.label(title).classes("text-slate-300")
+        ui.space()
+        ui.link("runs", "/").classes("text-white")
+        ui.link("compare", "/compare").classes("text-white")
+        ui.link("new run", "/new").classes("text-white")
+
+
+def build(root: Path) -> None:
+    from nicegui import ui
+
+    from evomotion.studies import STUDIES
+    from evomotion.studio import form, views
+
+    @ui.page("/")
+    def runs_page(study: str = "") -> None:
+        header(ui, "runs")
+        cols = [{"name": k, "label": lab, "field": f, "sortable": True, "align": "left"}
+                for k, lab, f in (("name", "run", "name"), ("study", "study", "study"),
+                                  ("status", "status", "status_text"),
+                                  ("generation", "generation", "generation"),
+                                  ("evaluations", "evaluations", "evaluations"),
+                                  ("best", "best", "best_text"),
+                                  ("started", "started", "started_text"),
+                                  ("duration", "duration", "duration_text"))]
+        with ui.row().classes("items-center w-full"):
+            pick = ui.select({"": "all studies", **{s: s for s in STUDIES}}, value=study,
+                             label="study").classes("w-56 study-filter")
+            count = ui.label().classes("text-slate-500 runs-count")
+        table = ui.table(columns=cols, rows=[], row_key="name",
+                         pagination={"rowsPerPage": 50, "sortBy": "started",
+                                     "descending": True}).classes("w-full runs-table")
+        table.add_slot("body-cell-status", """
+            <q-td :props="props"><q-badge :color="{running:'blue',finished:'green',
+            interrupted:'orange',failed:'red'}[props.row.status]">{{ props.value }}</q-badge>
+            </q-td>""")
+        table.on("rowClick", lambda e: ui.navigate.to(_run_url(e.args[1]["name"])))
+        last: list = []
+
+        def refresh() -> None:
+            rows = [_fmt_row(r) for r in data.list_runs(root, pick.value or None)]
+            if rows != last:
+                last[:] = rows
+                table.rows = rows
+                table.update()
+                count.set_text(f"{len(rows)} runs")
+
+        pick.on_value_change(lambda _: refresh())
+        refresh()
+        ui.timer(2.0, refresh)
+
+    @ui.page("/run")
+    def run_page(name: str = "") -> None:
+        header(ui, name)
+        try:
+            run_dir = data.resolve_run(root, name)
+        except InputError as e:
+            ui.label(f"error: {e}").classes("text-red-700 run-error")
+            return
+        study = data.study_name(run_dir)
+        with ui.row().classes("items-center"):
+            ui.label(study).classes("text-xl font-bold")
+            badge = ui.badge("").classes("run-status")
+            stop_b = ui.button("stop", icon="stop").classes("stop-button")
+            resume_b = ui.button("resume", icon="play_arrow").classes("resume-button")
+            msg = ui.label().classes("text-red-700 action-message")
+        with ui.row().classes("items-center"):
+            xaxis = ui.toggle({"generation": "generation", "evaluations": "evaluations"},
+                              value="generation").classes("x-axis")
+            summary = ui.label().classes("text-slate-600 run-summary")
+        chart = ui.echart({
+            "animation": False, "tooltip": {"trigger": "axis"}, "legend": {"top": 0},
+            "grid": {"left": 70, "right": 20, "top": 40, "bottom": 40},
+            "xAxis": {"type": "value", "name": "generation", "nameLocation": "middle",
+                      "nameGap": 25},
+            "yAxis": {"type": "value", "scale": True, "name": "fitness"},
+            "series": [{"name": lab, "type": "line", "showSymbol": False, "data": []}
+                       for _k, lab in CURVES]}).classes("w-full h-80 fitness-chart")
+        st = data.StatsTail(run_dir / "stats.csv")
+
+        def redraw() -> None:
+            x = st.column(xaxis.value)
+            for i, (k, _lab) in enumerate(CURVES):
+                chart.options["series"][i]["data"] = [list(p) for p in zip(x, st.column(k),
+                                                                       strict=False)]
+            chart.options["xAxis"]["name"] = xaxis.value
+            chart.update()
+
+        def status() -> None:
+            s, reason, pid = data.run_status(run_dir)
+            badge.set_text(s + (f": {reason}" if reason else ""))
+            badge.props(f"color={STATUS_COLOURS.get(s, 'grey')}")
+            stop_b.set_enabled(s == "running")
+            resume_b.set_enabled(s == "interrupted" and (run_dir / "checkpoints").is_dir())
+
+        def tick() -> None:
+            if st.update():
+                redraw()
+                g, e = st.column("generation")[-1:], st.column("evaluations")[-1:]
+                summary.set_text(f"generation {int(g[0]) if g and g[0] is not None else '-'}"
+                                 f", {int(e[0]) if e and e[0] is not None else 0} evaluations"
+                                 f", {len(st.rows)} rows")
+                log.set_content("\n".join(data.log_tail(run_dir, 60)))
+            status()
+
+        def act(fn) -> None:
+            try:
+                fn(root, name)
+                msg.set_text("")
+            except InputError as e:
+                msg.set_text(str(e))
+            status()
+
+        stop_b.on_click(lambda: act(actions.stop_run))
+        resume_b.on_click(lambda: act(actions.resume_run))
+        xaxis.on_value_change(lambda _: redraw())
+        with ui.tabs().classes("w-full") as tabs:
+            t_view = ui.tab("study view")
+            t_cfg = ui.tab("config")
+            t_log = ui.tab("log")
+        with ui.tab_panels(tabs, value=t_view).classes("w-full"):
+            with ui.tab_panel(t_view).classes("study-view"):
+                views.render(study, root, run_dir)
+            with ui.tab_panel(t_cfg):
+                ui.code(data.read_config(run_dir)[0], language="toml").classes("w-full run-config")
+            with ui.tab_panel(t_log):
+                log = ui.code("", language="text").classes("w-full run-log")
+        log.set_content("\n".join(data.log_tail(run_dir, 60)))
+        tick()
+        ui.timer(1.0, tick)
+
+    @ui.page("/compare")
+    def compare_page(runs: str = "") -> None:
+        header(ui, "compare")
+        names = [r.name for r in data.list_runs(root)]
+        chosen = [n for n in runs.split(",") if n in names]
+        pick = ui.select(names, value=chosen, multiple=True, label="runs",
+                         with_input=True).classes("w-full compare-pick")
+        note = ui.label().classes("text-slate-600 compare-note")
+        chart = ui.echart({
+            "animation": False, "tooltip": {"trigger": "axis"}, "legend": {"top": 0},
+            "xAxis": {"type": "value", "name": "evaluations", "nameLocation": "middle",
+                      "nameGap": 25},
+            "yAxis": {"type": "value", "scale": True, "name": "best so far"},
+            "series": [
+                {"name": "q25", "type": "line", "stack": "iqr", "showSymbol": False,
+                 "lineStyle": {"opacity": 0}, "data": []},
+                {"name": "interquartile band", "type": "line", "stack": "iqr",
+                 "showSymbol": False, "lineStyle": {"opacity": 0},
+                 "areaStyle": {"color": "rgba(70,130,180,0.3)"}, "data": []},
+                {"name": "median", "type": "line", "showSymbol": False, "data": [],
+                 "lineStyle": {"width": 2.5}}]}).classes("w-full h-96 compare-chart")
+
+        def redraw() -> None:
+            dirs = [root / n for n in pick.value or []]
+            c = data.compare_runs(dirs)
+            x = c["evaluations"]
+            band = [u - lo for u, lo in zip(c["q75"], c["q25"], strict=True)]
+            for i, ys in enumerate((c["q25"], band, c["median"])):
+                chart.options["series"][i]["data"] = [list(p) for p in zip(x, ys,
+                                                                       strict=True)]
+            chart.update()
+            note.set_text(f"{len(dirs)} runs: median and interquartile band of the best "
+                          "fitness so far")
+
+        pick.on_value_change(lambda _: redraw())
+        redraw()
+
+    form.build(root)

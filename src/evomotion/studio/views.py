@@ -1,0 +1,272 @@
+"""The individual, per study, on a run's page.
+
+- NAO studies (step, walk, kick, repertoire): any ``.motion`` of the run played in 3D
+  (:mod:`.nao3d`); the kick in its scene with the ball, with its table of aimed kicks; the
+  repertoire's heat map, where a click plays that cell's motion.
+- arm-ik: the board with the population of a generation and the seed's statistics of that
+  generation (step through the generations recorded in ``population.bin``).
+- grid-path: the map with the best path of a generation.
+- quadruped-plan: the plan (or executed walk) state by state, with rule names and the support
+  polygon (seed 003's viewer).
+
+Figures of the 2-D views are the studies' own matplotlib views, rendered on the server.
+"""
+
+from __future__ import annotations
+
+import base64
+import io
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+NAO_STUDIES = ("humanoid-step", "humanoid-walk", "biped-kick", "humanoid-repertoire")
+
+
+def _png(fig) -> str:
+    import matplotlib.pyplot as plt
+
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=90)
+    plt.close(fig)
+    return "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode()
+
+
+def _problem(study: str, run_dir: Path) -> Any:
+    from evomotion.run.config import config_from_dict, config_from_run_dir
+    from evomotion.studies import get_study
+
+    s = get_study(study)
+    _, raw = config_from_run_dir(run_dir)
+    return s.make_problem(config_from_dict(s, raw).problem)
+
+
+def motions_of(run_dir: Path) -> list[str]:
+    """The run's ``.motion`` files, relative to the run folder (best first)."""
+    found = sorted(p.relative_to(run_dir).as_posix() for p in run_dir.rglob("*.motion")
+                   if "checkpoints" not in p.parts)
+    return sorted(found, key=lambda n: (n != "best.motion", n))
+
+
+def render(study: str, root: Path, run_dir: Path) -> None:
+    from nicegui import ui
+
+    fn = {"arm-ik": _arm_ik, "grid-path": _grid_path, "quadruped-plan": _quadruped,
+          "humanoid-repertoire": _repertoire, "biped-kick": _kick}.get(study)
+    try:
+        if fn is not None:
+            fn(ui, study, run_dir)
+        elif study in NAO_STUDIES:
+            _nao(ui, run_dir, motions_of(run_dir))
+        else:
+            ui.label("this study has no view of its own: its curves are above")
+    except Exception as e:  # noqa: BLE001 - a view must not take the page down
+        ui.label(f"the study view failed: {type(e).__name__}: {e}").classes("text-red-700")
+
+
+def _nao(ui, run_dir: Path, motions: list[str], scene: str = "nao",
+         chosen: str | None = None) -> Any:
+    from evomotion.studio.nao3d import NaoPlayer
+
+    if not motions:
+        ui.label("no .motion in this run yet (written at checkpoints and at the end)")
+        return None
+    pick = ui.select(motions, value=chosen or motions[0], label="motion") \
+        .classes("w-96 motion-pick")
+    box = ui.column().classes("w-full")
+
+    def show(name: str) -> None:
+        box.clear()
+        with box:
+            NaoPlayer(run_dir / name, scene=scene)
+
+    pick.on_value_change(lambda e: show(e.value))
+    show(pick.value)
+    return pick
+
+
+def _kick(ui, study: str, run_dir: Path) -> None:
+    path = run_dir / "best_kicks.json"
+    if path.exists():
+        rows = json.loads(path.read_text())
+        cols = [{"name": k, "label": k, "field": k} for k in rows[0]] if rows else []
+        for r in rows:
+            for k, v in r.items():
+                if isinstance(v, float):
+                    r[k] = float(f"{v:.4g}")
+        ui.label("the kick plan: the best kick aimed at each angle").classes("font-bold")
+        ui.table(columns=cols, rows=rows).classes("w-full kick-table")
+    _nao(ui, run_dir, motions_of(run_dir), scene="kick")
+
+
+def heat_cells(a: Any, slice_k: int | None = None) -> list[list[float]]:
+    """``[ix, iy, objective, cell]`` per (x, y) bin of a grid archive: the best elite over the
+    other measures, or only those in bin ``slice_k`` of the third measure."""
+    lo, hi = a.lower, a.upper
+    bins = [int(b) for b in a.bins]
+    idx = np.stack([np.clip(((a.centre[:, d] - lo[d]) / (hi[d] - lo[d]) * bins[d]).astype(int),
+                            0, bins[d] - 1) for d in range(len(bins))], 1)
+    best: dict[tuple[int, int], list[float]] = {}
+    for k in range(len(a.cell)):
+        if slice_k is not None and len(bins) > 2 and idx[k, 2] != slice_k:
+            continue
+        key = (int(idx[k, 0]), int(idx[k, 1]))
+        o = float(a.objective[k])
+        if key not in best or o > best[key][2]:
+            best[key] = [key[0], key[1], round(o, 4), int(a.cell[k])]
+    return [best[k] for k in sorted(best)]
+
+
+def _repertoire(ui, study: str, run_dir: Path) -> None:
+    from evomotion.run.archive_file import read_archive
+
+    motions = motions_of(run_dir)
+    path = run_dir / "archive.npz"
+    if not path.exists():
+        _nao(ui, run_dir, motions)
+        return
+    a = read_archive(path)
+    if a.kind != "grid" or len(a.bins) < 2:
+        ui.label(f"{a.kind} archive: no heat map; its elites' motions:")
+        _nao(ui, run_dir, motions)
+        return
+    nx, ny = int(a.bins[0]), int(a.bins[1])
+    xs = np.linspace(a.lower[0], a.upper[0], nx + 1)
+    ys = np.linspace(a.lower[1], a.upper[1], ny + 1)
+    lo, hi = (float(np.percentile(a.objective, 5)), float(a.objective.max())) \
+        if a.objective.size else (0.0, 1.0)
+    ui.label(f"repertoire: {len(a.cell)} of {a.cells} cells filled; click a cell to play its "
+             "motion").classes("font-bold")
+    slices = {-1: f"best over {a.measure_names[2]}" if len(a.bins) > 2 else "all"}
+    if len(a.bins) > 2:
+        zs = np.linspace(a.lower[2], a.upper[2], int(a.bins[2]) + 1)
+        slices.update({k: f"{a.measure_names[2]} {zs[k]:.3g}..{zs[k + 1]:.3g}"
+                       for k in range(int(a.bins[2]))})
+    shown: dict = {"cells": heat_cells(a)}
+
+    def clicked(e) -> None:
+        i = getattr(e, "data_index", None)
+        if i is None or not 0 <= i < len(shown["cells"]) or shown.get("pick") is None:
+            return
+        name = f"repertoire/cell-{int(shown['cells'][i][3]):04d}.motion"
+        if name in motions:
+            shown["pick"].set_value(name)
+
+    def reslice(k: int) -> None:
+        shown["cells"] = heat_cells(a, None if k < 0 else k)
+        chart.options["series"][0]["data"] = shown["cells"]
+        chart.update()
+
+    if len(slices) > 1:
+        ui.select(slices, value=-1, label="slice", on_change=lambda e: reslice(e.value)) \
+            .classes("w-72 repertoire-slice")
+    chart = ui.echart({
+        "animation": False, "tooltip": {"position": "top"},
+        "grid": {"left": 90, "right": 90, "bottom": 60, "top": 20},
+        "xAxis": {"type": "category", "name": a.measure_names[0], "nameLocation": "middle",
+                  "nameGap": 35, "data": [f"{(xs[i] + xs[i + 1]) / 2:.3g}" for i in range(nx)]},
+        "yAxis": {"type": "category", "name": a.measure_names[1], "nameLocation": "middle",
+                  "nameGap": 60, "data": [f"{(ys[i] + ys[i + 1]) / 2:.3g}" for i in range(ny)]},
+        "visualMap": {"min": lo, "max": hi if hi > lo else lo + 1, "calculable": True,
+                      "dimension": 2, "orient": "vertical", "right": 0, "top": "center",
+                      "inRange": {"color": ["#440154", "#3b528b", "#21918c", "#5ec962",
+                                            "#fde725"]}},
+        "series": [{"type": "heatmap", "data": shown["cells"]}]},
+        on_point_click=clicked).classes("w-full h-96 repertoire-map")
+    shown["pick"] = _nao(ui, run_dir, motions)
+
+
+def _history(ui, run_dir: Path) -> list | None:
+    from evomotion.run.history import NAME, read_history
+
+    path = run_dir / NAME
+    if not path.exists():
+        ui.label("no population.bin in this run (set run.history_every = 1 to record the "
+                 "populations)")
+        return None
+    hist = read_history(path)
+    if not hist:
+        ui.label("no generation recorded yet")
+        return None
+    return hist
+
+
+def _stepper(ui, n: int, draw, label: str = "generation") -> None:
+    img = ui.image().classes("w-full max-w-3xl view-image")
+    caption = ui.label().classes("text-slate-600 view-caption")
+
+    def show(k: int) -> None:
+        src, text = draw(int(k))
+        img.set_source(src)
+        caption.set_text(text)
+
+    with ui.row().classes("items-center w-full max-w-3xl"):
+        ui.button(icon="chevron_left", on_click=lambda: slider.set_value(max(0, slider.value - 1)))
+        slider = ui.slider(min=0, max=max(n - 1, 0), value=max(n - 1, 0),
+                           on_change=lambda e: show(e.value)).classes("w-96 view-step")
+        ui.button(icon="chevron_right",
+                  on_click=lambda: slider.set_value(min(n - 1, slider.value + 1)))
+        ui.label(label)
+    show(slider.value)
+
+
+def _arm_ik(ui, study: str, run_dir: Path) -> None:
+    from evomotion.studies.arm_ik.views import population_figure
+    from evomotion.studio.data import StatsTail
+
+    hist = _history(ui, run_dir)
+    if hist is None:
+        return
+    prob = _problem(study, run_dir)
+    st = StatsTail(run_dir / "stats.csv")
+    st.update()
+    keys = ("phase", "mean_objective", "var_objective", "mean_intersections",
+            "var_intersections", "originality", "feasible_fraction", "best_objective")
+    gens = st.column("generation")
+
+    def draw(k: int) -> tuple[str, str]:
+        g, pop, fit = hist[k]
+        best = pop[int(np.nanargmin(np.where(np.isfinite(fit), fit, np.inf)))]
+        fig = population_figure(prob, pop, best, f"generation {g}: {len(pop)} limbs")
+        row = gens.index(g) if g in gens else None
+        stats = ", ".join(f"{key} {st.column(key)[row]:.4g}" for key in keys
+                          if row is not None and key in st.columns
+                          and st.column(key)[row] is not None)
+        return _png(fig), f"generation {g}: {stats}"
+
+    _stepper(ui, len(hist), draw)
+
+
+def _grid_path(ui, study: str, run_dir: Path) -> None:
+    from evomotion.studies.grid_path.views import path_figure
+
+    hist = _history(ui, run_dir)
+    if hist is None:
+        return
+    prob = _problem(study, run_dir)
+    sign = -1.0 if getattr(prob, "sense", "min") == "max" else 1.0
+
+    def draw(k: int) -> tuple[str, str]:
+        g, pop, fit = hist[k]
+        i = int(np.nanargmin(np.where(np.isfinite(fit), sign * fit, np.inf)))
+        path = prob.decode(pop[i:i + 1])[0]
+        fig = path_figure(prob.map, np.asarray(path), {}, f"generation {g}: best path")
+        return _png(fig), f"generation {g}: best fitness {fit[i]:.6g}"
+
+    _stepper(ui, len(hist), draw)
+
+
+def _quadruped(ui, study: str, run_dir: Path) -> None:
+    from evomotion.studies.quadruped_plan.views import step_figure
+
+    path = next((run_dir / n for n in ("mission.json", "plan.json")
+                 if (run_dir / n).exists()), None)
+    if path is None:
+        ui.label("no plan.json or mission.json: the search found no plan (yet)")
+        return
+    doc = json.loads(path.read_text())
+    ui.label(f"{path.name}: {len(doc['states']) - 1} transitions").classes("font-bold")
+    _stepper(ui, len(doc["states"]), lambda k: (_png(step_figure(doc, k)), f"state {k}"),
+             "transition")

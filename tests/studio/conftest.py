@@ -1,0 +1,85 @@
+"""Fixtures of the studio's end-to-end tests: a folder with a finished run of every study, the
+studio serving it, and headless Chromium (Debian's, installed by scripts/install.sh test)
+driven by Playwright."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from studio_helpers import ARGS, CHROMIUM, TOKEN, free_port, get, smoke_sets  # noqa: E402
+
+from evomotion.run.config import resolve_config
+from evomotion.run.runner import run_study
+from evomotion.studies import STUDIES, get_study
+
+
+@pytest.fixture(scope="session")
+def runs_root(tmp_path_factory) -> Path:
+    root = tmp_path_factory.mktemp("runs")
+    for name in sorted(STUDIES):
+        s = get_study(name)
+        run_study(s, resolve_config(s, None, smoke_sets(name)), root / name, quiet=True)
+    return root
+
+
+@pytest.fixture(scope="session")
+def studio(runs_root):
+    """``(base_url, runs_root)`` of a studio serving ``runs_root``."""
+    pytest.importorskip("nicegui")
+    port = free_port()
+    env = {k: v for k, v in os.environ.items() if not k.startswith("PYTEST")}
+    env["EVOMOTION_STUDIO_TOKEN"] = TOKEN
+    proc = subprocess.Popen([sys.executable, "-m", "evomotion.cli", "studio", str(runs_root),
+                             "--port", str(port)], env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.STDOUT)
+    base = f"http://127.0.0.1:{port}"
+    deadline = time.time() + 60
+    while time.time() < deadline:
+        try:
+            if get(f"{base}/?token={TOKEN}")[0] == 200:
+                break
+        except OSError:
+            pass
+        if proc.poll() is not None:
+            pytest.fail(f"the studio exited: {proc.stdout.read().decode()[-2000:]}")
+        time.sleep(0.3)
+    else:
+        proc.kill()
+        pytest.fail("the studio did not answer within 60 s")
+    yield base, runs_root
+    proc.terminate()
+    try:
+        proc.wait(10)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+
+
+@pytest.fixture(scope="session")
+def chromium():
+    sync_api = pytest.importorskip("playwright.sync_api")
+    if not Path(CHROMIUM).exists():
+        pytest.skip("Debian's chromium is not installed (scripts/install.sh test installs it)")
+    with sync_api.sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
+        yield browser
+        browser.close()
+
+
+@pytest.fixture
+def page(chromium, studio):
+    """A page whose console errors and uncaught exceptions fail the test."""
+    context = chromium.new_context(viewport={"width": 1300, "height": 1000})
+    pg = context.new_page()
+    errors: list[str] = []
+    pg.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    pg.on("pageerror", lambda e: errors.append(f"uncaught: {e}"))
+    base, _ = studio
+    pg.goto(f"{base}/?token={TOKEN}")  # sets the token cookie
+    yield pg
+    context.close()
+    assert not errors, f"browser console errors: {errors[:5]}"

@@ -1,0 +1,141 @@
+"""The studio's data layer and actions, without a server."""
+
+from __future__ import annotations
+
+import os
+import socket
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from evomotion.errors import InputError
+from evomotion.run.config import resolve_config
+from evomotion.run.history import read_history
+from evomotion.run.runner import run_study
+from evomotion.studies import get_study
+from evomotion.studio import actions, data
+
+FN = ["problem.dim=4", "algorithm.pop_size=10"]
+
+
+def _run(root, name, *extra, generations=8):
+    s = get_study("functions")
+    cfg = resolve_config(s, None, [*FN, f"run.generations={generations}", *extra])
+    run_study(s, cfg, root / name, quiet=True)
+    return root / name
+
+
+def test_finished_run_is_listed_with_its_last_row(tmp_path):
+    _run(tmp_path, "a")
+    (r,) = data.list_runs(tmp_path)
+    assert (r.name, r.study, r.status, r.stop_reason) == ("a", "functions", "finished",
+                                                          "generations")
+    assert r.generation == 8 and r.evaluations > 0 and np.isfinite(r.best)
+    assert not r.resumable and data.list_runs(tmp_path, "arm-ik") == []
+
+
+def test_status_from_lock_and_log(tmp_path):
+    d = _run(tmp_path, "a")
+    host = socket.gethostname()
+    (d / "run.lock").write_text(f"pid {os.getpid()} on {host}\n")
+    assert data.run_status(d)[0] == "running"
+    dead = subprocess.Popen([sys.executable, "-c", "pass"])
+    dead.wait()
+    (d / "run.lock").write_text(f"pid {dead.pid} on {host}\n")
+    assert data.run_status(d)[:2] == ("interrupted", "killed")
+    assert data.summarize(tmp_path, d).resumable
+    (d / "run.lock").write_text("")
+    with open(d / "log.txt", "a") as fh:
+        fh.write("resumed at generation 8 with evaluator serial\n")
+    assert data.run_status(d)[:2] == ("interrupted", "no end logged")
+    with open(d / "log.txt", "a") as fh:
+        fh.write("run failed at generation 9: ValueError: boom\n")
+    assert data.run_status(d)[0] == "failed"
+    with open(d / "log.txt", "a") as fh:
+        fh.write("stopped: interrupted at generation 9 after 90 evaluations\n")
+    assert data.run_status(d)[:2] == ("interrupted", "interrupted")
+
+
+def test_stats_tail_reads_only_what_was_appended_and_restarts_after_a_cut(tmp_path):
+    p = tmp_path / "stats.csv"
+    p.write_text("generation,best_so_far\n0,5.0\n1,4.0\n2,3")  # the last row is half written
+    t = data.StatsTail(p)
+    assert t.update() == 2 and t.column("best_so_far") == [5.0, 4.0]
+    with open(p, "a") as fh:
+        fh.write(".5\n3,nan\n")
+    assert t.update() == 2 and t.column("best_so_far") == [5.0, 4.0, 3.5, None]
+    p.write_text("generation,best_so_far\n0,9.0\n")  # cut back by a resume
+    assert t.update() == 1 and t.column("generation") == [0.0]
+
+
+def test_compare_median_and_band(tmp_path):
+    runs = [_run(tmp_path, f"r{i}", f"run.seed={i}") for i in range(5)]
+    c = data.compare_runs(runs, points=50)
+    assert len(c["evaluations"]) == len(c["median"]) > 10
+    q25, med, q75 = (np.array(c[k]) for k in ("q25", "median", "q75"))
+    assert (q25 <= med).all() and (med <= q75).all()
+    assert (np.diff(med) <= 1e-12).all()  # best so far of a minimisation never rises
+    assert max(c["runs"]) == 5
+
+
+def test_nothing_outside_the_runs_folder(tmp_path):
+    d = _run(tmp_path / "runs", "a")
+    (tmp_path / "secret.txt").write_text("x")
+    os.symlink(tmp_path / "secret.txt", d / "link.txt")
+    for bad in ("../secret.txt", "a/../../secret.txt", "/etc/passwd", "a/link.txt"):
+        with pytest.raises(InputError):
+            data.safe_file(tmp_path / "runs", bad)
+    assert data.safe_file(tmp_path / "runs", "a/stats.csv").name == "stats.csv"
+    for bad in ("..", ".", "", "a/checkpoints", "../runs/a/.."):
+        with pytest.raises(InputError):
+            data.resolve_run(tmp_path / "runs", bad)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.text(max_size=40))
+def test_any_requested_path_stays_inside(tmp_path_factory, rel):
+    root = tmp_path_factory.mktemp("r")
+    (root / "f.txt").write_text("x")
+    try:
+        p = data.safe_file(root, rel)
+    except (InputError, ValueError, OSError):
+        return
+    assert p.resolve().is_relative_to(root.resolve())
+
+
+def test_form_fields_and_one_line_errors():
+    fields = actions.form_fields("functions")
+    keys = [f.key for f in fields]
+    assert "run.seed" in keys and "problem.dim" in keys and "algorithm.name" not in keys
+    assert actions.changed_sets(fields, {"run.seed": "3", "problem.name": "rastrigin"}) == \
+        ["run.seed=3", 'problem.name="rastrigin"']
+    with pytest.raises(InputError) as e:
+        actions.check_new_run("functions", None, ["algorithm.pop_size=-4"])
+    assert actions.field_of_error(str(e.value), keys) == "algorithm.pop_size"
+    assert actions.run_command("functions", "seed", ["run.seed=1"], tmp := "out")[-3:] == \
+        ["--out", tmp, "--quiet"]
+    for name in ("arm-ik", "grid-path", "quadruped-plan", "humanoid-step"):
+        assert actions.form_fields(name, "seed")  # every study's schema makes a form
+
+
+def test_history_records_every_generation_and_survives_resume(tmp_path):
+    s = get_study("functions")
+    cfg = resolve_config(s, None, [*FN, "run.generations=9", "run.history_every=1",
+                                   "run.checkpoint_every=3"])
+    run_study(s, cfg, tmp_path / "full", quiet=True)
+    hist = read_history(tmp_path / "full" / "population.bin")
+    assert [g for g, _, _ in hist] == list(range(10))
+    assert all(p.shape == (10, 4) and f.shape == (10,) for _, p, f in hist)
+    from evomotion.run.faults import fault_at
+
+    with fault_at(5):
+        run_study(s, cfg, tmp_path / "cut", quiet=True)
+    run_study(s, cfg, tmp_path / "cut", quiet=True, resume=True)
+    a = (tmp_path / "full" / "population.bin").read_bytes()
+    assert (tmp_path / "cut" / "population.bin").read_bytes() == a
+    (tmp_path / "cut" / "population.bin").write_bytes(a[:-5])  # a crash mid-record
+    assert len(read_history(tmp_path / "cut" / "population.bin")) == 9

@@ -1,0 +1,171 @@
+"""The studio end to end, in headless Chromium: runs list, every study's run page, a live run
+growing, stop and resume from the page, a run started from the form (identical to the CLI's),
+the comparison, and the token."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import time
+from urllib.parse import quote
+
+import pytest
+from studio_helpers import TOKEN, get, smoke_sets
+
+from evomotion.run.stats import read_stats
+from evomotion.studies import STUDIES
+
+pytestmark = pytest.mark.slow
+
+VIEW = {"arm-ik": ".view-image", "grid-path": ".view-image", "quadruped-plan": ".view-image",
+        "humanoid-step": ".nao-scene", "humanoid-walk": ".nao-scene",
+        "biped-kick": ".kick-table", "humanoid-repertoire": ".repertoire-map",
+        "functions": "text=no view of its own"}
+
+
+def _rows(page) -> int:
+    text = page.locator(".run-summary").inner_text()
+    return int(text.rsplit(",", 1)[1].split()[0]) if "rows" in text else 0
+
+
+def _field(page, key: str):
+    return page.locator(f'input[data-key="{key}"], [data-key="{key}"] input').first
+
+
+def _wait(cond, timeout=30.0, what="condition"):
+    end = time.time() + timeout
+    while time.time() < end:
+        if cond():
+            return
+        time.sleep(0.25)
+    raise AssertionError(f"timed out waiting for {what}")
+
+
+def test_every_study_has_a_view():
+    assert set(VIEW) == set(STUDIES)
+
+
+def test_runs_list_shows_every_run(page, studio):
+    page.wait_for_selector(".runs-table tbody tr")
+    _wait(lambda: page.locator(".runs-table tbody tr").count() == len(STUDIES), what="rows")
+    text = page.locator(".runs-table").inner_text()
+    for name in STUDIES:
+        assert name in text
+    assert "finished" in text
+    page.locator(".runs-table tbody tr", has_text="grid-path").first.click()
+    page.wait_for_url("**/run?name=grid-path")
+
+
+@pytest.mark.parametrize("name", sorted(STUDIES))
+def test_run_page_shows_curves_and_the_study_view(page, studio, name):
+    base, root = studio
+    page.goto(f"{base}/run?name={quote(name)}")
+    page.wait_for_selector(".fitness-chart canvas")
+    n = len(read_stats(root / name / "stats.csv")["generation"])
+    _wait(lambda: _rows(page) == n, what=f"{n} rows")
+    assert "finished" in page.locator(".run-status").inner_text()
+    page.wait_for_selector(VIEW[name], timeout=30000)
+    if VIEW[name] == ".view-image":  # a rendered figure, stepped back one generation
+        src = page.locator(".view-image img").get_attribute("src")
+        assert src and src.startswith("data:image/png")
+    page.locator(".q-tab", has_text="config").click()
+    page.wait_for_selector(".run-config", state="visible")
+    assert f'study = "{name}"' in page.locator(".run-config").inner_text()
+
+
+def test_live_run_grows_then_stop_and_resume_from_the_page(page, studio):
+    base, root = studio
+    out = root / "live"
+    sets = [*smoke_sets("humanoid-walk"), "run.generations=400", "run.checkpoint_every=2"]
+    args = [a for s in sets for a in ("--set", s)]
+    proc = subprocess.Popen([sys.executable, "-m", "evomotion.cli", "run", "humanoid-walk",
+                             *args, "--out", str(out), "--quiet"])
+    try:
+        _wait(lambda: (out / "stats.csv").exists(), what="the run to start")
+        page.goto(f"{base}/")  # the list shows it running (it refreshes itself)
+        row = page.locator(".runs-table tbody tr", has_text="live").first
+        _wait(lambda: row.count() and "running" in row.inner_text(), 30, "a running row")
+        page.goto(f"{base}/run?name=live")
+        page.wait_for_selector(".fitness-chart canvas")
+        _wait(lambda: _rows(page) >= 2, what="first rows")
+        first = _rows(page)
+        _wait(lambda: _rows(page) >= first + 3, what="the curve to grow without a reload")
+        assert "running" in page.locator(".run-status").inner_text()
+        page.locator(".stop-button").click()
+        _wait(lambda: "interrupted" in page.locator(".run-status").inner_text(), 60,
+              "the stop")
+        assert proc.wait(30) == 130
+        assert "stopped: interrupted" in (out / "log.txt").read_text()
+        stopped_at = _rows(page)
+        page.locator(".resume-button").click()
+        _wait(lambda: "running" in page.locator(".run-status").inner_text(), 60, "resume")
+        _wait(lambda: _rows(page) > stopped_at, 60, "the resumed run to go on")
+        page.locator(".stop-button").click()
+        _wait(lambda: "interrupted" in page.locator(".run-status").inner_text(), 60,
+              "the second stop")
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+
+
+def test_run_started_from_the_form_is_the_cli_run(page, studio, tmp_path):
+    base, root = studio
+    page.goto(f"{base}/new?study=functions")
+    field = _field(page, "algorithm.pop_size")
+    field.fill("-4")
+    page.wait_for_selector(".field-error:has-text('algorithm.pop_size')")
+    assert page.locator(".start-button").is_disabled()
+    field.fill("12")
+    _field(page, "run.generations").fill("7")
+    _field(page, "run.seed").fill("4")
+    _wait(lambda: "run.seed=4" in page.locator(".new-command").inner_text(), what="command")
+    page.locator(".start-button").click()
+    page.wait_for_url("**/run?name=functions-*")
+    name = page.url.split("name=")[1]
+    run_dir = root / name
+    _wait(lambda: "finished" in page.locator(".run-status").inner_text(), 60, "the run")
+    cli = tmp_path / "cli"
+    subprocess.run([sys.executable, "-m", "evomotion.cli", "run", "functions", "--set",
+                    "algorithm.pop_size=12", "--set", "run.generations=7", "--set",
+                    "run.seed=4", "--out", str(cli), "--quiet"], check=True)
+    a, b = read_stats(run_dir / "stats.csv"), read_stats(cli / "stats.csv")
+    for col in a:
+        if col not in ("wall_s", "evals_per_s"):
+            assert a[col].tobytes() == b[col].tobytes(), col
+    ja, jb = (json.loads((d / "best.json").read_text()) for d in (run_dir, cli))
+    assert ja["genome"] == jb["genome"] and ja["fitness"] == jb["fitness"]
+    assert (run_dir / "config.toml").read_text() == (cli / "config.toml").read_text()
+
+
+def test_compare_page_draws_median_and_band(page, studio):
+    base, root = studio
+    page.goto(f"{base}/compare?runs=functions,grid-path")
+    page.wait_for_selector(".compare-chart canvas")
+    _wait(lambda: "2 runs" in page.locator(".compare-note").inner_text(), what="the note")
+
+
+def test_token_guards_pages_files_and_actions(studio):
+    base, _ = studio
+    assert get(f"{base}/")[0] == 403
+    assert get(f"{base}/run?name=functions")[0] == 403
+    assert get(f"{base}/files?path=functions/stats.csv")[0] == 403
+    assert get(f"{base}/files?path=functions/stats.csv&token={TOKEN}")[0] == 200
+    assert get(f"{base}/files?path=../../etc/passwd&token={TOKEN}")[0] == 404
+    # actions need the header, not a cookie or a query a foreign page could send
+    assert get(f"{base}/api/stop?name=functions&token={TOKEN}", method="POST")[0] == 403
+    code, body = get(f"{base}/api/stop?name=functions", {"X-Evomotion-Token": TOKEN}, "POST")
+    assert code == 400 and b"not running" in body
+    code, body = get(f"{base}/api/runs", {"X-Evomotion-Token": TOKEN})
+    assert code == 200 and len(json.loads(body)) >= len(STUDIES)
+
+
+def test_studio_refuses_bad_arguments_in_one_line(tmp_path):
+    env = dict(os.environ)
+    for args, needle in ((["studio", str(tmp_path / "nope")], "no such folder"),
+                         (["studio", str(tmp_path), "--port", "0"], "--port")):
+        r = subprocess.run([sys.executable, "-m", "evomotion.cli", *args], env=env,
+                           capture_output=True, text=True, timeout=60)
+        assert r.returncode == 2 and needle in r.stderr and "Traceback" not in r.stderr
+        assert len(r.stderr.strip().splitlines()) == 1
