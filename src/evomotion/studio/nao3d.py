@@ -1,182 +1,263 @@
 """The NAO (or the kick scene with its ball) playing a ``.motion`` in 3D in the browser.
 
-The geometry is the model's own: every visual geom of the MJCF (groups 0 and 1; the collision
-geoms of group 3 are hidden, as in MuJoCo's viewer) becomes a three.js object of NiceGUI's
-scene: boxes, spheres, cylinders, capsules (a cylinder and two spheres) and ellipsoids (a
-scaled sphere); the NAO model has no meshes (a mesh geom would be drawn as its bounding box).
-Geoms are placed once inside one group per body; the poses come from the physics replay
-(:func:`evomotion.sim.nao.replay.motion_targets`, the same open-loop targets as ``evomotion
-replay``), recorded at ``fps`` and turned into body poses with ``mj_kinematics``, so the browser
-shows exactly what the simulation did, falls included.
+The geometry is the simulation's own MJCF: :func:`geom_table` lists every geom MuJoCo's viewer
+draws by default (groups 0-2, alpha > 0; the NAO's visual geoms are group 1, its collision
+geoms group 3 are hidden; planes are skipped: the scene's grid is the floor), with its colour
+(the geom's rgba, or its material's when the rgba is MuJoCo's default, as MuJoCo renders it).
+In NiceGUI's :class:`ui.scene` (three.js) boxes, spheres and cylinders are its primitives
+(three.js cylinders run along y, MuJoCo's along z: a +90 degree turn about x), an ellipsoid is a
+scaled sphere, a capsule a cylinder and two spheres in one group, and a mesh an STL built from
+``mesh_vert``/``mesh_face`` and passed as a ``data:`` URL to ``scene.stl`` (the NAO model has
+no meshes). The geoms are placed once in one group per body; a frame moves the body groups only
+(one batched message per frame).
+
+The poses come from the physics replay: the open-loop targets of
+:func:`evomotion.sim.nao.replay.motion_targets` (as ``evomotion replay``) from the robot at
+rest in the motion's first pose (the kick scene: the ball at
+:func:`~evomotion.studies.biped_kick.scene.default_ball_xy`), rolled out with
+:class:`~evomotion.sim.rollout.BatchSimulator`; every ``1 / fps`` s (frame 0: the initial
+state) ``mj_kinematics`` turns the state's ``qpos`` into geom and body poses. The browser shows
+what the simulation did, falls included.
 """
 
 from __future__ import annotations
 
-import math
+import base64
+import contextlib
+import struct
 from pathlib import Path
 from typing import Any
 
 import mujoco
 import numpy as np
 
-VISUAL_GROUPS = (0, 1)
-_CACHE: dict[tuple, dict] = {}
+from evomotion.core.checks import check_choice, check_number
+
+SCENES = ("nao", "kick")
+VISUAL_GROUPS = (0, 1, 2)  # the groups MuJoCo's viewer shows by default
+_TYPES = {mujoco.mjtGeom.mjGEOM_BOX: "box", mujoco.mjtGeom.mjGEOM_SPHERE: "sphere",
+          mujoco.mjtGeom.mjGEOM_CAPSULE: "capsule", mujoco.mjtGeom.mjGEOM_CYLINDER: "cylinder",
+          mujoco.mjtGeom.mjGEOM_ELLIPSOID: "ellipsoid", mujoco.mjtGeom.mjGEOM_MESH: "mesh"}
+_TYPES = {int(k): v for k, v in _TYPES.items()}
+_Y_TO_Z = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])  # +90 deg about x
+_MODELS: dict[str, mujoco.MjModel] = {}
+_CACHE: dict[tuple, dict[str, Any]] = {}
+_CACHE_SIZE = 8
 
 
 def load_scene_model(scene: str = "nao") -> mujoco.MjModel:
-    if scene == "kick":
-        from evomotion.studies.biped_kick.scene import load_scene
+    """The model of ``scene`` ("nao": the NAO on its floor, "kick": plus the ball); one shared
+    instance per scene, not to be modified."""
+    check_choice("scene", scene, SCENES)
+    if scene not in _MODELS:
+        if scene == "kick":
+            from evomotion.studies.biped_kick.scene import load_scene
 
-        return load_scene()
-    from evomotion.sim import nao
+            _MODELS[scene] = load_scene()
+        else:
+            from evomotion.sim import nao
 
-    return nao.load_model()
+            _MODELS[scene] = nao.load_model()
+    return _MODELS[scene]
+
+
+def geom_rgba(model: mujoco.MjModel, i: int) -> np.ndarray:
+    """The colour MuJoCo draws geom ``i`` with: its material's rgba when its own is the
+    default (0.5, 0.5, 0.5, 1)."""
+    rgba = model.geom_rgba[i]
+    mat = int(model.geom_matid[i])
+    if mat >= 0 and np.allclose(rgba, [0.5, 0.5, 0.5, 1.0]):
+        rgba = model.mat_rgba[mat]
+    return np.array(rgba, dtype=float)
 
 
 def geom_table(model: mujoco.MjModel) -> list[dict[str, Any]]:
-    """The visual geoms: id, body, type name, size, rgba, pose in the body frame."""
-    names = {int(mujoco.mjtGeom.mjGEOM_BOX): "box", int(mujoco.mjtGeom.mjGEOM_SPHERE): "sphere",
-             int(mujoco.mjtGeom.mjGEOM_CAPSULE): "capsule",
-             int(mujoco.mjtGeom.mjGEOM_CYLINDER): "cylinder",
-             int(mujoco.mjtGeom.mjGEOM_ELLIPSOID): "ellipsoid",
-             int(mujoco.mjtGeom.mjGEOM_MESH): "mesh"}
+    """The drawn geoms: ``id, name, body, type`` (box, sphere, capsule, cylinder, ellipsoid,
+    mesh), ``size`` (MuJoCo's), ``rgba``, ``pos``/``mat`` in the body frame, and for meshes
+    ``vertices[n, 3]`` (geom frame) and ``faces[m, 3]``."""
     out = []
     for i in range(model.ngeom):
-        kind = names.get(int(model.geom_type[i]))
-        if kind is None or int(model.geom_group[i]) not in VISUAL_GROUPS \
-                or model.geom_rgba[i, 3] == 0 or model.geom_bodyid[i] == 0:
+        kind = _TYPES.get(int(model.geom_type[i]))
+        rgba = geom_rgba(model, i)
+        if kind is None or int(model.geom_group[i]) not in VISUAL_GROUPS or rgba[3] <= 0:
             continue
-        mat = np.zeros(9)
+        mat = np.empty(9)
         mujoco.mju_quat2Mat(mat, model.geom_quat[i])
-        size = model.geom_size[i].copy()
-        if kind == "mesh":  # its bounding box (geom_aabb: centre, half sizes)
-            kind, size = "box", model.geom_aabb[i, 3:].copy()
-        out.append({"id": i, "body": int(model.geom_bodyid[i]), "type": kind,
-                    "size": size.tolist(), "rgba": model.geom_rgba[i].tolist(),
-                    "pos": model.geom_pos[i].tolist(), "mat": mat.reshape(3, 3).tolist()})
+        row = {"id": i, "name": model.geom(i).name, "body": int(model.geom_bodyid[i]),
+               "type": kind, "size": model.geom_size[i].tolist(), "rgba": rgba.tolist(),
+               "pos": model.geom_pos[i].tolist(), "mat": mat.reshape(3, 3).tolist()}
+        if kind == "mesh":
+            m = int(model.geom_dataid[i])
+            v0, f0 = int(model.mesh_vertadr[m]), int(model.mesh_faceadr[m])
+            row["vertices"] = model.mesh_vert[v0:v0 + int(model.mesh_vertnum[m])].copy()
+            row["faces"] = model.mesh_face[f0:f0 + int(model.mesh_facenum[m])].copy()
+        out.append(row)
     return out
 
 
-def record_poses(motion_path: Path | str, scene: str = "nao", fps: float = 25.0,
-                 hold_s: float = 0.5) -> dict[str, Any]:
-    """Replay the motion and record the world pose of every body with visual geoms:
-    ``t_s[T]``, ``bodies[B]``, ``pos[T, B, 3]``, ``mat[T, B, 3, 3]``, ``fell``."""
-    path = Path(motion_path)
-    key = (str(path), path.stat().st_mtime, scene, fps, hold_s)
-    if key in _CACHE:
-        return _CACHE[key]
+def mesh_stl(vertices: np.ndarray, faces: np.ndarray) -> bytes:
+    """A binary STL of the triangles ``faces[m, 3]`` (indices into ``vertices[n, 3]``)."""
+    tri = np.asarray(vertices, dtype=np.float32)[np.asarray(faces, dtype=np.int64)]
+    normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-12)
+    rec = np.zeros(len(tri), dtype=[("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")])
+    rec["n"], rec["v"] = normal, tri
+    return b"evomotion".ljust(80, b" ") + struct.pack("<I", len(tri)) + rec.tobytes()
+
+
+def _initial_state(model: mujoco.MjModel, scene: str, pose: np.ndarray) -> np.ndarray:
+    from evomotion.sim import nao
+
+    if scene == "kick":
+        from evomotion.studies.biped_kick.scene import default_ball_xy, initial_scene_state
+
+        return initial_scene_state(model, default_ball_xy(model, pose=pose), pose)
+    return nao.initial_state(model, pose)
+
+
+def _record(path: Path, scene: str, fps: float, hold_s: float) -> dict[str, Any]:
     from evomotion.sim import nao
     from evomotion.sim.nao.motion import read_motion
-    from evomotion.sim.nao.replay import motion_targets
+    from evomotion.sim.nao.replay import MAX_HOLD_S, motion_targets
     from evomotion.sim.rollout import BatchSimulator, fall_step, torso_track
 
+    check_number("fps", fps, lo=0.0, lo_open=True, hi=1000.0)
+    check_number("hold_s", hold_s, lo=0.0, hi=MAX_HOLD_S)
     model = load_scene_model(scene)
     motion = read_motion(path)
     dt = float(model.opt.timestep)
     nstep = int(np.ceil((motion.duration_s + hold_s) / dt))
     first, ctrl = motion_targets(motion, dt, nstep)
-    if scene == "kick":
-        from evomotion.studies.biped_kick.scene import default_ball_xy, initial_scene_state
-
-        state0 = initial_scene_state(model, default_ball_xy(model, pose=first), first)
-    else:
-        state0 = nao.initial_state(model, first)
+    state0 = _initial_state(model, scene, first)
     with BatchSimulator(model, 1) as sim:
-        states = sim.run(state0, ctrl[None])
-    track = torso_track(states)
-    fall = int(fall_step(track, nao.FALL_HEIGHT_M, nao.FALL_TILT_RAD)[0])
+        states = sim.run(state0, ctrl[None])[0]
+    fall = int(fall_step(torso_track(states[None]), nao.FALL_HEIGHT_M, nao.FALL_TILT_RAD)[0])
     every = max(1, int(round(1.0 / (fps * dt))))
-    keep = np.arange(every - 1, nstep, every)
-    qpos = nao.state_qpos_all(model, states[0, keep])
-    bodies = sorted({g["body"] for g in geom_table(model)})
+    steps = np.arange(0, nstep + 1, every)  # physics steps done before each frame
+    qpos = np.concatenate([nao.state_qpos_all(model, state0)[None],
+                           nao.state_qpos_all(model, states[steps[1:] - 1])])
+    table = geom_table(model)
+    geoms = np.array([g["id"] for g in table], dtype=int)
+    bodies = np.array(sorted({g["body"] for g in table}), dtype=int)
+    n = len(steps)
+    pos, mat = np.empty((n, len(geoms), 3)), np.empty((n, len(geoms), 3, 3))
+    bpos, bmat = np.empty((n, len(bodies), 3)), np.empty((n, len(bodies), 3, 3))
     data = mujoco.MjData(model)
-    pos = np.empty((len(keep), len(bodies), 3))
-    mat = np.empty((len(keep), len(bodies), 3, 3))
     for k, q in enumerate(qpos):
         data.qpos[:] = q
         mujoco.mj_kinematics(model, data)
-        pos[k] = data.xpos[bodies]
-        mat[k] = data.xmat[bodies].reshape(-1, 3, 3)
-    rec = {"t_s": (keep + 1) * dt, "bodies": bodies, "pos": pos, "mat": mat,
-           "fell": fall < nstep, "duration_s": nstep * dt}
-    if len(_CACHE) > 16:
-        _CACHE.clear()
-    _CACHE[key] = rec
+        pos[k], mat[k] = data.geom_xpos[geoms], data.geom_xmat[geoms].reshape(-1, 3, 3)
+        bpos[k], bmat[k] = data.xpos[bodies], data.xmat[bodies].reshape(-1, 3, 3)
+    rec = {"t_s": steps * dt, "geoms": geoms, "pos": pos, "mat": mat, "bodies": bodies,
+           "body_pos": bpos, "body_mat": bmat}
+    for a in rec.values():
+        a.setflags(write=False)  # shared through the cache
+    rec.update(scene=scene, frame_dt_s=every * dt, duration_s=nstep * dt,
+               motion_s=float(motion.duration_s), fell=fall < nstep,
+               fall_time_s=float((fall + 1) * dt) if fall < nstep else None)
     return rec
 
 
-def _colour(rgba: list[float]) -> tuple[str, float]:
-    r, g, b, a = rgba
-    return f"#{int(r * 255):02x}{int(g * 255):02x}{int(b * 255):02x}", float(a)
+def record_poses(motion_path: Path | str, scene: str = "nao", fps: float = 25.0,
+                 hold_s: float = 0.5) -> dict[str, Any]:
+    """Replay the motion (and hold its last pose ``hold_s``) and record, at ``fps``:
+    ``t_s[T]`` (from 0), ``geoms[G]`` (the ids of :func:`geom_table`), their world poses
+    ``pos[T, G, 3]`` and ``mat[T, G, 3, 3]``, the bodies holding them ``bodies[B]`` with
+    ``body_pos[T, B, 3]``/``body_mat[T, B, 3, 3]``; ``fell``, ``fall_time_s``, ``duration_s``
+    (motion + hold), ``motion_s``, ``frame_dt_s``. Cached (read only) by file, mtime and
+    arguments (the last few)."""
+    path = Path(motion_path)
+    key = (str(path.resolve()), path.stat().st_mtime_ns, scene, float(fps), float(hold_s))
+    rec = _CACHE.pop(key, None) or _record(path, scene, fps, hold_s)
+    _CACHE[key] = rec  # most recently used last
+    while len(_CACHE) > _CACHE_SIZE:
+        _CACHE.pop(next(iter(_CACHE)))
+    return rec
 
 
 def _add_geom(scene: Any, g: dict[str, Any]) -> None:
-    colour, opacity = _colour(g["rgba"])
-    s = g["size"]
-    with scene.group().move(*g["pos"]).rotate_R(g["mat"]):
-        if g["type"] == "box":
-            scene.box(2 * s[0], 2 * s[1], 2 * s[2]).material(colour, opacity)
-        elif g["type"] == "sphere":
-            scene.sphere(s[0], 16, 12).material(colour, opacity)
-        elif g["type"] == "ellipsoid":
-            scene.sphere(1.0, 16, 12).scale(*s[:3]).material(colour, opacity)
-        else:  # cylinder / capsule: three.js cylinders run along y, MuJoCo's along z
-            scene.cylinder(s[0], s[0], 2 * s[1], 16).rotate(math.pi / 2, 0, 0) \
+    r, gr, b, a = g["rgba"]
+    colour, opacity = f"#{round(r * 255):02x}{round(gr * 255):02x}{round(b * 255):02x}", a
+    s, mat, kind = g["size"], np.array(g["mat"]), g["type"]
+    if kind == "cylinder":  # three.js's axis y onto MuJoCo's z
+        mat = mat @ _Y_TO_Z
+    if kind == "box":
+        obj = scene.box(2 * s[0], 2 * s[1], 2 * s[2])
+    elif kind == "sphere":
+        obj = scene.sphere(s[0], 24, 16)
+    elif kind == "ellipsoid":
+        obj = scene.sphere(1.0, 24, 16).scale(*s[:3])
+    elif kind == "cylinder":
+        obj = scene.cylinder(s[0], s[0], 2 * s[1], 24)
+    elif kind == "mesh":
+        url = "data:model/stl;base64," + base64.b64encode(
+            mesh_stl(g["vertices"], g["faces"])).decode()
+        obj = scene.stl(url)
+    else:  # capsule: a cylinder and two spheres along the group's z
+        with scene.group() as obj:
+            scene.cylinder(s[0], s[0], 2 * s[1], 24).rotate_R(_Y_TO_Z.tolist()) \
                 .material(colour, opacity)
-            if g["type"] == "capsule":
-                for z in (-s[1], s[1]):
-                    scene.sphere(s[0], 16, 8).move(0, 0, z).material(colour, opacity)
+            for z in (-s[1], s[1]):
+                scene.sphere(s[0], 24, 12).move(0, 0, z).material(colour, opacity)
+    if kind != "capsule":
+        obj.material(colour, opacity)
+    obj.move(*g["pos"]).rotate_R(mat.tolist())
 
 
 class NaoPlayer:
-    """A 3D view with play/pause, a scrub slider and the time; built in the current NiceGUI
-    container."""
+    """The motion playing in 3D (looping), with play/pause, a frame slider (``nao-scrub``),
+    the time and whether the robot fell; built in the current NiceGUI container."""
 
     def __init__(self, motion_path: Path | str, scene: str = "nao", height: int = 420,
-                 fps: float = 20.0) -> None:
+                 width: int = 640, fps: float = 25.0) -> None:
         from nicegui import ui
 
-        self.rec = record_poses(motion_path, scene, fps)
-        model = load_scene_model(scene)
-        geoms = geom_table(model)
-        n = len(self.rec["t_s"])
-        with ui.row().classes("items-center"):
-            self.play_b = ui.button(icon="pause", on_click=self.toggle).classes("nao-play")
-            self.slider = ui.slider(min=0, max=n - 1, value=0,
+        self.rec = rec = record_poses(motion_path, scene, fps)
+        geoms = geom_table(load_scene_model(scene))
+        self.nframe = len(rec["t_s"])
+        self.frame, self.playing = 0, True
+        with ui.row().classes("items-center gap-4"):
+            self.play_button = ui.button(icon="pause", on_click=self.toggle) \
+                .props("flat round dense").classes("nao-play")
+            self.slider = ui.slider(min=0, max=self.nframe - 1, value=0,
                                     on_change=lambda e: self.show(int(e.value))) \
-                .classes("w-96 nao-scrub")
+                .classes("w-80 nao-scrub")
             self.label = ui.label().classes("nao-time font-mono")
-            ui.label("fell" if self.rec["fell"] else "stayed up").classes(
-                "text-red-700" if self.rec["fell"] else "text-green-700")
-        with ui.scene(width=720, height=height, grid=(6, 60),
-                      background_color="#f4f6f8").classes("nao-scene") as self.scene:
-            self.scene.move_camera(x=0.55, y=-0.65, z=0.45, look_at_x=0.1, look_at_y=0,
-                                   look_at_z=0.22, duration=0)
+            fell = f"fell at {rec['fall_time_s']:.2f} s" if rec["fell"] else "stayed up"
+            ui.label(fell).classes("text-red-700" if rec["fell"] else "text-green-700")
+        camera = ui.scene.perspective_camera(fov=45, near=0.01, far=100)
+        with ui.scene(width=width, height=height, grid=(6, 60), camera=camera,
+                      background_color="#f4f6f8") as self.scene:
+            self.scene.classes("nao-scene").props("data-testid=nao-scene")
             self.groups = []
-            for b in self.rec["bodies"]:
-                with self.scene.group() as grp:
+            for b in rec["bodies"]:
+                with self.scene.group() as group:
                     for g in geoms:
                         if g["body"] == b:
                             _add_geom(self.scene, g)
-                self.groups.append(grp)
-        self.playing = True
-        self.frame = 0
+                self.groups.append(group)
+        look_x = 0.1 if scene == "kick" else 0.0
+        self.scene.move_camera(x=look_x + 0.75, y=-0.6, z=0.5, look_at_x=look_x, look_at_y=0.0,
+                               look_at_z=0.25, duration=0)
         self.show(0)
-        self.timer = ui.timer(1.0 / fps, self.advance)
+        self.timer = ui.timer(rec["frame_dt_s"], self.advance)
 
     def show(self, k: int) -> None:
-        k = max(0, min(k, len(self.rec["t_s"]) - 1))
-        self.frame = k
-        for grp, p, m in zip(self.groups, self.rec["pos"][k], self.rec["mat"][k], strict=True):
-            grp.move(*p.tolist()).rotate_R(m.tolist())
-        self.label.set_text(f"t = {self.rec['t_s'][k]:5.2f} s")
+        """Put the bodies at frame ``k`` (one batched message to the browser)."""
+        self.frame = k = max(0, min(int(k), self.nframe - 1))
+        batch = getattr(self.scene, "_batch_calls", None)  # NiceGUI's own batching
+        with batch() if batch is not None else contextlib.nullcontext():
+            for group, p, m in zip(self.groups, self.rec["body_pos"][k],
+                                   self.rec["body_mat"][k], strict=True):
+                group.move(*p.tolist()).rotate_R(m.tolist())
+        self.label.set_text(f"t = {self.rec['t_s'][k]:5.2f} s / {self.rec['duration_s']:.2f} s")
 
     def advance(self) -> None:
-        if not self.playing:
-            return
-        k = (self.frame + 1) % len(self.rec["t_s"])
-        self.slider.set_value(k)  # its handler shows the frame
+        """The timer's tick: the next frame while playing (after the last: the first)."""
+        if self.playing:
+            self.slider.set_value((self.frame + 1) % self.nframe)  # its handler shows it
 
     def toggle(self) -> None:
+        """Play or pause."""
         self.playing = not self.playing
-        self.play_b.props(f"icon={'pause' if self.playing else 'play_arrow'}")
+        self.play_button.props(f"icon={'pause' if self.playing else 'play_arrow'}")
