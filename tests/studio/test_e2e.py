@@ -169,3 +169,28 @@ def test_studio_refuses_bad_arguments_in_one_line(tmp_path):
                            capture_output=True, text=True, timeout=60)
         assert r.returncode == 2 and needle in r.stderr and "Traceback" not in r.stderr
         assert len(r.stderr.strip().splitlines()) == 1
+
+
+def test_a_click_on_the_repertoire_map_plays_that_cell(page, studio):
+    from evomotion.run.archive_file import read_archive
+    from evomotion.studio.views import heat_cells
+
+    base, root = studio
+    a = read_archive(root / "humanoid-repertoire" / "archive.npz")
+    nx, ny = int(a.bins[0]), int(a.bins[1])
+    page.goto(f"{base}/run?name=humanoid-repertoire")
+    page.wait_for_selector(".repertoire-map canvas")
+    page.wait_for_selector(".nao-scene")
+    shown = page.locator(".motion-pick").inner_text()
+    cells = [c for c in heat_cells(a) if f"cell-{c[3]:04d}" not in shown
+             and (root / "humanoid-repertoire" / "repertoire" / f"cell-{c[3]:04d}.motion")
+             .exists()]
+    if not cells:
+        pytest.skip("the smoke run filled a single cell")
+    ix, iy, _, cell = cells[0]
+    box = page.locator(".repertoire-map").bounding_box()  # grid margins of views._repertoire
+    w, h = box["width"] - 180, box["height"] - 80
+    page.mouse.click(box["x"] + 90 + (ix + 0.5) * w / nx,
+                     box["y"] + 20 + (ny - 1 - iy + 0.5) * h / ny)
+    _wait(lambda: f"cell-{cell:04d}.motion" in page.locator(".motion-pick").inner_text(), 20,
+          "the clicked cell's motion")
