@@ -43,7 +43,7 @@ from evomotion.studies.quadruped_plan.mission_events import world_events
 from evomotion.studies.quadruped_plan.model import QuadrupedModel
 from evomotion.studies.quadruped_plan.recovery import STEP_BACK, step_back
 from evomotion.studies.quadruped_plan.route import Route
-from evomotion.studies.quadruped_plan.rules import WalkProblem
+from evomotion.studies.quadruped_plan.rules import WalkProblem, is_leg_rule
 from evomotion.studies.quadruped_plan.terrain import Terrain
 from evomotion.studies.quadruped_plan.world import Polygon, World
 
@@ -255,7 +255,7 @@ class Mission:
                               "target": list(target)}]
         real = tuple(child[:11])
         d = self.disturb
-        if 4 <= rule <= 27 and d.foot_noise > 0:  # landing error of the moved foot
+        if is_leg_rule(rule) and d.foot_noise > 0:  # landing error of the moved foot
             leg = (rule - 4) % 4
             err = rng.normal(0.0, d.foot_noise, 2)
             norm = float(np.hypot(*err))

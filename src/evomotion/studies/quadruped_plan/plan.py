@@ -30,7 +30,7 @@ from evomotion.studies.quadruped_plan.model import (
     support_margin,
     world_feet,
 )
-from evomotion.studies.quadruped_plan.rules import ExclusionZone, rule_leg
+from evomotion.studies.quadruped_plan.rules import ExclusionZone, is_leg_rule, rule_leg
 from evomotion.textio import decode_utf8, read_file_bytes
 
 FORMAT = "evomotion.quadruped-plan/1"
@@ -38,7 +38,7 @@ LEG_NAMES = ("front-left", "rear-left", "rear-right", "front-right")
 
 
 def state_margin(prev: tuple[float, ...] | None, state: tuple[float, ...], rule: int) -> float:
-    if 4 <= rule <= 27 and prev is not None:
+    if is_leg_rule(rule) and prev is not None:
         return lift_margin(prev, rule_leg(rule))
     return support_margin(state)
 

@@ -21,6 +21,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.patches import Patch, Polygon  # noqa: E402
 
+from evomotion.studies.quadruped_plan.rules import is_leg_rule  # noqa: E402
+
 LEG_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red")
 LEG_SHORT = ("FL", "RL", "RR", "FR")
 
@@ -71,7 +73,7 @@ def _draw_state(ax: Any, doc: dict[str, Any], st: dict[str, Any], alpha: float =
              head_width=0.25, color="k", alpha=alpha)
     if support:
         rule = st["rule"]
-        idx = [k for k in range(4) if not (4 <= rule <= 27 and k == (rule - 4) % 4)]
+        idx = [k for k in range(4) if not (is_leg_rule(rule) and k == (rule - 4) % 4)]
         poly = feet[idx + [idx[0]]]
         ax.fill(poly[:, 0], poly[:, 1], color="tab:gray", alpha=0.2)
         ax.plot(poly[:, 0], poly[:, 1], color="tab:gray", lw=0.8)
@@ -184,7 +186,7 @@ def plot_plan(doc: dict[str, Any], out_png: str | Path, every: int = 0) -> None:
     ax.text(0.99, 0.01, text, transform=ax.transAxes, ha="right", va="bottom", fontsize=6,
             multialignment="left",
             family="monospace", bbox={"facecolor": "white", "alpha": 0.8, "lw": 0.5})
-    legs = sum(1 for st in states if 4 <= st["rule"] <= 27)
+    legs = sum(1 for st in states if is_leg_rule(st["rule"]))
     moves = len(states) - 1 - len(events)
     what = "executed walk" if doc.get("executed") else "plan"
     ax.set_title(f"{what}: {moves} transitions, {legs} leg moves (rule set "
