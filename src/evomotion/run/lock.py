@@ -67,6 +67,19 @@ class RunLock:
         self.release()
 
 
+def lock_owner(run_dir: Path) -> tuple[int, str] | None:
+    """``(pid, host)`` named in the run folder's ``run.lock`` (written by :class:`RunLock`),
+    or ``None`` when it is absent, empty (a clean release) or not in that form. Whether the
+    lock is still held is not checked (that would take it)."""
+    try:
+        parts = (Path(run_dir) / LOCK_NAME).read_text(errors="replace").split()
+    except OSError:
+        return None
+    if len(parts) < 4 or parts[0] != "pid" or not parts[1].isdigit() or parts[2] != "on":
+        return None
+    return int(parts[1]), parts[3]
+
+
 def _read(fd: int) -> str:
     try:
         return os.pread(fd, 200, 0).decode("utf-8", "replace").strip()

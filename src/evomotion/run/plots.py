@@ -11,7 +11,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from evomotion.errors import InputError  # noqa: E402
-from evomotion.run.stats import read_stats  # noqa: E402
+from evomotion.run.stats import read_stats, step_values  # noqa: E402
 
 
 def plot_fitness(stats_csv: Path, out_stem: Path, title: str = "") -> list[Path]:
@@ -41,7 +41,7 @@ def plot_runs(stats_csvs: list[Path], out_stem: Path, column: str = "best_so_far
     if not runs:
         raise InputError("no run has any recorded generation")
     grid = np.unique(np.concatenate([r["evaluations"] for r in runs]))
-    ys = np.array([_step_interp(grid, r["evaluations"], r[column]) for r in runs])
+    ys = np.array([step_values(grid, r["evaluations"], r[column]) for r in runs])
     fig, ax = plt.subplots(figsize=(6.4, 4.0))
     med = np.nanmedian(ys, axis=0)
     q1, q3 = np.nanpercentile(ys, 25, axis=0), np.nanpercentile(ys, 75, axis=0)
@@ -53,12 +53,6 @@ def plot_runs(stats_csvs: list[Path], out_stem: Path, column: str = "best_so_far
     ax.grid(alpha=0.3)
     ax.legend()
     return _save(fig, out_stem)
-
-
-def _step_interp(grid, x, y):
-    idx = np.searchsorted(x, grid, side="right") - 1
-    out = np.where(idx >= 0, y[np.clip(idx, 0, None)], np.nan)
-    return out
 
 
 def _save(fig, out_stem: Path, tight: bool = True) -> list[Path]:

@@ -98,6 +98,14 @@ def read_stats(path: Path) -> dict[str, np.ndarray]:
     return {k: np.array([_float(r.get(k)) for r in rows]) for k in rows[0] if k is not None}
 
 
+def step_values(grid: np.ndarray, x: np.ndarray, y: np.ndarray, hold: bool = True) -> np.ndarray:
+    """``y`` of the last row with ``x <= grid`` (a step function, NaN before the first row);
+    after the last row its value (``hold``) or NaN."""
+    idx = np.searchsorted(x, grid, side="right") - 1
+    out = np.where(idx >= 0, y[np.clip(idx, 0, None)], np.nan)
+    return out if hold else np.where(grid <= x[-1], out, np.nan)
+
+
 def _float(v: object) -> float:
     try:
         return float(v)  # type: ignore[arg-type]

@@ -22,6 +22,8 @@ from typing import Any
 import numpy as np
 
 from evomotion.errors import InputError
+from evomotion.run.lock import lock_owner as read_lock_owner
+from evomotion.run.stats import step_values
 
 TAIL_BYTES = 16384
 #: how deep below RUNS_DIR run folders are looked for (experiments nest their runs)
@@ -93,14 +95,10 @@ def head_tail(path: Path, n: int = TAIL_BYTES) -> tuple[str, str]:
 
 def lock_owner(run_dir: Path) -> tuple[int | None, bool]:
     """``(pid, alive)`` of the process named in ``run.lock`` (``(None, False)`` if none)."""
-    try:
-        text = (run_dir / "run.lock").read_text(errors="replace").strip()
-    except OSError:
+    owner = read_lock_owner(run_dir)
+    if owner is None:
         return None, False
-    parts = text.split()
-    if len(parts) < 4 or parts[0] != "pid" or not parts[1].isdigit():
-        return None, False
-    pid, host = int(parts[1]), parts[3]
+    pid, host = owner
     if host != socket.gethostname():
         return pid, True  # another machine's run: assume it is going on
     try:
@@ -268,11 +266,7 @@ def compare_runs(run_dirs: list[Path], points: int = 200) -> dict[str, list[floa
     hi = max(c[0][-1] for c in curves)
     lo = min(c[0][0] for c in curves)
     x = np.unique(np.linspace(lo, hi, points).round())
-    Y = np.full((len(curves), x.size), np.nan)
-    for i, (e, b) in enumerate(curves):
-        k = np.searchsorted(e, x, side="right") - 1
-        inside = (k >= 0) & (x <= e[-1])
-        Y[i, inside] = b[k[inside]]
+    Y = np.array([step_values(x, e, b, hold=False) for e, b in curves])
     have = np.isfinite(Y).any(0)
     x, Y = x[have], Y[:, have]
     q25, med, q75 = np.nanpercentile(Y, [25, 50, 75], axis=0)
