@@ -139,6 +139,13 @@ def test_history_records_every_generation_and_survives_resume(tmp_path):
     assert (tmp_path / "cut" / "population.bin").read_bytes() == a
     (tmp_path / "cut" / "population.bin").write_bytes(a[:-5])  # a crash mid-record
     assert len(read_history(tmp_path / "cut" / "population.bin")) == 9
+    from evomotion.errors import FileFormatError
+
+    for header in ([0, 0, 1e20], [0, -1, 3], [0, 2.5, 3], [0, np.nan, 1], [0, 1e10, 1e10]):
+        bad = tmp_path / "bad.bin"
+        np.array(header, "<f8").tofile(bad)
+        with pytest.raises(FileFormatError, match="expected a header"):
+            read_history(bad)
 
 
 def test_heat_map_cells_take_the_best_over_the_hidden_measure():
@@ -154,3 +161,19 @@ def test_heat_map_cells_take_the_best_over_the_hidden_measure():
     assert heat_cells(a) == [[0, 1, -1.0, 6], [1, 0, -2.0, 1]]
     assert heat_cells(a, 0) == [[0, 1, -3.0, 2], [1, 0, -2.0, 1]]
     assert heat_cells(a, 1) == [[0, 1, -1.0, 6]]
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.binary(max_size=400))
+def test_population_bin_reader_never_crashes(tmp_path_factory, raw):
+    from evomotion.errors import FileFormatError
+
+    p = tmp_path_factory.mktemp("h") / "population.bin"
+    p.write_bytes(raw)
+    try:
+        hist = read_history(p)
+    except FileFormatError as e:
+        assert str(e).startswith(str(p)) and "\n" not in str(e)
+        return
+    for g, pop, fit in hist:
+        assert pop.ndim == 2 and fit.shape == (pop.shape[0],) and isinstance(g, int)

@@ -58,7 +58,7 @@ def read_history(path: Path | str) -> list[tuple[int, np.ndarray, np.ndarray]]:
     while i + _HEADER <= raw.size:
         g, n, d = raw[i:i + _HEADER]
         if not (np.isfinite([g, n, d]).all() and n >= 0 and d >= 0 and n == int(n)
-                and d == int(d) and n * (d + 1) <= MAX_VALUES):
+                and d == int(d) and d <= MAX_VALUES and n * (d + 1) <= MAX_VALUES):
             raise FileFormatError(path, None, f"record at byte {8 * i}: expected a header "
                                   f"'generation, n, d' of whole numbers, got {g}, {n}, {d}")
         n, d = int(n), int(d)
