@@ -109,6 +109,7 @@ def check_memory(study: Any, config: Any, problem: Any = None) -> None:
     ``problem`` the built problem or ``None`` (then the config's ``genome_dim()``, else 1
     gene). A problem config may name the fields its ``memory_bytes`` depends on in a class
     attribute ``memory_keys`` (a tuple of field names) for the message."""
+    check_device_memory(config, problem)
     terms = memory_terms(config, problem)
     total = sum(b for b, _ in terms)
     avail = available_bytes()
@@ -117,3 +118,20 @@ def check_memory(study: Any, config: Any, problem: Any = None) -> None:
     _, what = max(terms)
     raise InputError(f"{what} about {format_bytes(total)}, more than the "
                      f"{format_bytes(avail)} available")
+
+
+def check_device_memory(config: Any, problem: Any) -> None:
+    """Raise a one-line :class:`InputError` when a GPU-backend problem's batch (its
+    ``device_memory(pop_size) -> (needed, free, device) | None``) cannot fit on its device."""
+    fn = getattr(problem, "device_memory", None)
+    if not callable(fn):
+        return
+    pop = population_size(config.algorithm, max(genome_dim(config, problem) or 1, 1))
+    found = fn(pop) if pop else None
+    if found is None or found[1] is None or found[0] <= found[1]:
+        return
+    needed, free, device = found
+    raise InputError(f"algorithm.pop_size={pop}, problem.backend="
+                     f"{getattr(config.problem, 'backend', '?')}: one batch needs about "
+                     f"{format_bytes(needed)} on {device}, more than the {format_bytes(free)} "
+                     "free")

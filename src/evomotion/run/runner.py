@@ -14,6 +14,7 @@ experiments of the studies use that for their many short runs.
 from __future__ import annotations
 
 import dataclasses
+import json
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -46,6 +47,8 @@ from evomotion.run.resume import config_record, restore
 from evomotion.run.runlog import RunLog, sigterm_as_interrupt
 from evomotion.run.stats import COLUMNS, MemoryStats, StatsWriter, diversity, population_stats
 from evomotion.run.stopping import limit_reached, stop_reason
+
+PHYSICS_NAME = "physics.json"  # the physics backend of a MuJoCo study and its guarantees
 
 EXIT_INTERRUPTED = 130
 EXIT_NO_FINITE = 5  # the run ended without any finite fitness
@@ -154,6 +157,7 @@ def _run(study: Any, config: Config, out_dir: Path | None, quiet: bool, resume: 
              "stats_offset": stats.offset, "log_offset": log.offset,
              "history_offset": history.offset if history is not None else 0}
         log(f"run {study.name} seed {rc.seed} evaluator {rc.evaluator} -> {out_dir or '-'}")
+    _record_physics(problem, out_dir, resume, log)
     if stale_owner:
         log(f"note: took over the run folder's lock from {stale_owner}, which is no longer "
             "running")
@@ -315,3 +319,30 @@ def _write_best(study: Any, ctx: RunContext, sense: str, seed: int, log) -> None
     rec.update(generation=ctx.generation, evaluations=ctx.evaluations,
                stop_reason=ctx.stop_reason, seed=seed)
     write_json(ctx.out_dir / "best.json", rec)
+
+
+def _record_physics(problem: Any, out_dir: Path | None, resume: bool, log) -> None:
+    """``physics.json``: the problem's physics backend and what it guarantees (MuJoCo
+    studies); a non-CPU backend is logged, and a resume on other physics is noted."""
+    fn = getattr(problem, "physics_record", None)
+    if not callable(fn):
+        return
+    now = fn()
+    if now.get("backend") != "cpu":
+        log(f"physics: backend {now['backend']} on {now.get('device', '?')}, "
+            f"{now.get('precision', '?')}; {now.get('guarantee', '')}")
+    if out_dir is None:
+        return
+    path = out_dir / PHYSICS_NAME
+    if resume and path.is_file():
+        try:
+            before = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            before = None
+        keys = ("backend", "device", "precision", "mujoco", "mujoco_warp", "deterministic")
+        if isinstance(before, dict) and any(before.get(k) != now.get(k) for k in keys):
+            log(f"note: resumed on other physics than the run started on ({PHYSICS_NAME}: "
+                f"{ {k: before.get(k) for k in keys if before.get(k) != now.get(k)} } -> "
+                f"{ {k: now.get(k) for k in keys if before.get(k) != now.get(k)} }); the "
+                "result is not bit-identical to an uninterrupted run")
+    atomic_write_text(path, json.dumps(now, indent=1) + "\n")

@@ -237,7 +237,8 @@ def aggregate_worlds(ev: Evaluation, n: int, k: int, aggregate: str = "mean",
 
 def simulate_worlds(worlds: list[World], initial_state: np.ndarray, controls: np.ndarray,
                     nthread: int = 1, sensors: bool = False, stopped=None,
-                    segment_steps: int = 0) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+                    segment_steps: int = 0,
+                    simulator=None) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
     """Roll out every world from ``initial_state`` (``[nstate]`` or ``[k, nstate]``,
     ``STATE_SPEC``) under ``controls`` (``[nstep, nu]`` or ``[k, nstep, nu]``), delayed and
     pushed per world, in one ``mujoco.rollout`` batch with ``nthread`` threads (0: all cores).
@@ -250,7 +251,10 @@ def simulate_worlds(worlds: list[World], initial_state: np.ndarray, controls: np
     (their remaining rows repeat their last state), as :meth:`~evomotion.sim.rollout.
     BatchSimulator.run_until` does for one model. A trajectory's states depend only on its own
     world, start and controls, so any split of the worlds over batches (evaluators) gives the
-    same states."""
+    same states.
+
+    With a :class:`~evomotion.sim.warp_rollout.WarpSimulator` as ``simulator`` the batch runs
+    on MuJoCo Warp instead (:mod:`evomotion.sim.warp_worlds`); ``nthread`` is then unused."""
     if not worlds:
         raise InputError("simulate_worlds: expected at least one world")
     k, base = len(worlds), worlds[0].model
@@ -259,6 +263,14 @@ def simulate_worlds(worlds: list[World], initial_state: np.ndarray, controls: np
     push, step = _pushes(worlds, nstep)
     nstate = mujoco.mj_stateSize(base, STATE_SPEC)
     models = [w.model for w in worlds]
+    if getattr(simulator, "backend", "cpu") == "warp":
+        from evomotion.sim.warp_worlds import simulate_worlds_warp
+
+        impulse = push * (step >= 0)[:, None]
+        out = simulate_worlds_warp(simulator, models, np.broadcast_to(initial_state, (k, nstate)),
+                                   ctrl, impulse, step, base.body(TORSO).id, stopped,
+                                   segment_steps)
+        return out if sensors else out[0]
     nthread = int(nthread) if nthread and nthread > 0 else (os.cpu_count() or 1)
     nthread = max(1, min(nthread, k))
     pushed = bool((step >= 0).any())

@@ -31,9 +31,10 @@ from evomotion.core.checks import check_fields, check_number
 from evomotion.core.problem import Evaluation, GenomeSpec, MeasureSpec
 from evomotion.errors import InputError
 from evomotion.sim import nao
+from evomotion.sim.backend import device_memory, make_simulator, physics_record, validate_backend
 from evomotion.sim.nao.motion import Motion
 from evomotion.sim.nao.replay import motion_targets
-from evomotion.sim.rollout import BatchSimulator, ServoWork, fall_step, fell, torso_track
+from evomotion.sim.rollout import ServoWork, fall_step, fell, torso_track
 from evomotion.studies.humanoid_repertoire import step
 
 METRICS = ("time_to_fall_s", "fell", "dx_m", "dy_m", "dtheta_deg", "peak_tilt_deg", "work_j")
@@ -52,6 +53,10 @@ class HumanoidRepertoireConfig:
     fall_height_m: float = nao.FALL_HEIGHT_M
     fall_tilt_rad: float = nao.FALL_TILT_RAD
     threads: int = 0  # mujoco.rollout threads; 0 = all cores
+    backend: str = "cpu"  # physics: cpu (mujoco.rollout, float64) | warp (MuJoCo Warp, float32)
+    warp_device: str = ""  # backend warp: "cuda:0", "cpu", ...; "" = the first GPU, else the CPU
+    warp_deterministic: bool = True  # backend warp: bit-identical run to run (opt.deterministic)
+    warp_nconmax: int = 16  # backend warp: contacts per world to start with (grown when short)
     segment_s: float = 0.4  # fallen robots stop being simulated at these boundaries (s)
 
     def for_worker(self) -> HumanoidRepertoireConfig:
@@ -65,6 +70,7 @@ class HumanoidRepertoireConfig:
         check_number("problem.fall_tilt_rad", self.fall_tilt_rad, lo=0.0, hi=math.pi,
                      lo_open=True)
         check_number("problem.threads", self.threads, lo=0, hi=1024, integer=True)
+        validate_backend(self)
         check_number("problem.segment_s", self.segment_s, lo=0.0, lo_open=True)
 
     def genome_dim(self) -> int:
@@ -95,7 +101,7 @@ class HumanoidRepertoireProblem:
         self.genome = GenomeSpec(step.LOWER.copy(), step.UPPER.copy(), names=step.NAMES)
         self.horizon_s = cfg.horizon_s()
         self.nstep = int(math.ceil(self.horizon_s / self.dt))
-        self.sim = BatchSimulator(self.model, cfg.threads)
+        self.sim = make_simulator(self.model, cfg, cfg.threads)
         self.segment_steps = max(1, int(round(cfg.segment_s / self.dt)))
         self.state0 = nao.initial_state(self.model, step.ready_pose())
         self.work = ServoWork(self.model)
@@ -125,6 +131,14 @@ class HumanoidRepertoireProblem:
 
     def _fallen(self, states: np.ndarray) -> np.ndarray:
         return fell(states, self.cfg.fall_height_m, self.cfg.fall_tilt_rad)
+
+    def physics_record(self) -> dict:
+        """The physics backend, device and its reproducibility guarantee (``physics.json``)."""
+        return physics_record(self.sim)
+
+    def device_memory(self, pop_size: int) -> tuple[int, int | None, str] | None:
+        """(needed, free bytes, device) of a population's batch on a GPU backend, else None."""
+        return device_memory(self.sim, pop_size * 1, self.nstep)
 
     def evaluate(self, genomes: np.ndarray) -> Evaluation:
         genomes = np.atleast_2d(np.asarray(genomes, dtype=float))

@@ -51,8 +51,9 @@ from evomotion.core.checks import check_choice, check_fields, check_number
 from evomotion.core.problem import Evaluation, GenomeSpec
 from evomotion.errors import InputError
 from evomotion.sim import nao
+from evomotion.sim.backend import device_memory, make_simulator, physics_record, validate_backend
 from evomotion.sim.nao.scene import scene_xml, sensor_slices
-from evomotion.sim.rollout import BatchSimulator, fall_step, fell, torso_track
+from evomotion.sim.rollout import fall_step, fell, torso_track
 from evomotion.studies.humanoid_step.encoding import ENCODINGS, ServoEncoding
 
 #: Seed 000, Table 1: servo angle limits (rad) used as GA bounds.
@@ -112,6 +113,10 @@ class HumanoidStepConfig:
     world_aggregate: str = "mean"  # mean | quantile: how the K fitness values are combined
     world_quantile: float = 0.25  # with "quantile": this quantile of the K values
     threads: int = 0  # mujoco.rollout threads; 0 = all cores
+    backend: str = "cpu"  # physics: cpu (mujoco.rollout, float64) | warp (MuJoCo Warp, float32)
+    warp_device: str = ""  # backend warp: "cuda:0", "cpu", ...; "" = the first GPU, else the CPU
+    warp_deterministic: bool = True  # backend warp: bit-identical run to run (opt.deterministic)
+    warp_nconmax: int = 16  # backend warp: contacts per world to start with (grown when short)
     segment_s: float = 0.2  # fallen robots stop being simulated at these boundaries (s)
 
     def for_worker(self) -> HumanoidStepConfig:
@@ -170,6 +175,7 @@ def validate(cfg: HumanoidStepConfig) -> None:
         check_number(f"problem.{key}", getattr(cfg, key), lo=0.0)
     check_number("problem.intervals", cfg.intervals, lo=2, hi=MAX_INTERVALS, integer=True)
     check_number("problem.threads", cfg.threads, lo=0, hi=MAX_THREADS, integer=True)
+    validate_backend(cfg)
     check_number("problem.fall_height_m", cfg.fall_height_m, lo=0.0, lo_open=True)
     check_number("problem.fall_tilt_rad", cfg.fall_tilt_rad, lo=0.0, hi=math.pi, lo_open=True)
     check_number("problem.step_min_m", cfg.step_min_m, lo=0.0)
@@ -224,7 +230,7 @@ class HumanoidStepProblem:
         self.sole_columns = [slices[s] for s in ("l_sole", "r_sole")]
         self.contact_columns = [slices["l_floor"].start, slices["r_floor"].start]
         self.segment_steps = max(1, int(round(cfg.segment_s / self.dt)))
-        self.sim = BatchSimulator(self.model, cfg.threads)
+        self.sim = make_simulator(self.model, cfg, cfg.threads)
         self.worlds = None
         if cfg.worlds > 1:  # the nominal world and K - 1 drawn ones
             from evomotion.sim.nao.worlds import Perturbation, World, draw_worlds
@@ -290,6 +296,15 @@ class HumanoidStepProblem:
         }
         return Evaluation(fitness, metrics)
 
+    def physics_record(self) -> dict:
+        """The physics backend, device and its reproducibility guarantee (``physics.json``)."""
+        return physics_record(self.sim)
+
+    def device_memory(self, pop_size: int) -> tuple[int, int | None, str] | None:
+        """(needed, free bytes, device) of a population's batch on a GPU backend, else None."""
+        k = len(self.worlds) if self.worlds else 1
+        return device_memory(self.sim, pop_size * k, self.nstep)
+
     def evaluate(self, genomes: np.ndarray) -> Evaluation:
         genomes = np.atleast_2d(genomes)
         if self.worlds is None:
@@ -306,7 +321,8 @@ class HumanoidStepProblem:
         ctrl = np.repeat(self.controls(genomes), k, axis=0)  # genome-major: i * k + world
         states, sensors = simulate_worlds(self.worlds * n, self.state0, ctrl,
                                           self.sim.nthread, sensors=True, stopped=self._fallen,
-                                          segment_steps=self.segment_steps)
+                                          segment_steps=self.segment_steps,
+                                          simulator=self.sim)
         # fall_rate: the share of worlds fallen
         return aggregate_worlds(self.score(states, sensors), n, k, self.cfg.world_aggregate,
                                 self.cfg.world_quantile)

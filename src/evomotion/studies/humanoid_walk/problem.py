@@ -47,10 +47,11 @@ from evomotion.core.checks import check_choice, check_fields, check_number
 from evomotion.core.problem import Evaluation, GenomeSpec
 from evomotion.errors import InputError
 from evomotion.sim import nao
+from evomotion.sim.backend import device_memory, make_simulator, physics_record, validate_backend
 from evomotion.sim.nao.joint_limits import SPEED_LIMITS
 from evomotion.sim.nao.motion import Motion
 from evomotion.sim.nao.replay import motion_targets
-from evomotion.sim.rollout import BatchSimulator, ServoWork, fall_step, fell, torso_track
+from evomotion.sim.rollout import ServoWork, fall_step, fell, torso_track
 from evomotion.studies.humanoid_walk import gait
 from evomotion.studies.humanoid_walk.walk_motion import assemble_poses, parts_batch, whole_walk
 
@@ -84,6 +85,10 @@ class HumanoidWalkConfig:
     #: replay trials, so that a walk that survives 7 drawn worlds survives most others
     train_push_ns: float = 3.5
     threads: int = 0  # mujoco.rollout threads; 0 = all cores
+    backend: str = "cpu"  # physics: cpu (mujoco.rollout, float64) | warp (MuJoCo Warp, float32)
+    warp_device: str = ""  # backend warp: "cuda:0", "cpu", ...; "" = the first GPU, else the CPU
+    warp_deterministic: bool = True  # backend warp: bit-identical run to run (opt.deterministic)
+    warp_nconmax: int = 16  # backend warp: contacts per world to start with (grown when short)
     segment_s: float = 0.4  # fallen robots stop being simulated at these boundaries (s)
 
     def for_worker(self) -> HumanoidWalkConfig:
@@ -107,6 +112,7 @@ class HumanoidWalkConfig:
         check_number("problem.world_quantile", self.world_quantile, lo=0.0, hi=1.0)
         check_number("problem.train_push_ns", self.train_push_ns, lo=0.0, hi=100.0)
         check_number("problem.threads", self.threads, lo=0, hi=MAX_THREADS, integer=True)
+        validate_backend(self)
         check_number("problem.segment_s", self.segment_s, lo=0.0, lo_open=True)
 
     def with_run_seed(self, seed: int) -> HumanoidWalkConfig:
@@ -142,7 +148,7 @@ class HumanoidWalkProblem:
         self.genome = GenomeSpec(gait.LOWER.copy(), gait.UPPER.copy(), names=gait.NAMES)
         self.horizon_s = cfg.horizon_s()
         self.nstep = int(math.ceil(self.horizon_s / self.dt))
-        self.sim = BatchSimulator(self.model, cfg.threads)
+        self.sim = make_simulator(self.model, cfg, cfg.threads)
         self.segment_steps = max(1, int(round(cfg.segment_s / self.dt)))
         m = self.model
         self.work = ServoWork(m)
@@ -205,6 +211,15 @@ class HumanoidWalkProblem:
     def _fallen(self, states: np.ndarray) -> np.ndarray:
         return fell(states, self.cfg.fall_height_m, self.cfg.fall_tilt_rad)
 
+    def physics_record(self) -> dict:
+        """The physics backend, device and its reproducibility guarantee (``physics.json``)."""
+        return physics_record(self.sim)
+
+    def device_memory(self, pop_size: int) -> tuple[int, int | None, str] | None:
+        """(needed, free bytes, device) of a population's batch on a GPU backend, else None."""
+        k = len(self.worlds) if self.worlds else 1
+        return device_memory(self.sim, pop_size * k, self.nstep)
+
     def evaluate(self, genomes: np.ndarray) -> Evaluation:
         genomes = np.atleast_2d(np.asarray(genomes, dtype=float))
         first, ctrl, walk, ratio = self.controls(genomes)
@@ -222,7 +237,7 @@ class HumanoidWalkProblem:
         c = np.repeat(ctrl, k, axis=0)  # genome-major: i * k + world
         states = simulate_worlds(self.worlds * n, np.repeat(init, k, axis=0), c,
                                  self.sim.nthread, stopped=self._fallen,
-                                 segment_steps=self.segment_steps)
+                                 segment_steps=self.segment_steps, simulator=self.sim)
         lat = np.tile([w.latency_steps for w in self.worlds], n)
         ev = self.score(states, delayed_controls(c, lat), np.repeat(walk, k),
                         np.repeat(ratio, k))
