@@ -31,6 +31,7 @@ def validate_backend(cfg: Any, section: str = "problem") -> None:
     """One-line :class:`InputError` for a bad ``backend``/``warp_*`` value of ``cfg``."""
     check_choice(f"{section}.backend", cfg.backend, BACKENDS)
     check_number(f"{section}.warp_nconmax", cfg.warp_nconmax, lo=1, hi=4096, integer=True)
+    check_number(f"{section}.batch_rollouts", cfg.batch_rollouts, lo=1, hi=2**20, integer=True)
     if not isinstance(cfg.warp_device, str):
         raise InputError(f"{section}.warp_device: expected a device name such as 'cuda:0' or "
                          f"'cpu' ('' = the first GPU, else the CPU), got {cfg.warp_device!r}")
@@ -66,3 +67,17 @@ def device_memory(sim: Any, batch: int, nstep: int) -> tuple[int, int | None, st
         return None
     est = sim.memory(batch, nstep)
     return est.needed, est.free, est.device
+
+
+def in_batches(evaluate, genomes, per_batch: int):
+    """``evaluate(genomes)`` on consecutive slices of at most ``per_batch`` genomes, joined
+    (:meth:`~evomotion.core.problem.Evaluation.concat`): a population larger than
+    ``problem.batch_rollouts`` is simulated batch by batch, so the recorded trajectories of one
+    batch are what must fit in memory. A rollout does not depend on its batch, so the result
+    is the same."""
+    from evomotion.core.problem import Evaluation
+
+    n, size = len(genomes), max(int(per_batch), 1)
+    if n <= size:
+        return evaluate(genomes)
+    return Evaluation.concat([evaluate(genomes[i:i + size]) for i in range(0, n, size)])

@@ -31,7 +31,13 @@ from evomotion.core.checks import check_fields, check_number
 from evomotion.core.problem import Evaluation, GenomeSpec, MeasureSpec
 from evomotion.errors import InputError
 from evomotion.sim import nao
-from evomotion.sim.backend import device_memory, make_simulator, physics_record, validate_backend
+from evomotion.sim.backend import (
+    device_memory,
+    in_batches,
+    make_simulator,
+    physics_record,
+    validate_backend,
+)
 from evomotion.sim.nao.motion import Motion
 from evomotion.sim.nao.replay import motion_targets
 from evomotion.sim.rollout import ServoWork, fall_step, fell, torso_track
@@ -57,6 +63,7 @@ class HumanoidRepertoireConfig:
     warp_device: str = ""  # backend warp: "cuda:0", "cpu", ...; "" = the first GPU, else the CPU
     warp_deterministic: bool = True  # backend warp: bit-identical run to run (opt.deterministic)
     warp_nconmax: int = 16  # backend warp: contacts per world to start with (grown when short)
+    batch_rollouts: int = 2048  # rollouts simulated (and recorded in memory) at once
     segment_s: float = 0.4  # fallen robots stop being simulated at these boundaries (s)
 
     def for_worker(self) -> HumanoidRepertoireConfig:
@@ -79,11 +86,13 @@ class HumanoidRepertoireConfig:
     def horizon_s(self) -> float:
         return step.MAX_DURATION_S + self.hold_s
 
-    memory_keys = ("hold_s",)
+    memory_keys = ("hold_s", "batch_rollouts")
 
     def memory_bytes(self, pop_size: int) -> int:
-        """Recorded states of one batch (about 90 doubles per physics step), twice."""
-        return 2 * 8 * pop_size * math.ceil(self.horizon_s() / NAO_TIMESTEP_S) * 90
+        """Recorded states of one batch of at most ``batch_rollouts`` rollouts (about 90
+        doubles per physics step), twice."""
+        rollouts = min(pop_size, self.batch_rollouts)
+        return 2 * 8 * rollouts * math.ceil(self.horizon_s() / NAO_TIMESTEP_S) * 90
 
 
 class HumanoidRepertoireProblem:
@@ -138,9 +147,16 @@ class HumanoidRepertoireProblem:
 
     def device_memory(self, pop_size: int) -> tuple[int, int | None, str] | None:
         """(needed, free bytes, device) of a population's batch on a GPU backend, else None."""
-        return device_memory(self.sim, pop_size * 1, self.nstep)
+        return device_memory(self.sim, min(pop_size, self.cfg.batch_rollouts),
+                             self.segment_steps)
 
     def evaluate(self, genomes: np.ndarray) -> Evaluation:
+        """Fitness and metrics of a batch, ``problem.batch_rollouts`` rollouts at a time."""
+        genomes = np.atleast_2d(np.asarray(genomes, dtype=float))
+        per = max(self.cfg.batch_rollouts // 1, 1)
+        return in_batches(self._evaluate_batch, genomes, per)
+
+    def _evaluate_batch(self, genomes: np.ndarray) -> Evaluation:
         genomes = np.atleast_2d(np.asarray(genomes, dtype=float))
         ctrl, end = self.controls(genomes)
         states, _ = self.sim.run_until(self.state0, ctrl, self._fallen, self.segment_steps)

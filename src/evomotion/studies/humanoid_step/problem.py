@@ -51,7 +51,13 @@ from evomotion.core.checks import check_choice, check_fields, check_number
 from evomotion.core.problem import Evaluation, GenomeSpec
 from evomotion.errors import InputError
 from evomotion.sim import nao
-from evomotion.sim.backend import device_memory, make_simulator, physics_record, validate_backend
+from evomotion.sim.backend import (
+    device_memory,
+    in_batches,
+    make_simulator,
+    physics_record,
+    validate_backend,
+)
 from evomotion.sim.nao.scene import scene_xml, sensor_slices
 from evomotion.sim.rollout import fall_step, fell, torso_track
 from evomotion.studies.humanoid_step.encoding import ENCODINGS, ServoEncoding
@@ -117,6 +123,7 @@ class HumanoidStepConfig:
     warp_device: str = ""  # backend warp: "cuda:0", "cpu", ...; "" = the first GPU, else the CPU
     warp_deterministic: bool = True  # backend warp: bit-identical run to run (opt.deterministic)
     warp_nconmax: int = 16  # backend warp: contacts per world to start with (grown when short)
+    batch_rollouts: int = 2048  # rollouts simulated (and recorded in memory) at once
     segment_s: float = 0.2  # fallen robots stop being simulated at these boundaries (s)
 
     def for_worker(self) -> HumanoidStepConfig:
@@ -138,13 +145,15 @@ class HumanoidStepConfig:
         n = len(nao.LEG_SERVOS)
         return 3 * n + 1 if self.encoding == "harmonic" else n * (self.intervals - 1)
 
-    memory_keys = ("motion_s", "hold_s", "worlds")  # what memory_bytes depends on (for its message)
+    #: what memory_bytes depends on (for its message)
+    memory_keys = ("motion_s", "hold_s", "worlds", "batch_rollouts")
 
     def memory_bytes(self, pop_size: int) -> int:
         """Bytes of one batch's rollout: recorded states, sensors and controls (doubles) of
         every physics step of the motion and the hold, twice (analysis temporaries)."""
         steps = math.ceil((self.motion_s + self.hold_s) / NAO_TIMESTEP_S)
-        return 2 * 8 * pop_size * self.worlds * steps * ROLLOUT_DOUBLES_PER_STEP
+        rollouts = min(pop_size * self.worlds, self.batch_rollouts)
+        return 2 * 8 * rollouts * steps * ROLLOUT_DOUBLES_PER_STEP
 
 
 def servo_bounds(model, scale: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
@@ -303,9 +312,16 @@ class HumanoidStepProblem:
     def device_memory(self, pop_size: int) -> tuple[int, int | None, str] | None:
         """(needed, free bytes, device) of a population's batch on a GPU backend, else None."""
         k = len(self.worlds) if self.worlds else 1
-        return device_memory(self.sim, pop_size * k, self.nstep)
+        return device_memory(self.sim, min(pop_size * k, self.cfg.batch_rollouts),
+                             self.segment_steps)
 
     def evaluate(self, genomes: np.ndarray) -> Evaluation:
+        """Fitness and metrics of a batch, ``problem.batch_rollouts`` rollouts at a time."""
+        genomes = np.atleast_2d(np.asarray(genomes, dtype=float))
+        per = max(self.cfg.batch_rollouts // (len(self.worlds) if self.worlds else 1), 1)
+        return in_batches(self._evaluate_batch, genomes, per)
+
+    def _evaluate_batch(self, genomes: np.ndarray) -> Evaluation:
         genomes = np.atleast_2d(genomes)
         if self.worlds is None:
             return self.score(*self.simulate(genomes))

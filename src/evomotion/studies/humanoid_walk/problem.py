@@ -47,7 +47,13 @@ from evomotion.core.checks import check_choice, check_fields, check_number
 from evomotion.core.problem import Evaluation, GenomeSpec
 from evomotion.errors import InputError
 from evomotion.sim import nao
-from evomotion.sim.backend import device_memory, make_simulator, physics_record, validate_backend
+from evomotion.sim.backend import (
+    device_memory,
+    in_batches,
+    make_simulator,
+    physics_record,
+    validate_backend,
+)
 from evomotion.sim.nao.joint_limits import SPEED_LIMITS
 from evomotion.sim.nao.motion import Motion
 from evomotion.sim.nao.replay import motion_targets
@@ -89,6 +95,7 @@ class HumanoidWalkConfig:
     warp_device: str = ""  # backend warp: "cuda:0", "cpu", ...; "" = the first GPU, else the CPU
     warp_deterministic: bool = True  # backend warp: bit-identical run to run (opt.deterministic)
     warp_nconmax: int = 16  # backend warp: contacts per world to start with (grown when short)
+    batch_rollouts: int = 2048  # rollouts simulated (and recorded in memory) at once
     segment_s: float = 0.4  # fallen robots stop being simulated at these boundaries (s)
 
     def for_worker(self) -> HumanoidWalkConfig:
@@ -126,12 +133,13 @@ class HumanoidWalkConfig:
         s = gait.schedule(gait.UPPER[gait.INDEX["period_s"]], self.walk_s, self.hold_s)
         return s.total_ms / 1000.0
 
-    memory_keys = ("walk_s", "hold_s", "worlds")
+    memory_keys = ("walk_s", "hold_s", "worlds", "batch_rollouts")
 
     def memory_bytes(self, pop_size: int) -> int:
-        """Recorded states of one batch (about 90 doubles per physics step), twice."""
+        """Recorded states of one batch of at most ``batch_rollouts`` rollouts (about 90
+        doubles per physics step), twice."""
         steps = math.ceil(self.horizon_s() / NAO_TIMESTEP_S)
-        return 2 * 8 * pop_size * self.worlds * steps * 90
+        return 2 * 8 * min(pop_size * self.worlds, self.batch_rollouts) * steps * 90
 
 
 class HumanoidWalkProblem:
@@ -218,9 +226,16 @@ class HumanoidWalkProblem:
     def device_memory(self, pop_size: int) -> tuple[int, int | None, str] | None:
         """(needed, free bytes, device) of a population's batch on a GPU backend, else None."""
         k = len(self.worlds) if self.worlds else 1
-        return device_memory(self.sim, pop_size * k, self.nstep)
+        return device_memory(self.sim, min(pop_size * k, self.cfg.batch_rollouts),
+                             self.segment_steps)
 
     def evaluate(self, genomes: np.ndarray) -> Evaluation:
+        """Fitness and metrics of a batch, ``problem.batch_rollouts`` rollouts at a time."""
+        genomes = np.atleast_2d(np.asarray(genomes, dtype=float))
+        per = max(self.cfg.batch_rollouts // (len(self.worlds) if self.worlds else 1), 1)
+        return in_batches(self._evaluate_batch, genomes, per)
+
+    def _evaluate_batch(self, genomes: np.ndarray) -> Evaluation:
         genomes = np.atleast_2d(np.asarray(genomes, dtype=float))
         first, ctrl, walk, ratio = self.controls(genomes)
         init = self._initial_states(first)
