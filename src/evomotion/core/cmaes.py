@@ -206,6 +206,11 @@ class CMAES(Optimizer):
         self.fixed = genome.span <= 0
         self.lam0 = initial_lambda(self.cfg, self.n)
 
+    def expected_population(self) -> int | None:
+        """Rows of the population: lambda (the default ``4 + floor(3 ln n)`` when
+        ``pop_size`` is 0), or ``None`` with restarts, which change lambda."""
+        return self.lam0 if self.cfg.restarts == "none" else None
+
     def params(self, lam: int) -> StrategyParams:
         return strategy_params(self.n, lam)
 
