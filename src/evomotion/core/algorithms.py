@@ -11,14 +11,19 @@ also take ``measures=``, the problem's :class:`~evomotion.core.problem.MeasureSp
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
+from typing import Any
 
 from evomotion.core.cellular_ga import CGAConfig, make_cga
 from evomotion.core.cma_me import CMAMEConfig, make_cma_me
 from evomotion.core.cmaes import CMAESConfig, make_cmaes
 from evomotion.core.ga import GAConfig, make_ga
 from evomotion.core.map_elites import MAPElitesConfig, make_map_elites
-from evomotion.core.optimizer import Optimizer
+from evomotion.core.optimizer import MutateFn, Optimizer
+from evomotion.core.problem import GenomeSpec, MeasureSpec
+from evomotion.core.registry import lookup
+from evomotion.errors import InputError
 
 ALGORITHMS: dict[str, tuple[type, Callable[..., Optimizer]]] = {
     "ga": (GAConfig, make_ga),
@@ -27,3 +32,31 @@ ALGORITHMS: dict[str, tuple[type, Callable[..., Optimizer]]] = {
     "map_elites": (MAPElitesConfig, make_map_elites),
     "cma_me": (CMAMEConfig, make_cma_me),
 }
+
+
+def make_optimizer(name: str, genome: GenomeSpec, config: Any = None, *,
+                   mutate: MutateFn | None = None, measures: MeasureSpec | None = None,
+                   **settings: Any) -> Optimizer:
+    """The registered optimizer ``name`` over ``genome`` with ``config`` (its config
+    dataclass) or, without one, its config built from ``settings``, e.g.
+    ``make_optimizer("cmaes", genome, sigma0=0.3, pop_size=16)``; for use with ``ask``/``tell``
+    and no run folder. A quality-diversity optimizer (``map_elites``, ``cma_me``) needs
+    ``measures`` and its ``tell`` takes ``measures=``. An unknown name or setting is an
+    :class:`~evomotion.errors.InputError`."""
+    cls, factory = lookup(ALGORITHMS, "algorithm", name)
+    if config is None:
+        known = {f.name for f in dataclasses.fields(cls)}
+        unknown = sorted(set(settings) - known)
+        if unknown:
+            raise InputError(f"{name}: unknown setting {unknown[0]!r}; valid: "
+                             f"{', '.join(sorted(known))}")
+        config = cls(**settings)
+    kwargs: dict[str, Any] = {}
+    if mutate is not None:
+        kwargs["mutate"] = mutate
+    if getattr(config, "needs_measures", False):
+        if measures is None:
+            raise InputError(f"{name}: a quality-diversity optimizer needs measures= (a "
+                             "MeasureSpec: names, lower, upper, bins)")
+        kwargs["measures"] = measures
+    return factory(genome, config, **kwargs)

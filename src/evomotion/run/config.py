@@ -266,14 +266,18 @@ def _drop_other_operator_params(study: Any, defaults: dict, user_alg: dict,
 
 def resolve_config(study: Any, file: Path | None = None,
                    overrides: list[str] | tuple[str, ...] = (),
-                   preset: str | None = None) -> Config:
+                   preset: str | None = None,
+                   values: dict[str, Any] | None = None) -> Config:
     """Resolve the full config of ``study`` (a :class:`~evomotion.studies.base.Study`):
-    dataclass defaults < study defaults < ``preset`` < TOML ``file`` < ``overrides``."""
+    dataclass defaults < study defaults < ``preset`` < TOML ``file`` < ``values`` (sections
+    as a dict, the Python API's ``config``) < ``overrides``."""
     user: dict[str, Any] = {}
     if file is not None:
         user = load_toml(file)
         user.pop("study", None)
         user.pop("preset", None)
+    if values:
+        user = _merge(user, values)
     for item in overrides:
         user = apply_override(user, item)
     defaults = {k: dict(v) for k, v in study.defaults.items()}

@@ -24,10 +24,13 @@ STUDIES: dict[str, str] = {
 
 
 def get_study(name: str) -> Study:
+    """The registered study ``name`` (its module is imported now); an unknown name is an
+    :class:`~evomotion.errors.InputError` listing the available ones."""
     target = lookup(STUDIES, "study", name)
     module, attr = target.split(":")
     return getattr(importlib.import_module(module), attr)
 
 
 def all_studies() -> list[Study]:
+    """Every registered study, in :data:`STUDIES` order."""
     return [get_study(n) for n in STUDIES]

@@ -1,0 +1,175 @@
+"""The Python API of the run loop: :func:`run` a study or your own problem, :func:`load_run`.
+
+``evomotion.run`` is ``evomotion run`` as a function: the same run folder (config.toml,
+log.txt, stats.csv, best.json, checkpoints, plots), the same stop rules, evaluators and resume,
+for a registered study (by name or :class:`~evomotion.studies.base.Study`) or for any object
+that follows the :class:`~evomotion.core.problem.Problem` protocol (``genome``, ``sense``,
+``metric_names``, ``evaluate``). ``config`` is a dict of sections (``{"algorithm": {...},
+"run": {...}, "problem": {...}}``) checked like a TOML config file: an unknown key is a
+one-line :class:`~evomotion.errors.InputError` naming it.
+"""
+
+from __future__ import annotations
+
+import json
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from evomotion.core.problem import Problem
+from evomotion.errors import InputError
+from evomotion.run.runner import RunResult
+from evomotion.studies.base import Study
+
+
+@dataclass(frozen=True)
+class NoProblemConfig:
+    """The ``[problem]`` section of a problem given as an object: it has no keys."""
+
+
+class _GivenProblem:
+    """``make_problem`` of a problem given as an object: the object itself (picklable when the
+    problem is, so process, Ray and Dask workers receive a copy)."""
+
+    def __init__(self, problem: Problem) -> None:
+        self.problem = problem
+
+    def __call__(self, _cfg: Any) -> Problem:
+        return self.problem
+
+
+def problem_study(problem: Problem, name: str | None = None) -> Study:
+    """A :class:`~evomotion.studies.base.Study` around a problem object (no presets, no
+    hooks; every registered optimizer; ``name`` defaults to the problem's class name)."""
+    for attr in ("genome", "sense", "evaluate"):
+        if not hasattr(problem, attr):
+            raise InputError(f"evomotion.run: the problem has no {attr!r}; expected an object "
+                             "with genome, sense, metric_names and evaluate(genomes) (see "
+                             "evomotion.Problem)")
+    label = name or type(problem).__name__
+    return Study(name=label, description=f"{label} (a problem given as a Python object)",
+                 problem_config=NoProblemConfig, make_problem=_GivenProblem(problem))
+
+
+def _study_of(problem_or_study: Any) -> Study:
+    if isinstance(problem_or_study, Study):
+        return problem_or_study
+    if isinstance(problem_or_study, str):
+        from evomotion.studies import get_study
+
+        return get_study(problem_or_study)
+    return problem_study(problem_or_study)
+
+
+def run(problem_or_study: Any, config: dict[str, Any] | None = None,
+        out_dir: str | Path | None = None, *, preset: str | None = None,
+        resume: bool = False, quiet: bool = True) -> RunResult:
+    """Run ``problem_or_study`` (a study name, a :class:`Study` or a problem object) with
+    ``config`` (sections ``algorithm``, ``run``, ``problem``; the study's defaults fill the
+    rest) through the run loop. With ``out_dir`` the run folder is written there (an empty or
+    new folder); ``resume=True`` continues the interrupted run in ``out_dir`` with its saved
+    config (``config`` may then raise limits such as ``run.generations``). ``quiet=False``
+    shows the progress bar. Returns the :class:`~evomotion.run.runner.RunResult` (best
+    genome, fitness, metrics, stop reason, generation, exit code)."""
+    from evomotion.run.config import resolve_config
+    from evomotion.run.runner import run_study
+
+    study = _study_of(problem_or_study)
+    if config is not None and not isinstance(config, dict):
+        raise InputError(f"evomotion.run: config must be a dict of sections, got "
+                         f"{type(config).__name__}")
+    values = dict(config or {})
+    if resume:
+        if out_dir is None:
+            raise InputError("evomotion.run: resume=True needs the out_dir of the run")
+        saved = Path(out_dir) / "config.toml"
+        if not saved.is_file():
+            raise InputError(f"{saved}: no run to resume (config.toml missing)")
+        values = _merge(_read_toml(saved), values)
+        preset = values.pop("preset", preset)
+    values.pop("study", None)
+    cfg = resolve_config(study, None, (), preset=preset, values=values)
+    return run_study(study, cfg, Path(out_dir) if out_dir is not None else None, quiet=quiet,
+                     resume=resume)
+
+
+def _merge(base: dict, extra: dict) -> dict:
+    out = {k: dict(v) if isinstance(v, dict) else v for k, v in base.items()}
+    for k, v in extra.items():
+        out[k] = {**out.get(k, {}), **v} if isinstance(v, dict) and isinstance(
+            out.get(k), dict) else v
+    return out
+
+
+def _read_toml(path: Path) -> dict[str, Any]:
+    try:
+        return tomllib.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as e:
+        raise InputError(f"{path}: not a readable TOML file ({e})") from None
+
+
+@dataclass(frozen=True)
+class Run:
+    """A run folder as data: ``config`` (the sections of config.toml), ``stats`` (column ->
+    array of stats.csv), ``best`` (best.json, ``None`` before the first checkpoint),
+    ``artifacts`` (file name -> path of everything else the run wrote: best.motion, plots,
+    videos, ...), ``physics`` (physics.json of the MuJoCo studies) and the ``log`` lines."""
+
+    path: Path
+    study: str
+    config: dict[str, Any]
+    stats: dict[str, np.ndarray]
+    best: dict[str, Any] | None
+    artifacts: dict[str, Path] = field(default_factory=dict)
+    physics: dict[str, Any] | None = None
+    log: tuple[str, ...] = ()
+
+    @property
+    def best_fitness(self) -> float | None:
+        return None if self.best is None else float(self.best["fitness"])
+
+    @property
+    def best_genome(self) -> np.ndarray | None:
+        return None if self.best is None else np.asarray(self.best["genome"], dtype=float)
+
+
+_ENGINE_FILES = {"config.toml", "stats.csv", "best.json", "physics.json", "log.txt", "run.lock"}
+
+
+def load_run(path: str | Path) -> Run:
+    """The run folder at ``path`` (finished, interrupted or running) as a :class:`Run`; a
+    folder without a run is a one-line :class:`~evomotion.errors.InputError`."""
+    from evomotion.run.stats import read_stats
+
+    root = Path(path)
+    cfg_path = root / "config.toml"
+    if not cfg_path.is_file():
+        raise InputError(f"{root}: not a run folder (no config.toml)")
+    config = _read_toml(cfg_path)
+    stats_path = root / "stats.csv"
+    stats = read_stats(stats_path) if stats_path.is_file() else {}
+    best = _read_json(root / "best.json")
+    physics = _read_json(root / "physics.json")
+    log_path = root / "log.txt"
+    log = tuple(log_path.read_text(encoding="utf-8", errors="replace").splitlines()) \
+        if log_path.is_file() else ()
+    artifacts = {str(p.relative_to(root)): p for p in sorted(root.rglob("*"))
+                 if p.is_file() and p.name not in _ENGINE_FILES
+                 and "checkpoints" not in p.relative_to(root).parts
+                 and not p.name.startswith(".")}
+    return Run(root, str(config.get("study", "")), config, stats, best, artifacts, physics,
+               log)
+
+
+def _read_json(path: Path) -> dict[str, Any] | None:
+    if not path.is_file():
+        return None
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError) as e:
+        raise InputError(f"{path}: not readable JSON ({e})") from None
+    return data if isinstance(data, dict) else None
+
