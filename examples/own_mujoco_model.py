@@ -1,9 +1,10 @@
 """Your own MuJoCo model: evolve an open-loop gait of a two-joint crawler with the GA.
 
 The model is an MJCF string: a planar box body (slides along x and z, pitches at most 30
-degrees) with a front and a back flipper on hinges, driven by position servos. A genome is (amplitude front, amplitude back, phase of the back flipper,
-frequency); the whole population is rolled out at once with ``mujoco.rollout`` and scored by
-how far the body moved along +x in 4 s.
+degrees) with a front and a back flipper on hinges, driven by position servos. A genome is
+(amplitude front, amplitude back, phase of the back flipper, frequency); the whole population
+is rolled out at once with ``mujoco.rollout`` and scored by how far the body moved along +x
+in 4 s.
 
     python examples/own_mujoco_model.py [OUT_DIR]
 """

@@ -50,6 +50,8 @@ def run_cmd(
         help="Named setting, e.g. 'seed' (the paper's literal one); default: best known")] = None,
     overwrite: Annotated[bool, typer.Option(
         "--overwrite", help="Empty --out first if it already holds a run")] = False,
+    robot: Annotated[str | None, typer.Option(
+        help="Another robot: a bundled spec (dm-humanoid, op3) or a spec .toml")] = None,
 ) -> None:
     """Run STUDY and write a run folder (config, stats, checkpoints, plots, artifacts)."""
     from evomotion.run.config import resolve_config
@@ -58,6 +60,12 @@ def run_cmd(
 
     s = get_study(study)
     overrides = list(sets or [])
+    if robot is not None:
+        import dataclasses
+
+        if "robot" not in {f.name for f in dataclasses.fields(s.problem_config)}:
+            raise InputError(f"--robot: study {s.name!r} runs only its own robot")
+        overrides.insert(0, f"problem.robot={robot!r}")
     for key, val in (("evaluator", evaluator), ("workers", workers), ("address", address)):
         if val is not None:
             overrides.append(f"run.{key}={val!r}" if isinstance(val, str) else f"run.{key}={val}")

@@ -41,9 +41,11 @@ def render_video(qpos: np.ndarray, dt: float, out_path: str | Path, fps: int = 2
     ``"kick"`` (robot and ball both in view: the camera looks at their midpoint and backs off
     as the ball rolls away; needs a body named ``ball``) or ``"overview"`` (the torso from
     higher up and farther away, for a small robot walking in the plane, such as the
-    quadruped of :mod:`evomotion.sim.quadruped`, about 0.6 m across)."""
+    quadruped of :mod:`evomotion.sim.quadruped`, about 0.6 m across) or
+    ``"follow=BODY,DISTANCE_M,HEIGHT_M"`` (like ``"follow"`` for another robot: the camera
+    follows ``BODY`` from ``DISTANCE_M`` away, looking at ``HEIGHT_M`` above the floor)."""
     out_path = Path(out_path)
-    if camera not in CAMERAS:
+    if camera not in CAMERAS and not camera.startswith("follow="):
         raise ValueError(f"unknown camera {camera!r}; available: {', '.join(CAMERAS)}")
     buf = io.BytesIO()
     stride = max(1, int(round(1.0 / (fps * dt))))
@@ -106,7 +108,7 @@ def _render_frames(model_path: str, frames_q: np.ndarray, width: int, height: in
         for q in frames_q:
             data.qpos[:] = q
             mujoco.mj_kinematics(model, data)
-            torso = data.body("torso").xpos
+            torso = None if camera.startswith("follow=") else data.body("torso").xpos
             if camera == "kick":
                 ball = data.body("ball").xpos
                 mid = 0.5 * (torso[:2] + ball[:2])
@@ -116,6 +118,11 @@ def _render_frames(model_path: str, frames_q: np.ndarray, width: int, height: in
             elif camera == "overview":
                 cam.lookat[:] = [torso[0], torso[1], 0.05]
                 cam.distance, cam.azimuth, cam.elevation = 1.6, -60.0, -45.0
+            elif camera.startswith("follow="):
+                body, dist, height = camera.split("=", 1)[1].split(",")
+                cam.lookat[:] = data.body(body).xpos
+                cam.lookat[2] = float(height)
+                cam.distance = float(dist)
             else:
                 cam.lookat[:] = torso
                 cam.lookat[2] = 0.2

@@ -18,10 +18,12 @@ POSE_MS = 40  # Webots motions (and the seed's Motion.save) sample a pose every 
 
 
 def genome_motion(problem: HumanoidStepProblem, genome: np.ndarray) -> Motion:
-    """The whole robot (22 joints) every 40 ms over the step time, as a Webots motion."""
+    """The whole robot (the NAO's 22 joints, or another robot's actuated joints) every 40 ms
+    over the step time, as a Webots motion."""
     times_ms = np.arange(0, int(round(problem.cfg.motion_s * 1000)) + 1, POSE_MS)
     ctrl = problem.controls(np.atleast_2d(genome), times_ms / 1000.0)[0]
-    return Motion(nao.JOINTS, times_ms, ctrl)
+    joints = nao.JOINTS if problem.robot is None else list(problem.robot.joints)
+    return Motion(joints, times_ms, ctrl)
 
 
 def write_best_motion(ctx: RunContext) -> Path | None:
@@ -60,6 +62,8 @@ def finalize(ctx: RunContext) -> None:
     path = write_best_motion(ctx)
     if path is None:
         return
+    if ctx.problem.robot is not None:
+        return finalize_robot(ctx)
     write_exports(ctx)
     video: Path | None = ctx.out_dir / "best.mp4"
     summary, skipped = replay_motion(read_motion(path), video, ctx.problem.cfg.hold_s)
@@ -69,5 +73,38 @@ def finalize(ctx: RunContext) -> None:
     atomic_write_text(ctx.out_dir / "best_replay.json", json.dumps(summary, indent=2) + "\n")
     dx, dy = summary["displacement_m"]
     ctx.log(f"best.motion replayed: dx={dx:+.3f} m dy={dy:+.3f} m, "
+            f"{'fell' if summary['fell'] else 'stayed up'}"
+            + (f"; video {video.name}" if video else ""))
+
+
+def finalize_robot(ctx: RunContext) -> None:
+    """Another robot than the NAO: the best genome simulated as evaluated (its own model),
+    ``best_replay.json`` and ``best.mp4`` (no NAO exports)."""
+    from evomotion.sim.render import RenderUnavailableError, render_video
+    from evomotion.sim.rollout import torso_track
+
+    problem, robot = ctx.problem, ctx.problem.robot
+    states, sensors = problem.simulate(np.atleast_2d(ctx.best_genome))
+    ev = problem.score(states, sensors)
+    track = torso_track(states)
+    summary = {"robot": robot.name, "displacement_m": [float(ev.metrics["forward_m"][0]),
+                                                       float(ev.metrics["lateral_m"][0])],
+               "heading_change_rad": float(ev.metrics["heading_change_rad"][0]),
+               "fell": bool(ev.metrics["fell"][0]),
+               "time_to_fall_s": float(ev.metrics["time_to_fall_s"][0]),
+               "torso_height_m": [float(track.xyz[0, 0, 2]), float(track.xyz[0, -1, 2])]}
+    atomic_write_text(ctx.out_dir / "best_replay.json", json.dumps(summary, indent=2) + "\n")
+    height = float(track.xyz[0, 0, 2])
+    video: Path | None = ctx.out_dir / "best.mp4"
+    try:
+        render_video(states[0, :, 1:1 + robot.model.nq], problem.dt, video,
+                     model_xml=robot.xml,
+                     camera=f"follow={robot.spec.torso},{max(1.1, 2.6 * height):.2f},"
+                            f"{0.6 * height:.2f}")
+    except (RenderUnavailableError, RuntimeError) as e:
+        ctx.log(f"best.mp4 skipped: {e}")
+        video = None
+    dx, dy = summary["displacement_m"]
+    ctx.log(f"best step on {robot.name}: dx={dx:+.3f} m dy={dy:+.3f} m, "
             f"{'fell' if summary['fell'] else 'stayed up'}"
             + (f"; video {video.name}" if video else ""))

@@ -125,6 +125,10 @@ class HumanoidStepConfig:
     warp_nconmax: int = 16  # backend warp: contacts per world to start with (grown when short)
     batch_rollouts: int = 2048  # rollouts simulated (and recorded in memory) at once
     segment_s: float = 0.2  # fallen robots stop being simulated at these boundaries (s)
+    #: another robot than the NAO: a bundled spec name (dm-humanoid, op3) or a spec .toml
+    #: (sim/robot); its [evolve] joints make the step, its [fall] thresholds apply unless
+    #: fall_height_m / fall_tilt_rad are set to other values than the NAO's defaults
+    robot: str = ""
 
     def for_worker(self) -> HumanoidStepConfig:
         """The config of a one-core evaluator worker: ``threads`` 0 (all cores) becomes 1;
@@ -222,22 +226,14 @@ class HumanoidStepProblem:
     def __init__(self, cfg: HumanoidStepConfig | None = None) -> None:
         self.cfg = cfg = cfg or HumanoidStepConfig()
         validate(cfg)
-        self.model = mujoco.MjModel.from_xml_string(scene_xml(sensors=CONTACT_SENSORS))
+        self.robot = None
+        if cfg.robot:
+            self._init_robot(cfg)
+        else:
+            self._init_nao(cfg)
         self.dt = float(self.model.opt.timestep)
-        lo, hi = servo_bounds(self.model, cfg.bounds_scale)
-        self.encoding = ServoEncoding(cfg.encoding, leg_initial_pose(), lo, hi, cfg.intervals,
-                                      cfg.motion_s)
-        self.genome: GenomeSpec = self.encoding.genome(nao.LEG_SERVOS)
         self.nstep = int(round((cfg.motion_s + cfg.hold_s) / self.dt))
         self.t_step = self.dt * np.arange(self.nstep)  # target applied during step i
-        self.leg_columns = np.array(nao.joint_columns(nao.LEG_SERVOS))
-        self.base = nao.pose_vector()
-        self.state0 = nao.initial_state(self.model)
-        data0 = nao.initial_data(self.model)
-        self.sole0 = 0.5 * (data0.site("l_sole_site").xpos + data0.site("r_sole_site").xpos)
-        slices = sensor_slices(self.model)
-        self.sole_columns = [slices[s] for s in ("l_sole", "r_sole")]
-        self.contact_columns = [slices["l_floor"].start, slices["r_floor"].start]
         self.segment_steps = max(1, int(round(cfg.segment_s / self.dt)))
         self.sim = make_simulator(self.model, cfg, cfg.threads)
         self.worlds = None
@@ -248,6 +244,59 @@ class HumanoidStepProblem:
                 self.model, Perturbation(), cfg.worlds - 1,
                 np.random.default_rng(max(cfg.world_seed, 0)), cfg.motion_s)
 
+    def _init_nao(self, cfg: HumanoidStepConfig) -> None:
+        """The NAO H25 (the default): seed Table 1 bounds, the model's sole sensors."""
+        self.model = mujoco.MjModel.from_xml_string(scene_xml(sensors=CONTACT_SENSORS))
+        lo, hi = servo_bounds(self.model, cfg.bounds_scale)
+        self.encoding = ServoEncoding(cfg.encoding, leg_initial_pose(), lo, hi, cfg.intervals,
+                                      cfg.motion_s)
+        self.genome: GenomeSpec = self.encoding.genome(nao.LEG_SERVOS)
+        self.leg_columns = np.array(nao.joint_columns(nao.LEG_SERVOS))
+        self.base = nao.pose_vector()
+        self.state0 = nao.initial_state(self.model)
+        data0 = nao.initial_data(self.model)
+        self.sole0 = 0.5 * (data0.site("l_sole_site").xpos + data0.site("r_sole_site").xpos)
+        slices = sensor_slices(self.model)
+        self.sole_columns = [slices[s] for s in ("l_sole", "r_sole")]
+        self.contact_columns = [slices["l_floor"].start, slices["r_floor"].start]
+        self.fall_height_m, self.fall_tilt_rad = cfg.fall_height_m, cfg.fall_tilt_rad
+
+    def _init_robot(self, cfg: HumanoidStepConfig) -> None:
+        """Another biped (:mod:`evomotion.sim.robot`): its ``[evolve]`` joints and ranges
+        (shrunk towards the initial pose by ``bounds_scale``), feet ``left`` and ``right``."""
+        from evomotion.sim.robot import load_robot
+
+        r = self.robot = load_robot(cfg.robot)
+        if set(r.feet) != {"left", "right"}:
+            raise InputError(f"problem.robot: {r.name} has feet {', '.join(r.feet)}; a step "
+                             "needs a biped with feet 'left' and 'right'")
+        if not r.evolved:
+            raise InputError(f"problem.robot: {r.spec.path} has no [evolve] joints")
+        if cfg.worlds > 1:
+            raise InputError("problem.worlds > 1 (perturbed worlds) is for the NAO only; "
+                             "use problem.worlds = 1 with problem.robot")
+        self.model = r.model
+        q0 = r.pose[r.columns]
+        lo = q0 + cfg.bounds_scale * (np.minimum(r.lower, q0) - q0)
+        hi = q0 + cfg.bounds_scale * (np.maximum(r.upper, q0) - q0)
+        self.encoding = ServoEncoding(cfg.encoding, q0, lo, hi, cfg.intervals, cfg.motion_s)
+        self.genome = self.encoding.genome(list(r.evolved))
+        self.leg_columns = r.columns
+        self.base = r.pose
+        self.state0 = r.state0
+        data0 = mujoco.MjData(self.model)
+        mujoco.mj_setState(self.model, data0, self.state0, mujoco.mjtState.mjSTATE_FULLPHYSICS)
+        data0.ctrl[:] = r.pose
+        mujoco.mj_forward(self.model, data0)
+        self.sole_columns = [r.sensor("left_pos"), r.sensor("right_pos")]
+        self.sole0 = 0.5 * (data0.sensordata[self.sole_columns[0]]
+                            + data0.sensordata[self.sole_columns[1]])
+        self.contact_columns = [r.sensor("left_floor").start, r.sensor("right_floor").start]
+        nao_default = (cfg.fall_height_m == nao.FALL_HEIGHT_M,
+                       cfg.fall_tilt_rad == nao.FALL_TILT_RAD)
+        self.fall_height_m = r.fall_height_m if nao_default[0] else cfg.fall_height_m
+        self.fall_tilt_rad = r.fall_tilt_rad if nao_default[1] else cfg.fall_tilt_rad
+
     def controls(self, genomes: np.ndarray, t: np.ndarray | None = None) -> np.ndarray:
         """Actuator targets ``[pop, nstep, 22]`` for a batch of genomes."""
         t = self.t_step if t is None else t
@@ -257,7 +306,7 @@ class HumanoidStepProblem:
         return ctrl
 
     def _fallen(self, states: np.ndarray) -> np.ndarray:
-        return fell(states, self.cfg.fall_height_m, self.cfg.fall_tilt_rad)
+        return fell(states, self.fall_height_m, self.fall_tilt_rad)
 
     def simulate(self, genomes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Recorded (states, sole positions) of a batch, fallen robots stopped early."""
@@ -268,7 +317,7 @@ class HumanoidStepProblem:
         """Fitness and metrics from recorded states ``[pop, nstep, nstate]`` and sensors."""
         c = self.cfg
         track = torso_track(states)
-        fall = fall_step(track, c.fall_height_m, c.fall_tilt_rad)
+        fall = fall_step(track, self.fall_height_m, self.fall_tilt_rad)
         fell = fall < self.nstep
         last = np.minimum(fall, self.nstep - 1)
         rows = np.arange(states.shape[0])

@@ -1,0 +1,53 @@
+"""Robots described by an MJCF file and a TOML spec (``--robot FILE.toml`` or a bundled name).
+
+- :mod:`.spec`: the spec format, read with line-numbered errors;
+- :mod:`.build`: the robot built from it with ``mujoco.MjSpec`` (position servos in place of
+  motors, sole sites and sensors) and checked against the model.
+
+Bundled specs (``specs/``): ``dm-humanoid`` and ``dm-quadruped`` (the dm_control suite's
+models, shipped in the ``dm-control`` wheel: extra ``[robots]``), ``op3`` (ROBOTIS OP3,
+authored in ``sim/models/op3`` from published data).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from evomotion.errors import InputError
+from evomotion.sim.robot.build import Robot, build_robot
+from evomotion.sim.robot.spec import RobotSpec, read_spec
+
+SPECS_DIR = Path(__file__).resolve().parent / "specs"
+
+
+def bundled_specs() -> list[str]:
+    """Names of the bundled robot specs."""
+    return sorted(p.stem for p in SPECS_DIR.glob("*.toml"))
+
+
+def spec_path(name_or_path: str) -> Path:
+    """The spec file of a bundled name or a path; a one-line error for neither."""
+    path = Path(name_or_path)
+    if path.suffix == ".toml" or path.exists():
+        return path
+    bundled = SPECS_DIR / f"{name_or_path}.toml"
+    if bundled.is_file():
+        return bundled
+    raise InputError(f"unknown robot {name_or_path!r}; bundled: {', '.join(bundled_specs())} "
+                     "(or a path to a spec .toml)")
+
+
+_CACHE: dict[str, Robot] = {}
+
+
+def load_robot(name_or_path: str) -> Robot:
+    """The robot of a bundled spec name or a spec file (built once per process)."""
+    path = spec_path(name_or_path)
+    key = str(path.resolve())
+    if key not in _CACHE:
+        _CACHE[key] = build_robot(read_spec(path))
+    return _CACHE[key]
+
+
+__all__ = ["Robot", "RobotSpec", "build_robot", "bundled_specs", "load_robot", "read_spec",
+           "spec_path"]

@@ -1,0 +1,248 @@
+"""Build a simulated robot from its :class:`~.spec.RobotSpec` with :class:`mujoco.MjSpec`.
+
+The MJCF is loaded as it is; then, with ``MjSpec`` (never by editing text):
+
+- with ``[servo]``, the integrator becomes ``implicitfast`` when the MJCF used Euler (stiff
+  servos on light links need implicit damping), and every motor (``gaintype`` fixed, no
+  bias) becomes a position servo on its joint: ``kp``/``kv`` of the spec, control range = the
+  joint's range, torque limited to the motor's ``gear x ctrlrange`` (``force = "gear"``)
+  or to ``force``;
+- per foot a site at the centre of the foot body's collision geoms, a ``framepos`` sensor of it
+  (``<foot>_pos``) and a ``contact`` sensor between the foot body and the floor (``<foot>_floor``,
+  1 while it touches).
+
+Then the checks against the model (each a ``FILE:LINE`` :class:`InputError`): the torso has
+the free joint, every foot body exists and has collision geoms (the soles), every ``[pose]``
+and ``[evolve]`` joint exists, is driven by an actuator and lies within the joint's limits,
+and no motor is left without a ``[servo]``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+from evomotion.sim.robot.spec import RobotSpec
+
+STATE_SPEC = mujoco.mjtState.mjSTATE_FULLPHYSICS
+
+
+@dataclass(frozen=True)
+class Robot:
+    """A robot ready to simulate: ``model``; ``joints`` driven by the actuators (actuator
+    order); the ``evolved`` joints, their actuator ``columns`` and ranges ``lower``/``upper``;
+    the initial targets ``pose[nu]`` and state ``state0``; the ``feet`` and fall thresholds."""
+
+    spec: RobotSpec
+    model: mujoco.MjModel
+    joints: tuple[str, ...]
+    evolved: tuple[str, ...]
+    columns: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    pose: np.ndarray
+    state0: np.ndarray
+    feet: tuple[str, ...]
+    xml: str = ""  # the edited model as MJCF text (for videos)
+
+    @property
+    def name(self) -> str:
+        return self.spec.name
+
+    @property
+    def fall_height_m(self) -> float:
+        return self.spec.fall_height_m
+
+    @property
+    def fall_tilt_rad(self) -> float:
+        return self.spec.fall_tilt_rad
+
+    def sensor(self, name: str) -> slice:
+        """Slice of ``sensordata`` of the sensor ``name`` (``<foot>_pos``, ``<foot>_floor``)."""
+        i = self.model.sensor(name).id
+        adr, dim = int(self.model.sensor_adr[i]), int(self.model.sensor_dim[i])
+        return slice(adr, adr + dim)
+
+
+def resolve_mjcf(spec: RobotSpec) -> Path:
+    """The MJCF file a spec names: relative to the spec, ``evomotion:`` (in this package) or
+    ``dm_control:`` (in the installed dm_control, found without importing it)."""
+    ref = spec.mjcf
+    if ref.startswith("evomotion:"):
+        path = Path(__file__).resolve().parents[2] / ref.split(":", 1)[1]
+    elif ref.startswith("dm_control:"):
+        import importlib.util
+
+        found = importlib.util.find_spec("dm_control")
+        if found is None or not found.submodule_search_locations:
+            raise spec.error("robot", "mjcf", f"{ref!r} needs dm_control: pip install "
+                             "'evomotion[robots]'")
+        path = Path(list(found.submodule_search_locations)[0]) / ref.split(":", 1)[1]
+    else:
+        path = (spec.path.parent / ref).resolve()
+    if not path.is_file():
+        raise spec.error("robot", "mjcf", f"no such MJCF file {path}")
+    return path
+
+
+def _servos(spec: RobotSpec, mj: mujoco.MjSpec, model: mujoco.MjModel) -> None:
+    motors = [a for a in mj.actuators
+              if a.gaintype == mujoco.mjtGain.mjGAIN_FIXED
+              and a.biastype == mujoco.mjtBias.mjBIAS_NONE]
+    if motors and spec.servo is None:
+        raise spec.error("robot", "mjcf", f"the MJCF drives {len(motors)} joints with motors "
+                         f"(e.g. {motors[0].target!r}); add a [servo] section (kp, kv, force) "
+                         "to make them position servos")
+    if spec.servo is None:
+        return
+    kp, kv, force = spec.servo["kp"], spec.servo["kv"], spec.servo["force"]
+    if mj.option.integrator == mujoco.mjtIntegrator.mjINT_EULER:
+        # stiff servos on light links are unstable with explicit Euler damping
+        mj.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+    for a in motors:
+        if a.trntype != mujoco.mjtTrn.mjTRN_JOINT:
+            raise spec.error("servo", None, f"actuator {a.name!r} does not drive a joint")
+        jid = model.joint(a.target).id
+        lo, hi = model.jnt_range[jid] if model.jnt_limited[jid] else (-np.pi, np.pi)
+        ranged = a.ctrlrange[1] > a.ctrlrange[0]  # a motor without a range: |ctrl| <= 1
+        peak = max(abs(a.ctrlrange[0]), abs(a.ctrlrange[1])) if ranged else 1.0
+        limit = abs(float(a.gear[0])) * float(peak) if force == "gear" else float(force)
+        a.set_to_position(kp=kp, kv=kv)
+        a.gear = [1, 0, 0, 0, 0, 0]
+        a.ctrlrange = [float(lo), float(hi)]
+        a.ctrllimited = True
+        a.forcerange = [-limit, limit]
+        a.forcelimited = True
+
+
+def _feet(spec: RobotSpec, mj: mujoco.MjSpec, model: mujoco.MjModel) -> None:
+    for foot, body_name in spec.feet.items():
+        try:
+            bid = model.body(body_name).id
+        except KeyError:
+            raise spec.error("feet", foot, f"no body {body_name!r} in the MJCF") from None
+        geoms = [g for g in range(model.ngeom) if model.geom_bodyid[g] == bid
+                 and (model.geom_contype[g] or model.geom_conaffinity[g])]
+        if not geoms:
+            raise spec.error("feet", foot, f"body {body_name!r} has no collision geoms (no "
+                             "sole geoms)")
+        centre = model.geom_pos[geoms].mean(axis=0)
+        mj.body(body_name).add_site(name=f"{foot}_sole", pos=centre, size=[0.005, 0, 0])
+        mj.add_sensor(name=f"{foot}_pos", type=mujoco.mjtSensor.mjSENS_FRAMEPOS,
+                      objtype=mujoco.mjtObj.mjOBJ_SITE, objname=f"{foot}_sole")
+        mj.add_sensor(name=f"{foot}_floor", type=mujoco.mjtSensor.mjSENS_CONTACT,
+                      objtype=mujoco.mjtObj.mjOBJ_BODY, objname=body_name,
+                      reftype=mujoco.mjtObj.mjOBJ_GEOM, refname=spec.floor,
+                      intprm=[1, 0, 1])  # data "found", no reduction, 1 match
+
+
+def build_robot(spec: RobotSpec) -> Robot:
+    """Load, edit, compile and check the robot of ``spec`` (see the module doc)."""
+    path = resolve_mjcf(spec)
+    try:
+        mj = mujoco.MjSpec.from_file(str(path))
+        base = mj.compile()
+    except (ValueError, RuntimeError) as e:
+        raise spec.error("robot", "mjcf", f"{path} does not compile: {e}") from None
+    try:
+        base.geom(spec.floor)
+    except KeyError:
+        raise spec.error("robot", "floor", f"no geom {spec.floor!r} in the MJCF") from None
+    try:
+        torso = base.body(spec.torso).id
+    except KeyError:
+        raise spec.error("robot", "torso", f"no body {spec.torso!r} in the MJCF") from None
+    free = [j for j in range(base.njnt) if base.jnt_bodyid[j] == torso
+            and base.jnt_type[j] == mujoco.mjtJoint.mjJNT_FREE]
+    if not free or base.jnt_qposadr[free[0]] != 0:
+        raise spec.error("robot", "torso", f"body {spec.torso!r} must carry the model's first "
+                         "joint, a free joint")
+    _servos(spec, mj, base)
+    _feet(spec, mj, base)
+    try:
+        model = mj.compile()
+    except (ValueError, RuntimeError) as e:
+        raise spec.error("robot", "mjcf", f"the edited model does not compile: {e}") from None
+    joints = tuple(model.joint(int(model.actuator_trnid[a, 0])).name for a in range(model.nu))
+    for section, values in (("pose", spec.pose), ("evolve", spec.evolve)):
+        for name, value in values.items():
+            _check_joint(spec, model, joints, section, name, value)
+    pose = _initial_targets(spec, model, joints)
+    evolved = tuple(spec.evolve)
+    columns = np.array([joints.index(j) for j in evolved], dtype=np.int64)
+    lower = np.array([spec.evolve[j][0] for j in evolved])
+    upper = np.array([spec.evolve[j][1] for j in evolved])
+    state0 = initial_state(spec, model, joints, pose)
+    try:
+        xml = mj.to_xml()
+    except (ValueError, RuntimeError):  # e.g. meshes that cannot be written back
+        xml = ""
+    return Robot(spec, model, joints, evolved, columns, lower, upper, pose, state0,
+                 tuple(spec.feet), xml)
+
+
+def _check_joint(spec: RobotSpec, model, joints, section: str, name: str, value) -> None:
+    try:
+        jid = model.joint(name).id
+    except KeyError:
+        raise spec.error(section, name, f"unknown joint {name!r}; actuated joints: "
+                         f"{', '.join(joints)}") from None
+    if name not in joints:
+        raise spec.error(section, name, f"joint {name!r} has no actuator")
+    if model.jnt_limited[jid]:
+        lo, hi = (float(v) for v in model.jnt_range[jid])
+        vals = value if isinstance(value, tuple) else (value,)
+        if min(vals) < lo - 1e-9 or max(vals) > hi + 1e-9:
+            shown = f"[{vals[0]:.6g}, {vals[1]:.6g}]" if len(vals) == 2 else f"{vals[0]:.6g}"
+            raise spec.error(section, name, f"{shown} is outside the model's joint range "
+                             f"[{lo:.4g}, {hi:.4g}] rad")
+
+
+def _initial_targets(spec: RobotSpec, model, joints) -> np.ndarray:
+    qpos = _keyframe_qpos(spec, model)
+    pose = np.array([qpos[model.jnt_qposadr[model.joint(j).id]] for j in joints])
+    for j, v in spec.pose.items():
+        pose[joints.index(j)] = v
+    return pose
+
+
+def _keyframe_qpos(spec: RobotSpec, model) -> np.ndarray:
+    if spec.keyframe is None:
+        return model.qpos0.copy()
+    try:
+        return model.key(spec.keyframe).qpos.copy()
+    except KeyError:
+        raise spec.error("robot", "keyframe", f"no keyframe {spec.keyframe!r}") from None
+
+
+def initial_state(spec: RobotSpec, model, joints, pose: np.ndarray) -> np.ndarray:
+    """The robot at rest in ``pose``, upright facing +x, the lowest foot geom
+    ``clearance_m`` above the floor (``mjSTATE_FULLPHYSICS``)."""
+    data = mujoco.MjData(model)
+    data.qpos[:] = _keyframe_qpos(spec, model)
+    data.qpos[3:7] = (1.0, 0.0, 0.0, 0.0)
+    for j, v in zip(joints, pose, strict=True):
+        data.qpos[model.jnt_qposadr[model.joint(j).id]] = v
+    data.ctrl[:] = pose
+    data.qpos[2] = 0.0
+    mujoco.mj_kinematics(model, data)
+    feet = {model.body(b).id for b in spec.feet.values()}
+    low = min(_lowest_z(model, data, g) for g in range(model.ngeom)
+              if model.geom_bodyid[g] in feet)
+    data.qpos[2] = spec.clearance_m - low
+    mujoco.mj_forward(model, data)
+    state = np.empty(mujoco.mj_stateSize(model, STATE_SPEC))
+    mujoco.mj_getState(model, data, state, STATE_SPEC)
+    return state
+
+
+def _lowest_z(model, data, g: int) -> float:
+    """Lowest world z of geom ``g``'s bounding box (its 8 corners, rotated)."""
+    centre, half = model.geom_aabb[g, :3], model.geom_aabb[g, 3:]
+    corners = centre + half * np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1)
+                                        for sz in (-1, 1)])
+    world = data.geom_xpos[g] + corners @ data.geom_xmat[g].reshape(3, 3).T
+    return float(world[:, 2].min())

@@ -1,0 +1,68 @@
+"""humanoid-step on another robot (``--robot``): the GA loop, the run folder, the video."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from evomotion.errors import InputError
+from evomotion.run.config import resolve_config
+from evomotion.run.runner import run_study
+from evomotion.studies import get_study
+
+needs_dm = pytest.mark.skipif(importlib.util.find_spec("dm_control") is None,
+                              reason="dm_control is not installed")
+
+
+def _cli(*args):
+    return subprocess.run([sys.executable, "-m", "evomotion.cli", *args], capture_output=True,
+                          text=True, timeout=600)
+
+
+@needs_dm
+def test_step_on_the_dm_control_humanoid(tmp_path):
+    s = get_study("humanoid-step")
+    over = [*s.smoke, "problem.robot=dm-humanoid", "run.generations=2"]
+    res = run_study(s, resolve_config(s, None, over), tmp_path / "r", quiet=True)
+    assert res.generation == 2 and np.isfinite(res.best_fitness)
+    replay = json.loads((tmp_path / "r" / "best_replay.json").read_text())
+    assert replay["robot"] == "dm-humanoid"
+    assert replay["torso_height_m"][0] > 1.0  # a 1.3 m tall humanoid, not the NAO
+    motion = (tmp_path / "r" / "best.motion").read_text()
+    assert "right_hip_y" in motion.splitlines()[0]
+    log = (tmp_path / "r" / "log.txt").read_text()
+    assert "best step on dm-humanoid" in log
+    problem = s.make_problem(resolve_config(s, None, over).problem)
+    assert problem.fall_height_m == 0.9 and problem.genome.dim == 12 * 3  # 4 intervals
+
+
+def test_robot_options_are_checked(tmp_path):
+    s = get_study("humanoid-step")
+    with pytest.raises(InputError, match="unknown robot 'r2d2'"):
+        s.make_problem(resolve_config(s, None, ["problem.robot=r2d2"]).problem)
+    r = _cli("run", "functions", "--robot", "nao", "--out", str(tmp_path / "f"))
+    assert r.returncode != 0 and "runs only its own robot" in r.stderr
+    assert "Traceback" not in r.stderr
+    r = _cli("run", "humanoid-step", "--robot", str(tmp_path / "none.toml"), "--out",
+             str(tmp_path / "g"))
+    assert r.returncode != 0 and "no such robot spec" in r.stderr and "Traceback" not in r.stderr
+
+
+def test_nao_through_the_robot_path_steps_like_the_nao():
+    """``--robot nao`` (the generic path) scores the NAO's initial pose like the NAO path."""
+    s = get_study("humanoid-step")
+    base = resolve_config(s, None, list(s.smoke))
+    spec = resolve_config(s, None, [*s.smoke, "problem.robot=nao"])
+    p_nao, p_spec = s.make_problem(base.problem), s.make_problem(spec.problem)
+    assert p_nao.genome.dim == p_spec.genome.dim
+    np.testing.assert_allclose(p_spec.genome.lower, p_nao.genome.lower, atol=1e-5)
+    np.testing.assert_allclose(p_spec.genome.upper, p_nao.genome.upper, atol=1e-5)
+    g = np.tile((p_nao.genome.lower + p_nao.genome.upper) / 2, (2, 1))
+    a, b = p_nao.evaluate(g), p_spec.evaluate(g)
+    assert a.metrics["fell"][0] == b.metrics["fell"][0]
+    assert abs(a.metrics["time_to_fall_s"][0] - b.metrics["time_to_fall_s"][0]) < 0.2
