@@ -42,7 +42,16 @@ from evomotion.errors import InputError
 from evomotion.sim.nao.constants import STATE_SPEC
 from evomotion.sim.rollout import rollout_segments
 
-TORSO = "torso"  # the body with the free joint: CoM offsets and pushes act on it
+TORSO = "torso"  # the NAO's body with the free joint: CoM offsets and pushes act on it
+
+
+def torso_id(model: mujoco.MjModel) -> int:
+    """The body CoM offsets and pushes act on: the one carrying the model's first joint when
+    that is a free joint (the NAO's ``torso``, any robot of :mod:`evomotion.sim.robot`), else
+    the body named :data:`TORSO`."""
+    if model.njnt and model.jnt_type[0] == mujoco.mjtJoint.mjJNT_FREE:
+        return int(model.jnt_bodyid[0])
+    return int(model.body(TORSO).id)
 
 
 def _check_range(name: str, lo_hi: tuple[float, float], low: float, low_ok: bool) -> None:
@@ -124,7 +133,7 @@ def make_world(base: mujoco.MjModel, *, friction_scale: float = 1.0,
     scale[1:] = np.broadcast_to(np.asarray(mass_scale, float), (base.nbody - 1,))
     m.body_mass[:] = base.body_mass * scale
     m.body_inertia[:] = base.body_inertia * scale[:, None]
-    m.body_ipos[m.body(TORSO).id] = base.body_ipos[base.body(TORSO).id] + np.asarray(com_offset_m)
+    m.body_ipos[torso_id(m)] = base.body_ipos[torso_id(base)] + np.asarray(com_offset_m)
     ms = np.broadcast_to(np.asarray(motor_scale, float), (base.nu,))
     m.actuator_gainprm[:, 0] = base.actuator_gainprm[:, 0] * ms
     m.actuator_biasprm[:, 1] = base.actuator_biasprm[:, 1] * ms
@@ -217,7 +226,7 @@ def _segment_controls(ctrl: np.ndarray, push: np.ndarray, step: np.ndarray, rows
     xfrc = np.zeros((len(rows), stop - start, base.nbody, 6))
     hit = np.flatnonzero((step[rows] >= start) & (step[rows] < stop))
     dt = float(base.opt.timestep)
-    xfrc[hit, step[rows[hit]] - start, base.body(TORSO).id, :3] = push[rows[hit]] / dt
+    xfrc[hit, step[rows[hit]] - start, torso_id(base), :3] = push[rows[hit]] / dt
     c = np.concatenate([c, xfrc.reshape(len(rows), stop - start, -1)], axis=2)
     return np.ascontiguousarray(c, dtype=np.float64), spec
 
@@ -268,7 +277,7 @@ def simulate_worlds(worlds: list[World], initial_state: np.ndarray, controls: np
 
         impulse = push * (step >= 0)[:, None]
         out = simulate_worlds_warp(simulator, models, np.broadcast_to(initial_state, (k, nstate)),
-                                   ctrl, impulse, step, base.body(TORSO).id, stopped,
+                                   ctrl, impulse, step, torso_id(base), stopped,
                                    segment_steps)
         return out if sensors else out[0]
     nthread = int(nthread) if nthread and nthread > 0 else (os.cpu_count() or 1)

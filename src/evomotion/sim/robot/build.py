@@ -19,7 +19,7 @@ and no motor is left without a ``[servo]``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import mujoco
@@ -47,6 +47,12 @@ class Robot:
     state0: np.ndarray
     feet: tuple[str, ...]
     xml: str = ""  # the edited model as MJCF text (for videos)
+    #: the walk study's gait roles: role -> ((actuator column, sign) per leg)
+    gait: dict[str, tuple[tuple[int, float], ...]] = field(default_factory=dict)
+
+    @property
+    def gait_kind(self) -> str | None:
+        return self.spec.gait_kind
 
     @property
     def name(self) -> str:
@@ -160,16 +166,25 @@ def build_robot(spec: RobotSpec) -> Robot:
     if not free or base.jnt_qposadr[free[0]] != 0:
         raise spec.error("robot", "torso", f"body {spec.torso!r} must carry the model's first "
                          "joint, a free joint")
+    for body in spec.remove:
+        try:
+            mj.delete(mj.body(body))
+        except (TypeError, ValueError, KeyError):
+            raise spec.error("robot", "remove", f"no body {body!r} to remove") from None
+    if spec.remove:
+        base = mj.compile()
     _servos(spec, mj, base)
     _feet(spec, mj, base)
     try:
         model = mj.compile()
     except (ValueError, RuntimeError) as e:
         raise spec.error("robot", "mjcf", f"the edited model does not compile: {e}") from None
-    joints = tuple(model.joint(int(model.actuator_trnid[a, 0])).name for a in range(model.nu))
+    joints = channels(model)
     for section, values in (("pose", spec.pose), ("evolve", spec.evolve)):
         for name, value in values.items():
             _check_joint(spec, model, joints, section, name, value)
+    gait = {role: tuple(_gait_channel(spec, joints, role, c) for c in chans)
+            for role, chans in spec.gait.items()}
     pose = _initial_targets(spec, model, joints)
     evolved = tuple(spec.evolve)
     columns = np.array([joints.index(j) for j in evolved], dtype=np.int64)
@@ -181,19 +196,44 @@ def build_robot(spec: RobotSpec) -> Robot:
     except (ValueError, RuntimeError):  # e.g. meshes that cannot be written back
         xml = ""
     return Robot(spec, model, joints, evolved, columns, lower, upper, pose, state0,
-                 tuple(spec.feet), xml)
+                 tuple(spec.feet), xml, gait)
+
+
+def channels(model: mujoco.MjModel) -> tuple[str, ...]:
+    """One name per actuator: its joint's name, or the actuator's own for other transmissions
+    (tendons)."""
+    out = []
+    for a in range(model.nu):
+        if model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT:
+            out.append(model.joint(int(model.actuator_trnid[a, 0])).name)
+        else:
+            out.append(model.actuator(a).name)
+    return tuple(out)
+
+
+def _gait_channel(spec: RobotSpec, joints, role: str, channel: str) -> tuple[int, float]:
+    name, sign = channel.lstrip("-"), -1.0 if channel.startswith("-") else 1.0
+    if name not in joints:
+        raise spec.error("gait", role, f"unknown channel {name!r}; actuated: "
+                         f"{', '.join(joints)}")
+    return joints.index(name), sign
 
 
 def _check_joint(spec: RobotSpec, model, joints, section: str, name: str, value) -> None:
     try:
         jid = model.joint(name).id
     except KeyError:
-        raise spec.error(section, name, f"unknown joint {name!r}; actuated joints: "
-                         f"{', '.join(joints)}") from None
+        jid = None
+        if name not in joints:
+            raise spec.error(section, name, f"unknown joint {name!r}; actuated joints: "
+                             f"{', '.join(joints)}") from None
     if name not in joints:
         raise spec.error(section, name, f"joint {name!r} has no actuator")
-    if model.jnt_limited[jid]:
-        lo, hi = (float(v) for v in model.jnt_range[jid])
+    a = joints.index(name)
+    limited = model.jnt_limited[jid] if jid is not None else model.actuator_ctrllimited[a]
+    if limited:
+        lo, hi = (float(v) for v in (model.jnt_range[jid] if jid is not None
+                                      else model.actuator_ctrlrange[a]))
         vals = value if isinstance(value, tuple) else (value,)
         if min(vals) < lo - 1e-9 or max(vals) > hi + 1e-9:
             shown = f"[{vals[0]:.6g}, {vals[1]:.6g}]" if len(vals) == 2 else f"{vals[0]:.6g}"
@@ -203,7 +243,9 @@ def _check_joint(spec: RobotSpec, model, joints, section: str, name: str, value)
 
 def _initial_targets(spec: RobotSpec, model, joints) -> np.ndarray:
     qpos = _keyframe_qpos(spec, model)
-    pose = np.array([qpos[model.jnt_qposadr[model.joint(j).id]] for j in joints])
+    pose = np.array([qpos[model.jnt_qposadr[model.joint(j).id]]
+                     if model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT else 0.0
+                     for a, j in enumerate(joints)])
     for j, v in spec.pose.items():
         pose[joints.index(j)] = v
     return pose
@@ -224,8 +266,9 @@ def initial_state(spec: RobotSpec, model, joints, pose: np.ndarray) -> np.ndarra
     data = mujoco.MjData(model)
     data.qpos[:] = _keyframe_qpos(spec, model)
     data.qpos[3:7] = (1.0, 0.0, 0.0, 0.0)
-    for j, v in zip(joints, pose, strict=True):
-        data.qpos[model.jnt_qposadr[model.joint(j).id]] = v
+    for a, (j, v) in enumerate(zip(joints, pose, strict=True)):
+        if model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT:
+            data.qpos[model.jnt_qposadr[model.joint(j).id]] = v
     data.ctrl[:] = pose
     data.qpos[2] = 0.0
     mujoco.mj_kinematics(model, data)

@@ -8,6 +8,7 @@ mjcf = "dm_control:suite/humanoid.xml"  # a path relative to this file, "evomoti
 torso = "torso"          # the body with the free joint (falls, heading, displacement)
 floor = "floor"          # the floor geom
 clearance_m = 0.0005     # lowest foot geom this far above the floor at the start
+remove = ["ball"]        # bodies of the MJCF the robot does not need (optional)
 
 [feet]                   # foot bodies in order (a biped: left, right); their geoms are the soles
 left = "left_foot"
@@ -27,7 +28,16 @@ right_knee = -0.3
 
 [evolve]                 # the joints a study evolves and their ranges (rad)
 right_hip_y = [-0.9, 0.2]
+
+[gait]                   # the walk study's joint-space gait: channels by role, one per leg
+kind = "biped"           # biped (left, right) | quadruped (front left, front right, hind
+hip_pitch = ["-left_hip_y", "-right_hip_y"]   # left, hind right); "-": the joint's negative
+knee = ["-left_knee", "-right_knee"]          # direction is the role's positive one
+ankle_pitch = ["left_ankle_y", "right_ankle_y"]
 ```
+
+A *channel* is an actuated joint (named by the joint) or, for an actuator on a tendon, the
+actuator's name; ``[pose]``, ``[evolve]`` and ``[gait]`` name channels.
 
 :func:`read_spec` returns a :class:`RobotSpec`; every mistake is a one-line
 :class:`~evomotion.errors.InputError` ``FILE:LINE: what was expected``. The checks against the
@@ -47,13 +57,22 @@ from typing import Any
 from evomotion.errors import InputError
 
 SECTIONS = {
-    "robot": {"name", "mjcf", "torso", "floor", "clearance_m", "keyframe"},
+    "robot": {"name", "mjcf", "torso", "floor", "clearance_m", "keyframe", "remove"},
     "feet": None,  # free keys: foot name -> body
     "fall": {"height_m", "tilt_rad"},
     "servo": {"kp", "kv", "force"},
     "pose": None,  # joint -> angle
     "evolve": None,  # joint -> [lo, hi]
+    "gait": None,  # kind + role -> channels (the walk study's joint-space gait)
 }
+#: the walk study's gait roles per kind: required, optional; each lists one channel per leg
+#: (biped: left, right; quadruped: front left, front right, hind left, hind right), a
+#: leading "-" where the role's positive direction is the joint's negative one
+GAIT_ROLES = {
+    "biped": (("hip_pitch", "knee", "ankle_pitch"), ("hip_roll", "ankle_roll")),
+    "quadruped": (("swing", "lift"), ("extend",)),
+}
+LEGS = {"biped": 2, "quadruped": 4}
 
 
 @dataclass(frozen=True)
@@ -73,6 +92,9 @@ class RobotSpec:
     servo: dict[str, Any] | None = None
     pose: dict[str, float] = field(default_factory=dict)
     evolve: dict[str, tuple[float, float]] = field(default_factory=dict)
+    remove: tuple[str, ...] = ()
+    gait_kind: str | None = None
+    gait: dict[str, tuple[str, ...]] = field(default_factory=dict)
     lines: dict[tuple[str, str], int] = field(default_factory=dict, compare=False)
 
     def where(self, section: str, key: str | None = None) -> str:
@@ -193,5 +215,39 @@ def read_spec(path: str | Path) -> RobotSpec:
     for key, value in (("floor", floor), ("keyframe", keyframe)):
         if value is not None and not isinstance(value, str):
             raise InputError(f"{where('robot', key)}: [robot] {key}: expected a name")
+    remove = robot.get("remove", [])
+    if not (isinstance(remove, list) and all(isinstance(b, str) for b in remove)):
+        raise InputError(f"{where('robot', 'remove')}: [robot] remove: expected a list of body "
+                         "names")
+    kind, roles = _gait(raw.get("gait"), where)
     return RobotSpec(path, robot["name"], robot["mjcf"], robot["torso"], floor, clearance,
-                     keyframe, dict(feet), height, tilt, servo, pose, evolve, lines)
+                     keyframe, dict(feet), height, tilt, servo, pose, evolve, tuple(remove),
+                     kind, roles, lines)
+
+
+def _gait(gait: dict | None, where) -> tuple[str | None, dict[str, tuple[str, ...]]]:
+    """(kind, role -> channels) of a ``[gait]`` section (see :data:`GAIT_ROLES`)."""
+    if gait is None:
+        return None, {}
+    kind = gait.get("kind")
+    if kind not in GAIT_ROLES:
+        raise InputError(f"{where('gait', 'kind')}: [gait] kind: expected one of "
+                         f"{', '.join(GAIT_ROLES)}, got {kind!r}")
+    required, optional = GAIT_ROLES[kind]
+    roles = {}
+    for key, value in gait.items():
+        if key == "kind":
+            continue
+        if key not in required + optional:
+            raise InputError(f"{where('gait', key)}: [gait] unknown role {key!r} for a {kind}; "
+                             f"valid: {', '.join(required + optional)}")
+        if not (isinstance(value, list) and len(value) == LEGS[kind]
+                and all(isinstance(v, str) and v.lstrip("-") for v in value)):
+            raise InputError(f"{where('gait', key)}: [gait] {key}: expected {LEGS[kind]} "
+                             "channel names (one per leg, '-' in front to flip the sign)")
+        roles[key] = tuple(value)
+    missing = [r for r in required if r not in roles]
+    if missing:
+        raise InputError(f"{where('gait')}: [gait] missing role {missing[0]!r} (a {kind} "
+                         f"needs {', '.join(required)})")
+    return kind, roles

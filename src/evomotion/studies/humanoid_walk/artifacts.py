@@ -35,6 +35,9 @@ def best_record(ctx: RunContext) -> dict[str, Any]:
     """The gait parameters by name, the period as played, and the walk's structure."""
     if not _ok(ctx.best_genome):
         return {}
+    if getattr(ctx.problem, "robot", None) is not None:
+        return {"robot": ctx.problem.robot.name, "gait": dict(zip(
+            ctx.problem.genome.names, (float(v) for v in ctx.best_genome), strict=True))}
     parts = walk_parts(ctx.best_genome, ctx.problem.cfg.walk_s)
     return {"gait": gait.named(ctx.best_genome),
             "motion": {"start_s": parts.start.duration_s, "cycle_s": parts.cycle.duration_s,
@@ -46,6 +49,13 @@ def write_motions(ctx: RunContext) -> Motion | None:
     """``best.motion`` and its three parts; the whole walk (``None`` without a best)."""
     if not _ok(ctx.best_genome):
         return None
+    if getattr(ctx.problem, "robot", None) is not None:  # the robot's channels every 20 ms
+        p = ctx.problem
+        t_ms = np.arange(0, int(p.horizon_s * 1000) + 1, gait.POSE_MS)
+        q = p.controls(np.atleast_2d(ctx.best_genome), t_ms / 1000.0)[0]
+        whole = Motion(list(p.robot.joints), t_ms, q)
+        atomic_write_text(ctx.out_dir / "best.motion", format_motion(whole))
+        return whole
     parts = walk_parts(ctx.best_genome, ctx.problem.cfg.walk_s)
     for name, motion in zip(PART_FILES, (parts.start, parts.cycle, parts.stop), strict=True):
         atomic_write_text(ctx.out_dir / name, format_motion(motion))
@@ -66,6 +76,8 @@ def finalize(ctx: RunContext) -> None:
     motion = write_motions(ctx)
     if motion is None:
         return
+    if getattr(ctx.problem, "robot", None) is not None:
+        return finalize_robot(ctx)
     # best_naoqi.py and best_keyframes.json only when the walk passes the real-NAO checks
     write_run_exports(motion, ctx.out_dir, ctx.log)
     hold = ctx.problem.cfg.hold_s
@@ -82,5 +94,38 @@ def finalize(ctx: RunContext) -> None:
     atomic_write_text(ctx.out_dir / "best_replay.json", json.dumps(summary, indent=2) + "\n")
     ctx.log(f"best.motion replayed: {dx:+.3f} m forward, {dy:+.3f} m sideways in "
             f"{duration:.2f} s ({summary['speed_mps']:.3f} m/s over the whole motion), "
+            f"{'fell' if summary['fell'] else 'stayed up'}"
+            + (f"; video {video.name}" if video else ""))
+
+
+def finalize_robot(ctx: RunContext) -> None:
+    """Another robot: the best gait simulated as evaluated (nominal world), its summary
+    (``best_replay.json``: distance, speed, straightness, fell) and ``best.mp4``."""
+    from evomotion.sim.render import RenderUnavailableError, render_video
+
+    p = ctx.problem
+    states, ctrl = p.simulate(np.atleast_2d(ctx.best_genome))
+    from evomotion.studies.humanoid_walk import robot_gait
+
+    period = np.array([ctx.best_genome[0]])
+    walk_s = robot_gait.walk_seconds(period, p.cfg.walk_s)
+    ev = p.score(states, ctrl, period)
+    summary = {"robot": p.robot.name, "gait_kind": p.kind,
+               **{k: float(v[0]) for k, v in ev.metrics.items()},
+               "walk_s": float(walk_s[0]), "horizon_s": p.horizon_s}
+    summary["fell"] = bool(summary["fell"])
+    atomic_write_text(ctx.out_dir / "best_replay.json", json.dumps(summary, indent=2) + "\n")
+    height = float(states[0, 0, 3])
+    video: Path | None = ctx.out_dir / "best.mp4"
+    try:
+        render_video(states[0, :, 1:1 + p.model.nq], p.dt, video, model_xml=p.robot.xml,
+                     camera=f"follow={p.robot.spec.torso},{max(1.2, 3.0 * height):.2f},"
+                            f"{0.6 * height:.2f}")
+    except (RenderUnavailableError, RuntimeError) as e:
+        ctx.log(f"best.mp4 skipped: {e}")
+        video = None
+    ctx.log(f"best gait on {p.robot.name}: {summary['forward_m']:+.3f} m forward, "
+            f"{summary['lateral_m']:+.3f} m sideways, {summary['speed_mps']:.3f} m/s, "
+            f"straightness {summary['straightness']:.2f}, "
             f"{'fell' if summary['fell'] else 'stayed up'}"
             + (f"; video {video.name}" if video else ""))

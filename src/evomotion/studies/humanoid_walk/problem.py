@@ -97,6 +97,9 @@ class HumanoidWalkConfig:
     warp_nconmax: int = 16  # backend warp: contacts per world to start with (grown when short)
     batch_rollouts: int = 2048  # rollouts simulated (and recorded in memory) at once
     segment_s: float = 0.4  # fallen robots stop being simulated at these boundaries (s)
+    #: another robot than the NAO: a bundled spec name (op3, dm-humanoid, dm-quadruped) or a
+    #: spec .toml with a [gait] section; it walks the joint-space gait of robot_gait.py
+    robot: str = ""
 
     def for_worker(self) -> HumanoidWalkConfig:
         return dataclasses.replace(self, threads=1) if self.threads == 0 else self
@@ -302,7 +305,12 @@ def soft_floor(quality: np.ndarray) -> np.ndarray:
     return np.where(q >= 0.0, q, -0.99 * -np.expm1(np.minimum(q, 0.0)))
 
 
-def make_problem(cfg: HumanoidWalkConfig) -> HumanoidWalkProblem:
+def make_problem(cfg: HumanoidWalkConfig):
+    """The NAO walk, or with ``cfg.robot`` the joint-space gait of another robot."""
     if not isinstance(cfg, HumanoidWalkConfig):
         raise InputError("humanoid-walk: expected a HumanoidWalkConfig")
+    if cfg.robot:
+        from evomotion.studies.humanoid_walk.robot_walk import RobotWalkProblem
+
+        return RobotWalkProblem(cfg)
     return HumanoidWalkProblem(cfg)
