@@ -9,8 +9,9 @@ Measures, on one machine:
    step) against ``mujoco.rollout`` with ``os.cpu_count()`` threads (``BatchSimulator``);
    also the largest batch with ``warp_deterministic = false``;
 2. on the device: the largest state difference to ``mujoco.rollout`` over the first 0.5 s,
-   whether two runs of one batch are bit-identical, and whether a trajectory simulated alone
-   equals the same trajectory inside the batch (what evaluators and resume rely on);
+   whether a replay of the captured batch, a fresh simulator on the same batch, and the same
+   trajectory at another row among other neighbours are bit-identical (what evaluators and
+   resume would rely on; MuJoCo Warp 4.0.0 does not promise it on a GPU);
 3. the wall time of ``evomotion run humanoid-step`` (its defaults: GA, 2 s step + 2 s hold =
    1,000 physics steps per rollout) at the paper's scale, population 100 x 100 generations,
    and at population 4,096, on warp and on cpu (run loop only: the ``wall_s`` of the last row
@@ -82,10 +83,15 @@ def physics(args, model, device: str) -> list[dict]:
             key = "warp" if det else "warp_nondeterministic"
             row[f"{key}_steps_per_s"] = batch * args.nstep / wall
             row[f"{key}_first_call_s"] = compile_s
-            if det:
-                row["warp_run_to_run_identical"] = bool(np.array_equal(first[0], again[0]))
-                alone, _ = sim.segment(init[:1], ctrl[:1])
-                row["warp_batch_independent"] = bool(np.array_equal(alone[0], again[0][0]))
+            if det:  # what reproducibility holds on this device (see docs/gpu.md)
+                row["warp_replay_identical"] = bool(np.array_equal(first[0], again[0]))
+                fresh = WarpSimulator(model, device, deterministic=det)
+                other = fresh.segment(init, ctrl)[0]
+                row["warp_fresh_simulator_identical"] = bool(np.array_equal(other, again[0]))
+                perm = np.roll(np.arange(batch), 1)  # row 0 moves to row 1, new neighbours
+                moved = fresh.segment(init[perm], ctrl[perm])[0]
+                row["warp_batch_independent"] = bool(np.array_equal(moved[1], again[0][0]))
+                fresh.close()
                 warp_states = again[0]
             sim.close()
         if batch in args.cpu_batches:

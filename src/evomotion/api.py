@@ -44,11 +44,24 @@ class _GivenProblem:
 def problem_study(problem: Problem, name: str | None = None) -> Study:
     """A :class:`~evomotion.studies.base.Study` around a problem object (no presets, no
     hooks; every registered optimizer; ``name`` defaults to the problem's class name)."""
+    from evomotion.core.problem import GenomeSpec
+
     for attr in ("genome", "sense", "evaluate"):
         if not hasattr(problem, attr):
             raise InputError(f"evomotion.run: the problem has no {attr!r}; expected an object "
                              "with genome, sense, metric_names and evaluate(genomes) (see "
                              "evomotion.Problem)")
+    if not isinstance(problem.genome, GenomeSpec):
+        raise InputError(f"evomotion.run: problem.genome must be an evomotion.GenomeSpec, got "
+                         f"{type(problem.genome).__name__}")
+    if problem.sense not in ("min", "max"):
+        raise InputError(f"evomotion.run: problem.sense must be 'min' or 'max', got "
+                         f"{problem.sense!r}")
+    names = getattr(problem, "metric_names", ())
+    if not (isinstance(names, tuple | list) and all(isinstance(n, str) for n in names)):
+        raise InputError("evomotion.run: problem.metric_names must be a tuple of metric names")
+    if not callable(problem.evaluate):
+        raise InputError("evomotion.run: problem.evaluate must be callable")
     label = name or type(problem).__name__
     return Study(name=label, description=f"{label} (a problem given as a Python object)",
                  problem_config=NoProblemConfig, make_problem=_GivenProblem(problem))
@@ -82,26 +95,26 @@ def run(problem_or_study: Any, config: dict[str, Any] | None = None,
         raise InputError(f"evomotion.run: config must be a dict of sections, got "
                          f"{type(config).__name__}")
     values = dict(config or {})
+    for key in ("study", "preset"):
+        if key in values:
+            raise InputError(f"evomotion.run: config[{key!r}]: give the study as the first "
+                             "argument and the preset as preset=")
+    if preset is not None and not isinstance(preset, str):
+        raise InputError(f"evomotion.run: preset must be a name, got {preset!r}")
     if resume:
+        from evomotion.run.resume import resume_config
+
         if out_dir is None:
             raise InputError("evomotion.run: resume=True needs the out_dir of the run")
-        saved = Path(out_dir) / "config.toml"
-        if not saved.is_file():
-            raise InputError(f"{saved}: no run to resume (config.toml missing)")
-        values = _merge(_read_toml(saved), values)
-        preset = values.pop("preset", preset)
-    values.pop("study", None)
+        changes = {}
+        for section, keys in values.items():
+            if not isinstance(keys, dict):
+                raise InputError(f"evomotion.run: config[{section!r}] must be a dict")
+            changes.update({f"{section}.{k}": v for k, v in keys.items()})
+        study, cfg = resume_config(Path(out_dir), study, changes)
+        return run_study(study, cfg, Path(out_dir), quiet=quiet, resume=True)
     cfg = resolve_config(study, None, (), preset=preset, values=values)
-    return run_study(study, cfg, Path(out_dir) if out_dir is not None else None, quiet=quiet,
-                     resume=resume)
-
-
-def _merge(base: dict, extra: dict) -> dict:
-    out = {k: dict(v) if isinstance(v, dict) else v for k, v in base.items()}
-    for k, v in extra.items():
-        out[k] = {**out.get(k, {}), **v} if isinstance(v, dict) and isinstance(
-            out.get(k), dict) else v
-    return out
+    return run_study(study, cfg, Path(out_dir) if out_dir is not None else None, quiet=quiet)
 
 
 def _read_toml(path: Path) -> dict[str, Any]:

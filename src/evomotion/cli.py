@@ -15,10 +15,6 @@ app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_
                   help="Evolve and search robot motions: gaits, steps, kicks, reaches, plans.")
 
 #: the [run] keys a resume may change: limits, checkpointing, the evaluator and the loggers
-RESUME_KEYS = frozenset(f"run.{k}" for k in (
-    "generations", "max_evaluations", "target", "stagnation_generations", "stagnation_eps",
-    "wall_seconds", "checkpoint_every", "evaluator", "workers", "chunks_per_worker", "address",
-    "loggers"))
 
 SetOpt = Annotated[list[str] | None, typer.Option("--set", help="Override, e.g. run.seed=3")]
 
@@ -98,31 +94,20 @@ def resume_cmd(
     quiet: Annotated[bool, typer.Option("--quiet", "-q")] = False,
 ) -> None:
     """Continue an interrupted run from its last checkpoint (or extend a finished one)."""
-    from evomotion.run.config import (
-        apply_override,
-        config_from_dict,
-        config_from_run_dir,
-        config_to_toml,
-    )
-    from evomotion.run.folder import atomic_write_text
+    from evomotion.run.config import parse_value
+    from evomotion.run.resume import resume_config
     from evomotion.run.runner import run_study
 
-    name, raw = config_from_run_dir(run_dir)
-    s = get_study(name)
-    raw.setdefault("run", {})
+    changes: dict = {}
     for key, val in (("evaluator", evaluator), ("workers", workers), ("address", address)):
         if val is not None:
-            raw["run"][key] = val
+            changes[f"run.{key}"] = val
     for item in sets or []:
-        key = item.partition("=")[0].strip()
-        if key not in RESUME_KEYS:
-            raise InputError(f"--set {key}: resume only changes the limits, the evaluator and "
-                             f"the loggers ({', '.join(sorted(RESUME_KEYS))}); other keys would "
-                             "make the results differ from an uninterrupted run")
-        raw = apply_override(raw, item)
-    cfg = config_from_dict(s, raw)
-    if sets:
-        atomic_write_text(run_dir / "config.toml", config_to_toml(cfg))
+        key, eq, text = item.partition("=")
+        if not eq:
+            raise InputError(f"--set {item!r}: expected section.key=value")
+        changes[key.strip()] = parse_value(text.strip())
+    s, cfg = resume_config(run_dir, None, changes)
     _finish(run_study(s, cfg, run_dir, quiet=quiet, resume=True), quiet)
 
 

@@ -197,6 +197,6 @@ def test_loggers_do_not_change_results(tmp_path):
 
 
 def test_resume_may_change_the_loggers():
-    from evomotion.cli import RESUME_KEYS
+    from evomotion.run.resume import RESUME_KEYS
 
     assert "run.loggers" in RESUME_KEYS

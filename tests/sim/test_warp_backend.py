@@ -146,7 +146,7 @@ def test_buffers_grow_when_contacts_overflow(model, batch):
     s_small, _ = small.segment(inits[:2], ctrl[:2, :50])
     s_ref, _ = WarpSimulator(model, "cpu").segment(inits[:2], ctrl[:2, :50])
     assert small.regrown >= 1 and small.nconmax > 1
-    np.testing.assert_allclose(s_small, s_ref, atol=1e-5)
+    np.testing.assert_array_equal(s_small, s_ref)  # buffer sizes do not change results
 
 
 def test_perturbed_worlds_agree_with_the_cpu_engine(model, warp_sim, batch):

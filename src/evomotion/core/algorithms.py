@@ -44,6 +44,10 @@ def make_optimizer(name: str, genome: GenomeSpec, config: Any = None, *,
     ``measures`` and its ``tell`` takes ``measures=``. An unknown name or setting is an
     :class:`~evomotion.errors.InputError`."""
     cls, factory = lookup(ALGORITHMS, "algorithm", name)
+    if not isinstance(genome, GenomeSpec):
+        raise InputError(f"{name}: genome must be a GenomeSpec, got {type(genome).__name__}")
+    if config is not None and settings:
+        raise InputError(f"{name}: give either a config or settings, not both")
     if config is None:
         known = {f.name for f in dataclasses.fields(cls)}
         unknown = sorted(set(settings) - known)
@@ -51,6 +55,9 @@ def make_optimizer(name: str, genome: GenomeSpec, config: Any = None, *,
             raise InputError(f"{name}: unknown setting {unknown[0]!r}; valid: "
                              f"{', '.join(sorted(known))}")
         config = cls(**settings)
+    if not isinstance(config, cls):
+        raise InputError(f"{name}: config must be a {cls.__name__}, got "
+                         f"{type(config).__name__}")
     kwargs: dict[str, Any] = {}
     if mutate is not None:
         kwargs["mutate"] = mutate
@@ -59,4 +66,9 @@ def make_optimizer(name: str, genome: GenomeSpec, config: Any = None, *,
             raise InputError(f"{name}: a quality-diversity optimizer needs measures= (a "
                              "MeasureSpec: names, lower, upper, bins)")
         kwargs["measures"] = measures
-    return factory(genome, config, **kwargs)
+    try:
+        return factory(genome, config, **kwargs)
+    except ValueError as e:  # a setting out of range (the configs' own checks)
+        if isinstance(e, InputError):
+            raise
+        raise InputError(f"{name}: {e}") from None

@@ -18,6 +18,41 @@ from evomotion.run.checkpoint import NAME, CheckpointError, candidates, load_che
 from evomotion.run.config import Config
 from evomotion.run.driver import Driver
 
+#: the keys a resume may change: limits, the evaluator, the loggers (results stay the same)
+RESUME_KEYS = frozenset(f"run.{k}" for k in (
+    "generations", "max_evaluations", "target", "stagnation_generations", "stagnation_eps",
+    "wall_seconds", "checkpoint_every", "evaluator", "workers", "chunks_per_worker", "address",
+    "loggers"))
+
+
+def resume_config(run_dir: Path, study: Any = None,
+                  changes: dict[str, Any] | None = None) -> tuple[Any, Config]:
+    """(study, config) to resume ``run_dir`` with: its saved ``config.toml`` with
+    ``changes`` (``{"section.key": value}``, only :data:`RESUME_KEYS`) applied, and the file
+    rewritten when something changed (so ``evomotion resume`` later sees the new limits).
+    ``study`` (a Study) defaults to the registered one the file names."""
+    from evomotion.run.config import config_from_dict, config_from_run_dir, config_to_toml
+    from evomotion.run.folder import atomic_write_text
+
+    name, raw = config_from_run_dir(run_dir)
+    if study is None:
+        from evomotion.studies import get_study
+
+        study = get_study(name)
+    elif name != study.name:
+        raise InputError(f"{run_dir}: the run is of study {name!r}, not {study.name!r}")
+    raw.setdefault("run", {})
+    for key, value in (changes or {}).items():
+        if key not in RESUME_KEYS:
+            raise InputError(f"{key}: resume only changes the limits, the evaluator and the "
+                             f"loggers ({', '.join(sorted(RESUME_KEYS))}); other keys would "
+                             "make the results differ from an uninterrupted run")
+        raw["run"][key.split(".", 1)[1]] = value
+    config = config_from_dict(study, raw)
+    if changes:
+        atomic_write_text(Path(run_dir) / "config.toml", config_to_toml(config))
+    return study, config
+
 
 def config_record(config: Config) -> dict[str, Any]:
     """What a checkpoint records of the config: the keys a resume may not change."""
@@ -41,11 +76,31 @@ def check_same_config(recorded: Any, config: Config, run_dir: Path) -> None:
         raise CheckpointError("config: expected an object")
     now = config_record(config)
     for key in sorted(set(recorded) | set(now)):
+        if key not in recorded and now[key] == _field_default(config, key):
+            continue  # a key added after the run started, at its default: same results
         if recorded.get(key) != now.get(key):
             raise InputError(
                 f"{run_dir}: resume cannot change {key} (the run has {recorded.get(key)!r}, "
                 f"now {now.get(key)!r}); the results would differ from an uninterrupted run "
                 "(start a new run instead)")
+
+
+def _field_default(config: Config, key: str) -> Any:
+    """The dataclass default of ``algorithm.X`` / ``problem.X`` (a sentinel when none)."""
+    section, _, name = key.partition(".")
+    obj = getattr(config, section, None)
+    if obj is None or not dataclasses.is_dataclass(obj) or "." in name:
+        return _NO_DEFAULT
+    for f in dataclasses.fields(obj):
+        if f.name == name:
+            if f.default is not dataclasses.MISSING:
+                return list(f.default) if isinstance(f.default, tuple) else f.default
+            if f.default_factory is not dataclasses.MISSING:
+                return f.default_factory()
+    return _NO_DEFAULT
+
+
+_NO_DEFAULT = object()
 
 
 def restore(run_dir: Path, driver: Driver, config: Config) -> tuple[Any, Any, dict, list[str]]:

@@ -10,9 +10,10 @@ Why MuJoCo Warp and not MJX: it runs the same MJCF with this model's features (i
 integrator, Newton solver, pyramidal cones, box/capsule/sphere/plane contacts, touch and force
 sensors) from the same ``MjModel``, scales better than MJX's JAX implementation on
 contact-rich scenes (MuJoCo docs, "When to use MJWarp"), needs no JAX, has batched model
-fields for perturbed worlds, and since 4.0 an ``opt.deterministic`` mode for run-to-run
-bit-identical stepping on a GPU. Its version follows MuJoCo's (mujoco-warp 4.0.0 with
-mujoco 4.0.0).
+fields for perturbed worlds, and its version follows MuJoCo's (mujoco-warp 4.0.0 with
+mujoco 4.0.0). On a GPU it does not promise bit-identical runs (contacts are placed with
+atomics; 4.0.0's deterministic contact sort is a stub): ``physics.json`` records what holds,
+docs/gpu.md says which guarantees change.
 """
 
 from __future__ import annotations

@@ -169,17 +169,23 @@ class ServoWork:
     """Mechanical work of a model's position servos from recorded rollouts:
     ``sum_t sum_j |tau_j qdot_j| dt`` with ``tau = clip(kp (target - q), force range)`` (J)."""
 
-    def __init__(self, model) -> None:
-        joints = model.actuator_trnid[:, 0]
+    def __init__(self, model, actuators: np.ndarray | None = None) -> None:
+        """``actuators``: the columns of ``ctrl`` to count (default all; they must drive
+        joints, e.g. a robot's joint servos without its tendon actuators)."""
+        self.columns = None if actuators is None else np.asarray(actuators, dtype=np.int64)
+        acts = np.arange(model.nu) if self.columns is None else self.columns
+        joints = model.actuator_trnid[acts, 0]
         self.q_cols = _as_slice(QPOS_OFFSET + model.jnt_qposadr[joints])
         self.v_cols = _as_slice(QPOS_OFFSET + model.nq + model.jnt_dofadr[joints])
-        self.kp = model.actuator_gainprm[:, 0].copy()
-        self.force_range = model.actuator_forcerange.copy()
+        self.kp = model.actuator_gainprm[acts, 0].copy()
+        self.force_range = model.actuator_forcerange[acts].copy()
         self.dt = float(model.opt.timestep)
 
     def __call__(self, states: np.ndarray, ctrl: np.ndarray, last: np.ndarray) -> np.ndarray:
         """Work ``[P]`` (J) up to and including step ``last[P]``, from ``states[P, T, ns]``
         and the targets the servos received ``ctrl[P, T, nu]``."""
+        if self.columns is not None:
+            ctrl = ctrl[..., self.columns]
         tau = ctrl - states[..., self.q_cols]  # in place from here: [P, T, nu] is large
         tau *= self.kp
         np.maximum(tau, self.force_range[:, 0], out=tau)

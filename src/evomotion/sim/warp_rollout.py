@@ -111,6 +111,15 @@ class WarpSimulator:
         self._batches: dict[tuple, _Batch] = {}
         self._data0 = mujoco.MjData(model)  # no contacts yet: any nconmax/njmax is allowed
         self.graphs = self.device.startswith("cuda")
+        ov = self.mjw.OverflowType
+        #: overflows that lose contacts or constraint rows: the buffers grow, the segment reruns
+        self._grow_bits = int(ov.NEFC | ov.NJMAX_NNZ | ov.BROADPHASE | ov.NARROWPHASE | ov.CCD)
+        try:
+            with self.wp.ScopedDevice(self.device):
+                self.mjw.put_model(model)
+        except (NotImplementedError, ValueError, TypeError) as e:
+            raise InputError(f"problem.backend = 'warp': MuJoCo Warp cannot simulate this "
+                             f"model ({' '.join(str(e).split())})") from None
 
     # -- the BatchSimulator interface ------------------------------------------------------
     def run(self, initial_state: np.ndarray, ctrl: np.ndarray) -> np.ndarray:
@@ -164,8 +173,8 @@ class WarpSimulator:
         while True:
             b = self._batch(bucket_size(n), nseg, tuple(sorted(fields or {})),
                             None if push is None else int(push[2]))
-            states, sensors, peak = self._simulate(b, init, ctrl, fields, push)
-            if peak[0] <= self.njmax and peak[1] <= b.data.naconmax:
+            states, sensors, peak, overflow = self._simulate(b, init, ctrl, fields, push)
+            if peak[0] <= self.njmax and peak[1] <= b.data.naconmax and not overflow:
                 break
             self._grow(peak, b)
         self.rollout_seconds += time.perf_counter() - t0
@@ -193,6 +202,7 @@ class WarpSimulator:
             b.push_force.assign(np.asarray(push[1], np.float32)[rows])
         b.step.zero_()
         b.peak.zero_()
+        d.overflow.zero_()
         with wp.ScopedDevice(self.device):
             for _ in range(nseg):
                 if b.graph is not None:
@@ -202,7 +212,8 @@ class WarpSimulator:
             wp.synchronize_device(self.device)
         states = b.states.numpy()[:n, :nseg].astype(np.float64)
         sensors = b.sensors.numpy()[:n, :nseg].astype(np.float64)
-        return states, sensors, b.peak.numpy()
+        overflow = int(np.bitwise_or.reduce(d.overflow.numpy()[:n])) & self._grow_bits
+        return states, sensors, b.peak.numpy(), overflow
 
     def _one_step(self, b: _Batch) -> None:
         wp, k, d, m = self.wp, _kernels(), b.data, self.model
@@ -237,9 +248,10 @@ class WarpSimulator:
         if est.free is not None and est.needed > est.free:
             raise InputError(f"problem.backend = 'warp': a batch of {nworld} worlds needs "
                              f"about {est.needed / 1e9:.2f} GB on {self.device}, "
-                             f"{est.free / 1e9:.2f} GB are free; lower algorithm.pop_size")
+                             f"{est.free / 1e9:.2f} GB are free; lower problem.batch_rollouts")
         with wp.ScopedDevice(self.device):
             wm = mjw.put_model(m, batch_sizes={f: nworld for f in fields} or None)
+            wm.opt.warn_overflow = 0  # no printf from the kernels: overflows are read above
             if self.deterministic:
                 wm.opt.deterministic = int(mjw.DeterminismType.ALL) \
                     if hasattr(mjw, "DeterminismType") else True
@@ -269,20 +281,44 @@ class WarpSimulator:
 
 
 def backend_record(sim: WarpSimulator) -> dict[str, Any]:
-    import mujoco_warp
+    import mujoco_warp as mjw
     import warp
 
     det = sim.deterministic
+    cpu = sim.device == "cpu"
+    implemented = _deterministic_contacts(mjw)
+    if cpu:
+        guarantee = ("bit-identical run to run and whatever the batch (Warp's CPU device runs "
+                     "every kernel in a fixed order)")
+    elif det and implemented:
+        guarantee = "bit-identical run to run on the same GPU and software versions"
+    else:
+        guarantee = ("not guaranteed bit-identical run to run on a GPU: contact and constraint "
+                     "order come from atomics" + (" (this MuJoCo Warp does not implement the "
+                                                  "deterministic contact sort)" if det else ""))
     return {
         "backend": "warp", "device": sim.device, "precision": "float32",
-        "mujoco_warp": getattr(mujoco_warp, "__version__", "?"),
+        "mujoco_warp": getattr(mjw, "__version__", "?"),
         "warp": getattr(warp, "__version__", "?"), "mujoco": mujoco.__version__,
-        "deterministic": det,
-        "guarantee": ("bit-identical run to run on the same device, GPU and software "
-                      "versions (MuJoCo Warp opt.deterministic = ALL)" if det else
-                      "not bit-identical run to run on a GPU (atomic contact and solver "
-                      "reductions)") + "; not bit-identical to backend 'cpu' (float64)",
+        "deterministic": det, "deterministic_contacts_implemented": implemented,
+        "guarantee": guarantee + "; not bit-identical to backend 'cpu' (float64)",
     }
+
+
+def _deterministic_contacts(mjw) -> bool:
+    """Whether this MuJoCo Warp really sorts contacts in deterministic mode (4.0.0's
+    ``_sort_contacts`` is a stub)."""
+    import inspect
+
+    try:
+        from mujoco_warp._src import collision_driver
+
+        src = inspect.getsource(collision_driver._sort_contacts)
+    except (ImportError, AttributeError, OSError, TypeError):
+        return False
+    body = [ln.strip() for ln in src.splitlines()[1:]
+            if ln.strip() and not ln.strip().startswith(("#", '"""'))]
+    return body != ["pass"]
 
 
 _KERNELS = None

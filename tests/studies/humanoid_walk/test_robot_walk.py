@@ -63,7 +63,7 @@ def test_quadruped_trot_evaluates():
     p = s.make_problem(cfg.problem)
     assert p.kind == "quadruped" and p.genome.dim == len(robot_gait.GENES["quadruped"])
     ev = p.evaluate(p.initial_population(3, np.random.default_rng(0)))
-    assert np.isfinite(ev.fitness).all() and (ev.metrics["cost_of_transport"] == 0).all()
+    assert np.isfinite(ev.fitness).all() and (ev.metrics["cost_of_transport"] >= 0).all()
 
 
 def test_a_robot_without_gait_roles_is_refused(tmp_path):

@@ -150,9 +150,19 @@ def build_robot(spec: RobotSpec) -> Robot:
     path = resolve_mjcf(spec)
     try:
         mj = mujoco.MjSpec.from_file(str(path))
+        mj.compile()
+    except (ValueError, RuntimeError) as e:
+        raise spec.error("robot", "mjcf", f"{path} does not compile: {_one_line(e)}") from None
+    for body in spec.remove:
+        try:
+            mj.delete(mj.body(body))
+        except (TypeError, ValueError, KeyError):
+            raise spec.error("robot", "remove", f"no body {body!r} to remove") from None
+    try:
         base = mj.compile()
     except (ValueError, RuntimeError) as e:
-        raise spec.error("robot", "mjcf", f"{path} does not compile: {e}") from None
+        raise spec.error("robot", "remove", f"the model does not compile without "
+                         f"{', '.join(spec.remove)}: {_one_line(e)}") from None
     try:
         base.geom(spec.floor)
     except KeyError:
@@ -166,19 +176,18 @@ def build_robot(spec: RobotSpec) -> Robot:
     if not free or base.jnt_qposadr[free[0]] != 0:
         raise spec.error("robot", "torso", f"body {spec.torso!r} must carry the model's first "
                          "joint, a free joint")
-    for body in spec.remove:
-        try:
-            mj.delete(mj.body(body))
-        except (TypeError, ValueError, KeyError):
-            raise spec.error("robot", "remove", f"no body {body!r} to remove") from None
-    if spec.remove:
-        base = mj.compile()
+    if spec.keyframe is not None:
+        key = next((k for k in mj.keys if k.name == spec.keyframe), None)
+        if key is not None and len(key.qpos) not in (0, base.nq):
+            raise spec.error("robot", "keyframe", f"keyframe {spec.keyframe!r} has "
+                             f"{len(key.qpos)} qpos values, the model {base.nq}")
     _servos(spec, mj, base)
     _feet(spec, mj, base)
     try:
         model = mj.compile()
     except (ValueError, RuntimeError) as e:
-        raise spec.error("robot", "mjcf", f"the edited model does not compile: {e}") from None
+        raise spec.error("robot", "mjcf", "the edited model does not compile: "
+                         f"{_one_line(e)}") from None
     joints = channels(model)
     for section, values in (("pose", spec.pose), ("evolve", spec.evolve)):
         for name, value in values.items():
@@ -191,6 +200,9 @@ def build_robot(spec: RobotSpec) -> Robot:
     lower = np.array([spec.evolve[j][0] for j in evolved])
     upper = np.array([spec.evolve[j][1] for j in evolved])
     state0 = initial_state(spec, model, joints, pose)
+    if state0[3] <= spec.fall_height_m:  # time, then the free joint's x, y, z
+        raise spec.error("fall", "height_m", f"{spec.fall_height_m} m: the torso starts at "
+                         f"{state0[3]:.3f} m, so every rollout would start fallen")
     try:
         xml = mj.to_xml()
     except (ValueError, RuntimeError):  # e.g. meshes that cannot be written back
@@ -289,3 +301,7 @@ def _lowest_z(model, data, g: int) -> float:
                                         for sz in (-1, 1)])
     world = data.geom_xpos[g] + corners @ data.geom_xmat[g].reshape(3, 3).T
     return float(world[:, 2].min())
+
+
+def _one_line(e: Exception) -> str:
+    return " ".join(str(e).split())

@@ -186,6 +186,9 @@ def read_spec(path: str | Path) -> RobotSpec:
     height = _number(path, lines, "fall", "height_m", fall["height_m"], 0.0, lo_open=True)
     tilt = _number(path, lines, "fall", "tilt_rad", fall.get("tilt_rad", math.pi / 4), 0.0,
                    lo_open=True)
+    if tilt > math.pi:
+        raise InputError(f"{where('fall', 'tilt_rad')}: [fall] tilt_rad: expected at most pi "
+                         f"(3.1416), got {tilt}")
     servo = raw.get("servo")
     if servo is not None:
         if "kp" not in servo:

@@ -61,7 +61,7 @@ class HumanoidRepertoireConfig:
     threads: int = 0  # mujoco.rollout threads; 0 = all cores
     backend: str = "cpu"  # physics: cpu (mujoco.rollout, float64) | warp (MuJoCo Warp, float32)
     warp_device: str = ""  # backend warp: "cuda:0", "cpu", ...; "" = the first GPU, else the CPU
-    warp_deterministic: bool = True  # backend warp: bit-identical run to run (opt.deterministic)
+    warp_deterministic: bool = True  # backend warp: MuJoCo Warp opt.deterministic = ALL
     warp_nconmax: int = 16  # backend warp: contacts per world to start with (grown when short)
     batch_rollouts: int = 2048  # rollouts simulated (and recorded in memory) at once
     segment_s: float = 0.4  # fallen robots stop being simulated at these boundaries (s)

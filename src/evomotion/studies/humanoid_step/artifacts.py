@@ -97,6 +97,8 @@ def finalize_robot(ctx: RunContext) -> None:
     height = float(track.xyz[0, 0, 2])
     video: Path | None = ctx.out_dir / "best.mp4"
     try:
+        if not robot.xml:
+            raise RuntimeError("the robot's edited model cannot be written as MJCF text")
         render_video(states[0, :, 1:1 + robot.model.nq], problem.dt, video,
                      model_xml=robot.xml,
                      camera=f"follow={robot.spec.torso},{max(1.1, 2.6 * height):.2f},"

@@ -5,9 +5,10 @@ Fitness (maximised), as :class:`~.problem.HumanoidWalkProblem`'s without the NAO
 speed check: fell: ``time_up_s + 0.1 clip(forward_m, -0.5, 0.5)``; stayed up: ``horizon_s +
 1 + soft_floor(quality_m)`` with ``quality_m = forward_m - heading_weight |heading| -
 lateral_weight |lateral_m| - excess_weight max(|heading| - tolerance forward_m, 0) -
-energy_weight cost_of_transport`` (the work of the joint servos; tendon actuators count no
-work). ``straightness`` is the forward displacement over the torso's path length (1: a
-straight line). Perturbed worlds (``worlds = K``) as for the NAO, with the training pushes
+energy_weight cost_of_transport`` (the work of the joint servos; actuators on tendons,
+such as the dm_control quadruped's lift and extend, count no work). ``straightness`` is the
+forward displacement over the torso's path length sampled once per gait cycle (1: a straight
+line). Perturbed worlds (``worlds = K``) as for the NAO, with the training pushes
 scaled by the robot's mass over the NAO's (the same change of velocity).
 """
 
@@ -58,8 +59,8 @@ class RobotWalkProblem:
         self.ctrl_hi = np.where(limited, m.actuator_ctrlrange[:, 1], np.inf)
         self.sim = make_simulator(m, cfg, cfg.threads)
         self.segment_steps = max(1, int(round(cfg.segment_s / self.dt)))
-        self.joint_actuated = (m.actuator_trntype == 0).all()  # mjTRN_JOINT everywhere
-        self.work = ServoWork(m) if self.joint_actuated else None
+        joint_servos = np.flatnonzero(m.actuator_trntype == 0)  # mjTRN_JOINT
+        self.work = ServoWork(m, joint_servos) if joint_servos.size else None
         self.mass_kg = float(m.body_mass.sum())
         same = (cfg.fall_height_m == nao.FALL_HEIGHT_M, cfg.fall_tilt_rad == nao.FALL_TILT_RAD)
         self.fall_height_m = r.fall_height_m if same[0] else cfg.fall_height_m
@@ -175,5 +176,7 @@ def straightness(xy: np.ndarray, last: np.ndarray, stride: np.ndarray,
         k = np.arange(pts.shape[1])[None]
         seg = np.linalg.norm(np.diff(pts, axis=1), axis=2)  # [r, K-1]
         seg = seg * (k[:, 1:] * s <= last[rows, None])
-        out[rows] = np.maximum(forward[rows], 0.0) / np.maximum(seg.sum(axis=1), 1e-6)
+        length = seg.sum(axis=1)
+        out[rows] = np.where(length > 1e-6, np.maximum(forward[rows], 0.0)
+                             / np.maximum(length, 1e-6), 0.0)  # no path: no progress
     return np.clip(out, 0.0, 1.0)
