@@ -178,7 +178,9 @@ class ServoWork:
         self.q_cols = _as_slice(QPOS_OFFSET + model.jnt_qposadr[joints])
         self.v_cols = _as_slice(QPOS_OFFSET + model.nq + model.jnt_dofadr[joints])
         self.kp = model.actuator_gainprm[acts, 0].copy()
-        self.force_range = model.actuator_forcerange[acts].copy()
+        limited = model.actuator_forcelimited[acts].astype(bool)[:, None]
+        self.force_range = np.where(limited, model.actuator_forcerange[acts],
+                                    [-np.inf, np.inf])  # unlimited: no clipping
         self.dt = float(model.opt.timestep)
 
     def __call__(self, states: np.ndarray, ctrl: np.ndarray, last: np.ndarray) -> np.ndarray:
