@@ -82,3 +82,33 @@ def in_batches(evaluate, genomes, per_batch: int):
     if n <= size:
         return evaluate(genomes)
     return Evaluation.concat([evaluate(genomes[i:i + size]) for i in range(0, n, size)])
+
+
+class BatchedRollouts:
+    """Mixin of the MuJoCo problems: ``evaluate`` in batches of ``cfg.batch_rollouts``
+    rollouts (:func:`in_batches`), the run folder's ``physics_record`` and the GPU
+    ``device_memory`` check. The problem has ``sim``, ``cfg.batch_rollouts``,
+    ``segment_steps``, ``worlds`` (``None`` or the K perturbed worlds, K rollouts per genome)
+    and ``_evaluate_batch(genomes)``."""
+
+    worlds: list | None = None
+
+    def _rollouts_per_genome(self) -> int:
+        return len(self.worlds) if self.worlds else 1
+
+    def physics_record(self) -> dict[str, Any]:
+        """The physics backend, device and its reproducibility guarantee (``physics.json``)."""
+        return physics_record(self.sim)
+
+    def device_memory(self, pop_size: int) -> tuple[int, int | None, str] | None:
+        """(needed, free bytes, device) of a population's batch on a GPU backend, else None."""
+        rollouts = min(pop_size * self._rollouts_per_genome(), self.cfg.batch_rollouts)
+        return device_memory(self.sim, rollouts, self.segment_steps)
+
+    def evaluate(self, genomes):
+        """Fitness and metrics of a batch, ``problem.batch_rollouts`` rollouts at a time."""
+        import numpy as np
+
+        genomes = np.atleast_2d(np.asarray(genomes, dtype=float))
+        per = max(self.cfg.batch_rollouts // self._rollouts_per_genome(), 1)
+        return in_batches(self._evaluate_batch, genomes, per)

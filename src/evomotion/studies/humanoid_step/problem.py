@@ -51,13 +51,7 @@ from evomotion.core.checks import check_choice, check_fields, check_number
 from evomotion.core.problem import Evaluation, GenomeSpec
 from evomotion.errors import InputError
 from evomotion.sim import nao
-from evomotion.sim.backend import (
-    device_memory,
-    in_batches,
-    make_simulator,
-    physics_record,
-    validate_backend,
-)
+from evomotion.sim.backend import BatchedRollouts, make_simulator, validate_backend
 from evomotion.sim.nao.scene import scene_xml, sensor_slices
 from evomotion.sim.rollout import fall_step, fell, torso_track
 from evomotion.studies.humanoid_step.encoding import ENCODINGS, ServoEncoding
@@ -217,7 +211,7 @@ def flight_steps(airborne: np.ndarray, min_run: int) -> np.ndarray:
     return out
 
 
-class HumanoidStepProblem:
+class HumanoidStepProblem(BatchedRollouts):
     """Batch evaluation of forward-step trajectories (fitness maximised)."""
 
     sense = "max"
@@ -354,21 +348,6 @@ class HumanoidStepProblem:
         }
         return Evaluation(fitness, metrics)
 
-    def physics_record(self) -> dict:
-        """The physics backend, device and its reproducibility guarantee (``physics.json``)."""
-        return physics_record(self.sim)
-
-    def device_memory(self, pop_size: int) -> tuple[int, int | None, str] | None:
-        """(needed, free bytes, device) of a population's batch on a GPU backend, else None."""
-        k = len(self.worlds) if self.worlds else 1
-        return device_memory(self.sim, min(pop_size * k, self.cfg.batch_rollouts),
-                             self.segment_steps)
-
-    def evaluate(self, genomes: np.ndarray) -> Evaluation:
-        """Fitness and metrics of a batch, ``problem.batch_rollouts`` rollouts at a time."""
-        genomes = np.atleast_2d(np.asarray(genomes, dtype=float))
-        per = max(self.cfg.batch_rollouts // (len(self.worlds) if self.worlds else 1), 1)
-        return in_batches(self._evaluate_batch, genomes, per)
 
     def _evaluate_batch(self, genomes: np.ndarray) -> Evaluation:
         genomes = np.atleast_2d(genomes)

@@ -47,13 +47,7 @@ from evomotion.core.checks import check_choice, check_fields, check_number
 from evomotion.core.problem import Evaluation, GenomeSpec
 from evomotion.errors import InputError
 from evomotion.sim import nao
-from evomotion.sim.backend import (
-    device_memory,
-    in_batches,
-    make_simulator,
-    physics_record,
-    validate_backend,
-)
+from evomotion.sim.backend import BatchedRollouts, make_simulator, validate_backend
 from evomotion.sim.nao.joint_limits import SPEED_LIMITS
 from evomotion.sim.nao.motion import Motion
 from evomotion.sim.nao.replay import motion_targets
@@ -145,7 +139,7 @@ class HumanoidWalkConfig:
         return 2 * 8 * min(pop_size * self.worlds, self.batch_rollouts) * steps * 90
 
 
-class HumanoidWalkProblem:
+class HumanoidWalkProblem(BatchedRollouts):
     """Batch evaluation of gait parameters (fitness maximised)."""
 
     sense = "max"
@@ -222,21 +216,6 @@ class HumanoidWalkProblem:
     def _fallen(self, states: np.ndarray) -> np.ndarray:
         return fell(states, self.cfg.fall_height_m, self.cfg.fall_tilt_rad)
 
-    def physics_record(self) -> dict:
-        """The physics backend, device and its reproducibility guarantee (``physics.json``)."""
-        return physics_record(self.sim)
-
-    def device_memory(self, pop_size: int) -> tuple[int, int | None, str] | None:
-        """(needed, free bytes, device) of a population's batch on a GPU backend, else None."""
-        k = len(self.worlds) if self.worlds else 1
-        return device_memory(self.sim, min(pop_size * k, self.cfg.batch_rollouts),
-                             self.segment_steps)
-
-    def evaluate(self, genomes: np.ndarray) -> Evaluation:
-        """Fitness and metrics of a batch, ``problem.batch_rollouts`` rollouts at a time."""
-        genomes = np.atleast_2d(np.asarray(genomes, dtype=float))
-        per = max(self.cfg.batch_rollouts // (len(self.worlds) if self.worlds else 1), 1)
-        return in_batches(self._evaluate_batch, genomes, per)
 
     def _evaluate_batch(self, genomes: np.ndarray) -> Evaluation:
         genomes = np.atleast_2d(np.asarray(genomes, dtype=float))

@@ -21,7 +21,7 @@ import numpy as np
 from evomotion.core.problem import Evaluation, GenomeSpec
 from evomotion.errors import InputError
 from evomotion.sim import nao
-from evomotion.sim.backend import device_memory, in_batches, make_simulator, physics_record
+from evomotion.sim.backend import BatchedRollouts, make_simulator
 from evomotion.sim.rollout import ServoWork, fall_step, fell, torso_track
 from evomotion.studies.humanoid_walk import robot_gait
 from evomotion.studies.humanoid_walk.problem import GRAVITY, HumanoidWalkConfig, soft_floor
@@ -30,7 +30,7 @@ METRICS = ("time_to_fall_s", "forward_m", "speed_mps", "lateral_m", "heading_cha
            "heading_deg_per_m", "straightness", "cost_of_transport", "fell", "fall_rate")
 
 
-class RobotWalkProblem:
+class RobotWalkProblem(BatchedRollouts):
     """Batch evaluation of joint-space gaits of a robot spec (fitness maximised)."""
 
     sense = "max"
@@ -92,18 +92,6 @@ class RobotWalkProblem:
     def _fallen(self, states: np.ndarray) -> np.ndarray:
         return fell(states, self.fall_height_m, self.fall_tilt_rad)
 
-    def physics_record(self) -> dict:
-        return physics_record(self.sim)
-
-    def device_memory(self, pop_size: int) -> tuple[int, int | None, str] | None:
-        k = len(self.worlds) if self.worlds else 1
-        return device_memory(self.sim, min(pop_size * k, self.cfg.batch_rollouts),
-                             self.segment_steps)
-
-    def evaluate(self, genomes: np.ndarray) -> Evaluation:
-        genomes = np.atleast_2d(np.asarray(genomes, dtype=float))
-        per = max(self.cfg.batch_rollouts // (len(self.worlds) if self.worlds else 1), 1)
-        return in_batches(self._evaluate_batch, genomes, per)
 
     def simulate(self, genomes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(states, controls) of a batch in the nominal world."""
