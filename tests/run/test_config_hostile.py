@@ -266,8 +266,8 @@ def test_every_inf_field_documents_its_meaning():
     ("humanoid-step", "problem.intervals=1000000000", "problem.intervals"),
     ("humanoid-step", "problem.motion_s=nan", "problem.motion_s"),
     ("humanoid-step", "problem.motion_s=1e9", "problem.motion_s=1000000000.0, problem.hold_s="
-                                              "2.0, problem.worlds=1: the simulated "
-                                              "trajectories need about"),
+                                              "2.0, problem.worlds=1, problem.batch_rollouts="
+                                              "2048: the simulated trajectories need about"),
     ("humanoid-step", "problem.threads=100000", "problem.threads"),
     ("humanoid-step", "problem.encoding=wavelet", "problem.encoding"),
     ("biped-kick", "problem.roll_after_s=1e12", "problem.roll_after_s=1000000000000.0: the "
