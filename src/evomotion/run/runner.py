@@ -339,7 +339,8 @@ def _record_physics(problem: Any, out_dir: Path | None, resume: bool, log) -> No
             before = json.loads(path.read_text(encoding="utf-8"))
         except (OSError, ValueError):
             before = None
-        keys = ("backend", "device", "precision", "mujoco", "mujoco_warp", "deterministic")
+        keys = ("backend", "device", "precision", "mujoco", "mujoco_warp", "deterministic",
+                "robot", "robot_spec_sha256", "robot_mjcf_sha256")
         if isinstance(before, dict) and any(before.get(k) != now.get(k) for k in keys):
             log(f"note: resumed on other physics than the run started on ({PHYSICS_NAME}: "
                 f"{ {k: before.get(k) for k in keys if before.get(k) != now.get(k)} } -> "

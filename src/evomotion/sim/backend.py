@@ -61,6 +61,23 @@ def physics_record(sim: Any) -> dict[str, Any]:
             "guarantee": "bit-identical for one seed, whatever the evaluator and thread count"}
 
 
+def robot_identity(robot: Any) -> dict[str, str]:
+    """Name and SHA-256 digests of a robot's spec file and MJCF file."""
+    import hashlib
+
+    from evomotion.sim.robot.build import resolve_mjcf
+
+    def digest(path) -> str:
+        try:
+            return hashlib.sha256(path.read_bytes()).hexdigest()
+        except OSError:
+            return "?"
+
+    return {"robot": robot.name, "robot_spec": str(robot.spec.path.resolve()),
+            "robot_spec_sha256": digest(robot.spec.path),
+            "robot_mjcf_sha256": digest(resolve_mjcf(robot.spec))}
+
+
 def device_memory(sim: Any, batch: int, nstep: int) -> tuple[int, int | None, str] | None:
     """(needed bytes, free bytes, device) of a batch on the simulator's device, or ``None``
     for the CPU backend (its memory is the host's, in the problem's ``memory_bytes``)."""
@@ -97,8 +114,14 @@ class BatchedRollouts:
         return len(self.worlds) if self.worlds else 1
 
     def physics_record(self) -> dict[str, Any]:
-        """The physics backend, device and its reproducibility guarantee (``physics.json``)."""
-        return physics_record(self.sim)
+        """The physics backend, device and its reproducibility guarantee (``physics.json``);
+        for another robot than the NAO also its name and the SHA-256 of its spec and MJCF (a
+        resume with an edited robot is noted in the log)."""
+        record = physics_record(self.sim)
+        robot = getattr(self, "robot", None)
+        if robot is not None:
+            record.update(robot_identity(robot))
+        return record
 
     def device_memory(self, pop_size: int) -> tuple[int, int | None, str] | None:
         """(needed, free bytes, device) of a population's batch on a GPU backend, else None."""

@@ -66,3 +66,24 @@ def test_nao_through_the_robot_path_steps_like_the_nao():
     a, b = p_nao.evaluate(g), p_spec.evaluate(g)
     assert a.metrics["fell"][0] == b.metrics["fell"][0]
     assert abs(a.metrics["time_to_fall_s"][0] - b.metrics["time_to_fall_s"][0]) < 0.2
+
+
+def test_physics_json_pins_the_robot_and_a_changed_spec_is_noted(tmp_path):
+    import shutil
+
+    from evomotion.run.faults import fault_at
+    from evomotion.sim.robot import SPECS_DIR
+
+    spec = tmp_path / "op3.toml"
+    shutil.copy(SPECS_DIR / "op3.toml", spec)
+    s = get_study("humanoid-step")
+    over = [*s.smoke, f"problem.robot={spec}", "run.generations=1", "run.checkpoint_every=1",
+            "run.wall_seconds=0"]
+    cfg = resolve_config(s, None, over)
+    with fault_at(1, "interrupt"):
+        run_study(s, cfg, tmp_path / "r", quiet=True)
+    rec = json.loads((tmp_path / "r" / "physics.json").read_text())
+    assert rec["robot"] == "op3" and len(rec["robot_spec_sha256"]) == 64
+    spec.write_text(spec.read_text().replace("height_m = 0.18", "height_m = 0.170"))
+    run_study(s, cfg, tmp_path / "r", quiet=True, resume=True)
+    assert "resumed on other physics" in (tmp_path / "r" / "log.txt").read_text()

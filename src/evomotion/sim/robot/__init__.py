@@ -37,13 +37,18 @@ def spec_path(name_or_path: str) -> Path:
                      "(or a path to a spec .toml)")
 
 
-_CACHE: dict[str, Robot] = {}
+_CACHE: dict[str, Robot] = {}  # key: path, mtime and size of the spec
 
 
 def load_robot(name_or_path: str) -> Robot:
-    """The robot of a bundled spec name or a spec file (built once per process)."""
+    """The robot of a bundled spec name or a spec file (built once per process and version
+    of the file)."""
     path = spec_path(name_or_path)
-    key = str(path.resolve())
+    try:
+        stat = path.stat()
+        key = f"{path.resolve()}:{stat.st_mtime_ns}:{stat.st_size}"  # an edited spec reloads
+    except OSError:
+        key = str(path)
     if key not in _CACHE:
         _CACHE[key] = build_robot(read_spec(path))
     return _CACHE[key]
