@@ -19,7 +19,7 @@ import mujoco
 from evomotion.run.limits import available_bytes
 
 STATE_SPEC = mujoco.mjtState.mjSTATE_FULLPHYSICS
-_PROBES: dict[tuple, tuple[int, int]] = {}
+_PROBES: dict[tuple, tuple[mujoco.MjModel, tuple[int, int]]] = {}
 
 
 @dataclass(frozen=True)
@@ -52,19 +52,20 @@ def _probe(model: mujoco.MjModel, data0: mujoco.MjData, device: str, nconmax: in
            njmax: int) -> tuple[int, int]:
     """(fixed bytes, bytes per world) of MuJoCo Warp ``Data`` (and the model) for ``model``."""
     key = (id(model), device, nconmax, njmax)
-    if key not in _PROBES:
-        import mujoco_warp as mjw
-        import warp as wp
+    cached = _PROBES.get(key)
+    if cached is not None and cached[0] is model:  # not another model at a reused id
+        return cached[1]
+    import mujoco_warp as mjw
+    import warp as wp
 
-        with wp.ScopedDevice(device):
-            one = array_bytes(mjw.put_data(model, data0, nworld=1, nconmax=nconmax,
-                                           njmax=njmax))
-            two = array_bytes(mjw.put_data(model, data0, nworld=2, nconmax=nconmax,
-                                           njmax=njmax))
-            model_bytes = array_bytes(mjw.put_model(model))
-        per_world = max(two - one, 0)
-        _PROBES[key] = (one - per_world + model_bytes, per_world)
-    return _PROBES[key]
+    with wp.ScopedDevice(device):
+        one = array_bytes(mjw.put_data(model, data0, nworld=1, nconmax=nconmax, njmax=njmax))
+        two = array_bytes(mjw.put_data(model, data0, nworld=2, nconmax=nconmax, njmax=njmax))
+        model_bytes = array_bytes(mjw.put_model(model))
+    per_world = max(two - one, 0)
+    sizes = (one - per_world + model_bytes, per_world)
+    _PROBES[key] = (model, sizes)
+    return sizes
 
 
 def free_bytes(device: str) -> int | None:

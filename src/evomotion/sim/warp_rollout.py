@@ -269,9 +269,13 @@ class WarpSimulator:
                 b.push_force = wp.zeros(nworld, dtype=wp.vec3)
             if self.graphs:  # compile every kernel outside the capture, then capture a step
                 self._one_step(b)
-                with wp.ScopedCapture(device=self.device) as cap:
-                    self._one_step(b)
-                b.graph = cap.graph
+                try:
+                    with wp.ScopedCapture(device=self.device) as cap:
+                        self._one_step(b)
+                    b.graph = cap.graph
+                except RuntimeError:  # e.g. a driver without conditional graphs: step by step
+                    b.graph = None
+                    self.graphs = False
         self._batches[key] = b
         return b
 

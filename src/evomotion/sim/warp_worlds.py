@@ -51,6 +51,22 @@ def differing_fields(models: list) -> tuple[dict[str, np.ndarray], np.ndarray]:
     return fields, index
 
 
+def _cached_fields(sim, models: list) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """:func:`differing_fields` of ``models``, kept on ``sim`` for the same worlds (every
+    generation of a run evaluates the same K worlds, repeated per genome)."""
+    distinct = list({id(m): m for m in models}.values())
+    key = tuple(id(m) for m in distinct)
+    cache = getattr(sim, "_world_fields", None)
+    if cache is None or cache[0] != key or any(a is not b for a, b in zip(cache[1], distinct,
+                                                                          strict=True)):
+        with sim.wp.ScopedDevice(sim.device):
+            fields, _ = differing_fields(distinct)  # distinct: its own order
+        sim._world_fields = cache = (key, distinct, fields)
+    fields = cache[2]
+    position = {id(m): i for i, m in enumerate(cache[1])}
+    return fields, np.array([position[id(m)] for m in models], dtype=np.int64)
+
+
 def simulate_worlds_warp(sim, models: list, initial: np.ndarray, ctrl: np.ndarray,
                          push_ns: np.ndarray, push_step: np.ndarray, body: int,
                          stopped: Callable[[np.ndarray], np.ndarray] | None,
@@ -59,8 +75,7 @@ def simulate_worlds_warp(sim, models: list, initial: np.ndarray, ctrl: np.ndarra
     i-th in ``models[i]`` from ``initial[i]`` under ``ctrl[i]``, pushed by ``push_ns[i]``
     (N s) in step ``push_step[i]`` (-1: never), stopped early as in
     :func:`~evomotion.sim.rollout.rollout_segments`."""
-    with sim.wp.ScopedDevice(sim.device):
-        fields, index = differing_fields(models)
+    fields, index = _cached_fields(sim, models)
     dt = float(sim.model.opt.timestep)
     force = np.asarray(push_ns, dtype=float) / dt
     pushed = bool((np.asarray(push_step) >= 0).any())
