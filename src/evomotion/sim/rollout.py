@@ -22,7 +22,41 @@ from evomotion.sim.nao import STATE_SPEC
 QPOS_OFFSET = 1  # the state vector starts with time (mjSTATE_TIME), then qpos
 
 
-class BatchSimulator:
+class SegmentedSimulator:
+    """What every simulator derives from ``run_with_sensors(init, ctrl)`` (``init``: one
+    state or one per row): ``run``, the early-stopped ``run_until`` and ``with`` support."""
+
+    model: mujoco.MjModel
+    nstate: int
+
+    def run(self, initial_state: np.ndarray, ctrl: np.ndarray) -> np.ndarray:
+        """``states[batch, nstep, nstate]`` after each step for ``ctrl[batch, nstep, nu]``."""
+        return self.run_with_sensors(initial_state, ctrl)[0]
+
+    def run_until(self, initial_state: np.ndarray, ctrl: np.ndarray,
+                  stopped: Callable[[np.ndarray], np.ndarray],
+                  segment_steps: int) -> tuple[np.ndarray, np.ndarray]:
+        """Like ``run_with_sensors``, but in segments of ``segment_steps`` steps: after each
+        segment, trajectories for which ``stopped(states_segment) -> bool[batch]`` is true are
+        not simulated further; their remaining rows repeat their last state and sensor values.
+        (A fallen robot stays fallen, so falls are still found from the recorded states.)"""
+        batch, nstep, _ = ctrl.shape
+        return rollout_segments(
+            lambda rows, start, stop, init: self.run_with_sensors(init, ctrl[rows, start:stop]),
+            np.broadcast_to(initial_state, (batch, self.nstate)), nstep,
+            self.model.nsensordata, stopped, segment_steps)
+
+    def close(self) -> None:
+        """Release threads or device buffers (subclasses)."""
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+class BatchSimulator(SegmentedSimulator):
     """Rolls out batches of control sequences from one initial state with ``nthread`` threads."""
 
     def __init__(self, model: mujoco.MjModel, nthread: int = 0) -> None:
@@ -33,10 +67,6 @@ class BatchSimulator:
         self.nstate = mujoco.mj_stateSize(model, STATE_SPEC)
         self.steps_simulated = 0
         self.rollout_seconds = 0.0  # wall time spent inside mujoco.rollout
-
-    def run(self, initial_state: np.ndarray, ctrl: np.ndarray) -> np.ndarray:
-        """``states[batch, nstep, nstate]`` after each step for ``ctrl[batch, nstep, nu]``."""
-        return self.run_with_sensors(initial_state, ctrl)[0]
 
     def run_with_sensors(self, initial_state: np.ndarray,
                          ctrl: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -54,29 +84,10 @@ class BatchSimulator:
         self.steps_simulated += batch * nstep
         return out
 
-    def run_until(self, initial_state: np.ndarray, ctrl: np.ndarray,
-                  stopped: Callable[[np.ndarray], np.ndarray],
-                  segment_steps: int) -> tuple[np.ndarray, np.ndarray]:
-        """Like :meth:`run_with_sensors`, but in segments of ``segment_steps`` steps: after each
-        segment, trajectories for which ``stopped(states_segment) -> bool[batch]`` is true are
-        not simulated further; their remaining rows repeat their last state and sensor values.
-        (A fallen robot stays fallen, so falls are still found from the recorded states.)"""
-        batch, nstep, _ = ctrl.shape
-        return rollout_segments(
-            lambda rows, start, stop, init: self.run_with_sensors(init, ctrl[rows, start:stop]),
-            np.broadcast_to(initial_state, (batch, self.nstate)), nstep,
-            self.model.nsensordata, stopped, segment_steps)
-
     def close(self) -> None:
         if self._runner is not None:
             self._runner.close()
             self._runner = None
-
-    def __enter__(self) -> BatchSimulator:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
 
 
 def rollout_segments(roll: Callable[[np.ndarray, int, int, np.ndarray],

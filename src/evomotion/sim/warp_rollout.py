@@ -25,7 +25,6 @@ tolerances between the two are measured in ``tests/sim/test_warp_backend.py``.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -33,7 +32,7 @@ import mujoco
 import numpy as np
 
 from evomotion.errors import InputError
-from evomotion.sim.rollout import rollout_segments
+from evomotion.sim.rollout import SegmentedSimulator
 from evomotion.sim.warp_memory import MemoryEstimate, bucket_size, estimate_bytes
 
 STATE_SPEC = mujoco.mjtState.mjSTATE_FULLPHYSICS
@@ -87,7 +86,7 @@ class _Batch:
     fields: tuple[str, ...] = field(default_factory=tuple)
 
 
-class WarpSimulator:
+class WarpSimulator(SegmentedSimulator):
     """:class:`~evomotion.sim.rollout.BatchSimulator`'s interface on MuJoCo Warp."""
 
     backend = "warp"
@@ -121,33 +120,15 @@ class WarpSimulator:
             raise InputError(f"problem.backend = 'warp': MuJoCo Warp cannot simulate this "
                              f"model ({' '.join(str(e).split())})") from None
 
-    # -- the BatchSimulator interface ------------------------------------------------------
-    def run(self, initial_state: np.ndarray, ctrl: np.ndarray) -> np.ndarray:
-        return self.run_with_sensors(initial_state, ctrl)[0]
-
+    # -- the BatchSimulator interface (run, run_until, with: SegmentedSimulator) ------------
     def run_with_sensors(self, initial_state: np.ndarray,
                          ctrl: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         batch = ctrl.shape[0]
         init = np.broadcast_to(initial_state, (batch, self.nstate))
         return self.segment(init, ctrl)
 
-    def run_until(self, initial_state: np.ndarray, ctrl: np.ndarray,
-                  stopped: Callable[[np.ndarray], np.ndarray],
-                  segment_steps: int) -> tuple[np.ndarray, np.ndarray]:
-        batch, nstep, _ = ctrl.shape
-        return rollout_segments(
-            lambda rows, start, stop, init: self.segment(init, ctrl[rows, start:stop]),
-            np.broadcast_to(initial_state, (batch, self.nstate)), nstep,
-            self.model.nsensordata, stopped, segment_steps)
-
     def close(self) -> None:
         self._batches.clear()
-
-    def __enter__(self) -> WarpSimulator:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
 
     # -- memory ----------------------------------------------------------------------------
     def memory(self, batch: int, nstep: int) -> MemoryEstimate:

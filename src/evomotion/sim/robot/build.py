@@ -66,6 +66,14 @@ class Robot:
     def fall_tilt_rad(self) -> float:
         return self.spec.fall_tilt_rad
 
+    def fall_thresholds(self, height_m: float, tilt_rad: float) -> tuple[float, float]:
+        """(height m, tilt rad) a study uses: its configured values, where they are set to
+        something other than the NAO's defaults, else this robot's ``[fall]`` ones."""
+        from evomotion.sim.nao.constants import FALL_HEIGHT_M, FALL_TILT_RAD
+
+        return (self.fall_height_m if height_m == FALL_HEIGHT_M else height_m,
+                self.fall_tilt_rad if tilt_rad == FALL_TILT_RAD else tilt_rad)
+
     def sensor(self, name: str) -> slice:
         """Slice of ``sensordata`` of the sensor ``name`` (``<foot>_pos``, ``<foot>_floor``)."""
         i = self.model.sensor(name).id

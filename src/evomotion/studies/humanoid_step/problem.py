@@ -286,10 +286,8 @@ class HumanoidStepProblem(BatchedRollouts):
         self.sole0 = 0.5 * (data0.sensordata[self.sole_columns[0]]
                             + data0.sensordata[self.sole_columns[1]])
         self.contact_columns = [r.sensor("left_floor").start, r.sensor("right_floor").start]
-        nao_default = (cfg.fall_height_m == nao.FALL_HEIGHT_M,
-                       cfg.fall_tilt_rad == nao.FALL_TILT_RAD)
-        self.fall_height_m = r.fall_height_m if nao_default[0] else cfg.fall_height_m
-        self.fall_tilt_rad = r.fall_tilt_rad if nao_default[1] else cfg.fall_tilt_rad
+        self.fall_height_m, self.fall_tilt_rad = r.fall_thresholds(cfg.fall_height_m,
+                                                                   cfg.fall_tilt_rad)
 
     def controls(self, genomes: np.ndarray, t: np.ndarray | None = None) -> np.ndarray:
         """Actuator targets ``[pop, nstep, 22]`` for a batch of genomes."""

@@ -62,9 +62,8 @@ class RobotWalkProblem(BatchedRollouts):
         joint_servos = np.flatnonzero(m.actuator_trntype == 0)  # mjTRN_JOINT
         self.work = ServoWork(m, joint_servos) if joint_servos.size else None
         self.mass_kg = float(m.body_mass.sum())
-        same = (cfg.fall_height_m == nao.FALL_HEIGHT_M, cfg.fall_tilt_rad == nao.FALL_TILT_RAD)
-        self.fall_height_m = r.fall_height_m if same[0] else cfg.fall_height_m
-        self.fall_tilt_rad = r.fall_tilt_rad if same[1] else cfg.fall_tilt_rad
+        self.fall_height_m, self.fall_tilt_rad = r.fall_thresholds(cfg.fall_height_m,
+                                                                   cfg.fall_tilt_rad)
         self.worlds = None
         if cfg.worlds > 1:
             from evomotion.sim.nao.worlds import Perturbation, World, draw_worlds
