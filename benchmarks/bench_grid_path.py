@@ -23,7 +23,10 @@ import numpy as np
 
 from evomotion.core.cellular_ga import CGAConfig
 from evomotion.core.neighbourhoods import neighbour_table
-from evomotion.studies.grid_path.outcome import evolve
+try:
+    from evomotion.studies.grid_path.outcome import evolve
+except ImportError:  # a tree from before the one run loop (PYTHONPATH=... for a baseline)
+    from evomotion.studies.grid_path.driver import evolve
 from evomotion.studies.grid_path.problem import GridPathConfig, GridPathProblem
 
 

@@ -40,6 +40,7 @@ the mutation (and a registry crossover other than one-point) draws per wave.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -151,12 +152,17 @@ def roulette_rows(cost: np.ndarray, rng: np.random.Generator | None,
     """
     if u is None:
         u = rng.random((cost.shape[0], 1))
-    hi, lo = cost.max(1, keepdims=True), cost.min(1, keepdims=True)
-    if np.isfinite(hi).all() and np.isfinite(lo).all():  # finite costs: no inf handling
+    # ufunc reductions: the same values as the ndarray methods without their Python
+    # wrappers (this runs once per wave of a cellular-GA sweep)
+    hi = np.maximum.reduce(cost, axis=1, keepdims=True)
+    lo = np.minimum.reduce(cost, axis=1, keepdims=True)
+    # finite sums iff every cost is finite (a finite sum that overflows takes the exact path)
+    if math.isfinite(np.add.reduce(hi, axis=None)) and \
+            math.isfinite(np.add.reduce(lo, axis=None)):  # finite costs: no inf handling
         spread = hi - lo
         w = hi - cost + np.where(spread > 0, 1e-3 * spread, 1.0)
-        cdf = np.cumsum(w, axis=1)
-        return np.minimum((cdf <= u * cdf[:, -1:]).sum(1), cost.shape[1] - 1)
+        cdf = np.add.accumulate(w, axis=1)
+        return np.minimum(np.add.reduce(cdf <= u * cdf[:, -1:], axis=1), cost.shape[1] - 1)
     finite = np.isfinite(cost)
     any_f = finite.any(1, keepdims=True)
     c = np.where(finite, cost, 0.0)
@@ -193,6 +199,7 @@ class CellularGA(Optimizer):
         self.rows, self.cols = grid_shape(cfg.pop_size, cfg.rows)
         self._xo = CROSSOVERS[cfg.crossover]
         self._fast_one_point = self._xo is one_point and not cfg.crossover_params
+        self._rows = np.arange(cfg.pop_size)  # row numbers of a wave (a slice of it)
         parities = 2 if cfg.neighbourhood == "Margolus" else 1
         self._tables = tuple(neighbour_table(cfg.neighbourhood, self.rows, self.cols, p)
                              for p in range(parities))
@@ -259,8 +266,8 @@ class CellularGA(Optimizer):
 
     def _wave(self, state: CGAState) -> tuple[np.ndarray, slice]:
         """Cells of the current wave and their columns (slice of the sweep, wave order)."""
-        lo, hi = state.wave_starts[state.wave], state.wave_starts[state.wave + 1]
-        return state.wave_cells[lo:hi], slice(int(lo), int(hi))
+        lo, hi = state.wave_starts[state.wave:state.wave + 2].tolist()
+        return state.wave_cells[lo:hi], slice(lo, hi)
 
     def _ask(self, state: CGAState, rng: np.random.Generator):
         if not state.evaluated:
@@ -270,7 +277,7 @@ class CellularGA(Optimizer):
         c, g = self.cfg, self.genome
         cells, part = self._wave(state)
         nbr = state.wave_nbr[part]
-        rows = np.arange(len(cells))
+        rows = self._rows[:len(cells)]
         u = state.draws[:, part]
         ncost = state.cost[nbr]
         if c.mate_selection == "roulette":

@@ -26,6 +26,7 @@ Construction is uniform: every registered factory is ``factory(genome, cfg, *, m
 
 from __future__ import annotations
 
+import math
 from abc import ABC, abstractmethod
 from collections.abc import Callable
 from typing import Any
@@ -89,7 +90,7 @@ class Optimizer(ABC):
             raise ValueError(f"{self.name}: tell got genomes of shape {genomes.shape}")
         if cost.shape != (genomes.shape[0],):
             raise ValueError(f"{self.name}: {cost.shape} costs for {genomes.shape[0]} genomes")
-        if not np.isfinite(cost.sum()):  # one reduction; exact check and fix below
+        if not math.isfinite(np.add.reduce(cost)):  # one reduction; exact check below
             cost = np.where(np.isfinite(cost), cost, np.inf)
         new = self._tell(state, genomes, cost, rng, measures) if self.needs_measures \
             else self._tell(state, genomes, cost, rng)

@@ -13,6 +13,7 @@ by a uniform amount in ``[-delta, delta]``).
 
 from __future__ import annotations
 
+import math
 from functools import partial
 
 import numpy as np
@@ -28,10 +29,18 @@ def clip_to_bounds(x: np.ndarray, lower: np.ndarray, upper: np.ndarray,
     """Clip every gene into its box; NaN genes become the lower bound (``out`` may be ``x``)."""
     y = np.maximum(x, lower, out=out)  # maximum propagates NaN ...
     np.minimum(y, upper, out=y)
-    if np.isnan(y.sum()):  # ... so replace NaN genes explicitly (one reduction when none)
+    if math.isnan(np.add.reduce(y, axis=None)):  # ... so replace NaN genes explicitly
+        # (one reduction when there are none; a ufunc reduce: no Python wrapper)
         nan = np.isnan(y)
         y[nan] = np.broadcast_to(lower, y.shape)[nan]
     return y
+
+
+def _per_gene(bound, d: int) -> np.ndarray:
+    """``bound`` as a ``[d]`` array (a view when it already is one: this runs per batch)."""
+    if isinstance(bound, np.ndarray) and bound.shape == (d,):
+        return bound
+    return np.broadcast_to(bound, d)
 
 
 def _who(rng: np.random.Generator, n: int, rate: float) -> np.ndarray:
@@ -60,7 +69,7 @@ def _positions(rng: np.random.Generator, who: np.ndarray, d: int,
         flat = np.empty(0, dtype=np.int64)
     else:
         mean = total * p
-        size = int(mean + 6 * np.sqrt(mean) + 16)
+        size = int(mean + 6 * math.sqrt(mean) + 16)
         pos = np.cumsum(rng.geometric(p, size=size)) - 1
         while pos[-1] < total - 1:  # rare: extend the process until it passes the end
             pos = np.concatenate([pos, pos[-1] + np.cumsum(rng.geometric(p, size=size))])
@@ -79,7 +88,7 @@ def uniform_reset(x, lower, upper, rng: np.random.Generator, rate: float,
     """Reset chosen genes to ``U(lower, upper)``."""
     x = np.array(x, dtype=float)
     r, c = _positions(rng, _who(rng, x.shape[0], rate), x.shape[1], gene_rate)
-    lower, upper = np.broadcast_to(lower, x.shape[1]), np.broadcast_to(upper, x.shape[1])
+    lower, upper = _per_gene(lower, x.shape[1]), _per_gene(upper, x.shape[1])
     x[r, c] = rng.uniform(lower[c], upper[c])
     return x
 
@@ -92,7 +101,7 @@ def gaussian(x, lower, upper, rng: np.random.Generator, rate: float,
         raise ValueError(f"gaussian mutation needs sigma >= 0, got {sigma}")
     x = np.array(x, dtype=float)
     r, c = _positions(rng, _who(rng, x.shape[0], rate), x.shape[1], gene_rate)
-    lower, upper = np.broadcast_to(lower, x.shape[1]), np.broadcast_to(upper, x.shape[1])
+    lower, upper = _per_gene(lower, x.shape[1]), _per_gene(upper, x.shape[1])
     v = x[r, c] + rng.standard_normal(r.size) * (sigma * (upper[c] - lower[c]))
     x[r, c] = np.clip(v, lower[c], upper[c])
     return x

@@ -232,7 +232,7 @@ class PathOperators:
         """Seed mutation on each row with probability ``rate`` (see module doc)."""
         n, d = x.shape
         u = rng.random(n)  # u < rate picks the row; u / rate (uniform) picks the point
-        rows = np.flatnonzero(u < rate)
+        rows = (u < rate).nonzero()[0]
         x = np.array(x, dtype=float)
         if rows.size == 0:
             return x

@@ -74,12 +74,15 @@ class SegmentTables:
         """Position of each gene's cell in its layer, ``idx[P, d]``, straight from the genes
         (the cell of ``foot + y * normal``, as :meth:`.PerpendicularEncoding.decode` snaps
         it), or ``None`` when a cell is off the map or not listed."""
-        xy = np.floor(self._feet[None] + genes[..., None] * self._normal)
-        if not ((xy >= 0.0) & (xy < self._size)).all():  # off the map (or NaN)
+        # this runs twice per batch (mutation, evaluation): few numpy calls, no wrappers
+        xy = self._feet + genes[..., None] * self._normal
+        np.floor(xy, out=xy)
+        on_map = (xy >= 0.0) & (xy < self._size)
+        if np.count_nonzero(on_map) != on_map.size:  # off the map (or NaN)
             return None
         ix = xy.astype(np.int64)
         idx = self._inner[self._gene_rows, ix[..., 1] * self.w + ix[..., 0]]
-        return None if (idx < 0).any() else idx
+        return None if np.count_nonzero(idx < 0) else idx
 
     def chromosomes(self, genes: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
         """``(valid[P, S], length[P, S])`` of the decoded polylines of ``genes[P, d]`` (the
