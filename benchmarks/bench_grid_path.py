@@ -23,6 +23,7 @@ import numpy as np
 
 from evomotion.core.cellular_ga import CGAConfig
 from evomotion.core.neighbourhoods import neighbour_table
+
 try:
     from evomotion.studies.grid_path.outcome import evolve
 except ImportError:  # a tree from before the one run loop (PYTHONPATH=... for a baseline)

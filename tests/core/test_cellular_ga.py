@@ -197,6 +197,19 @@ def test_roulette_rows_fast_path_matches_reference(seed, k):
                           _roulette_reference(cost, np.random.default_rng(seed)))
 
 
+def test_roulette_rows_huge_and_infinite_costs(recwarn):
+    """Finite costs whose row sums overflow take the exact path and pick the same columns
+    as the plain-Python reference; inf and nan costs raise no numpy warning."""
+    cost = np.array([[1e307, 1.7e307, 0.0], [1.6e307, 1e307, 1.7e307]] * 10)
+    with np.errstate(over="ignore"):  # the sum of the rows' maxima overflows
+        assert np.array_equal(roulette_rows(cost, np.random.default_rng(3)),
+                              _roulette_reference(cost, np.random.default_rng(3)))
+    j = roulette_rows(np.array([[np.inf, 1.0, np.nan], [np.inf, np.inf, np.inf]]),
+                      np.random.default_rng(0))
+    assert j[0] == 1 and 0 <= j[1] <= 2
+    assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
+
+
 @pytest.mark.parametrize("fast", [True, False])
 @pytest.mark.parametrize("update", ["line_sweep", "new_random_sweep", "uniform_choice"])
 def test_mid_generation_restore_is_exact(update, fast):
