@@ -33,7 +33,7 @@ TIMED = {"wall_s", "evals_per_s"}
 
 def _overrides(name: str) -> list[str]:
     return [*get_study(name).smoke, f"run.generations={STEPS - 1}", "run.checkpoint_every=2",
-            "run.wall_seconds=0", "run.seed=3"]
+            "run.wall_seconds=0", "run.seed=3", "run.videos=false"]
 
 
 def _same(d1: Path, d2: Path) -> None:

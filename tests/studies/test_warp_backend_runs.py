@@ -25,7 +25,7 @@ TIMED = {"wall_s", "evals_per_s"}
 
 def _overrides(name: str) -> list[str]:
     return [*get_study(name).smoke, *WARP, "run.generations=1", "run.checkpoint_every=1",
-            "run.wall_seconds=0", "run.seed=5"]
+            "run.wall_seconds=0", "run.seed=5", "run.videos=false"]
 
 
 @pytest.mark.parametrize("name", ["humanoid-step", "humanoid-walk", "humanoid-repertoire"])

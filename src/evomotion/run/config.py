@@ -56,6 +56,7 @@ class RunSection:
     address: str = ""
     history_every: int = 0  # population.bin every N generations (0: none; run/history.py)
     loggers: tuple[str, ...] = ()  # extra loggers beside stats.csv (run/loggers/)
+    videos: bool = True  # the studies' MP4s at the end (false: skipped, logged; sim/render.py)
 
     def validate(self) -> None:
         check_fields(self, "run")

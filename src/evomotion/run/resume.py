@@ -18,11 +18,12 @@ from evomotion.run.checkpoint import NAME, CheckpointError, candidates, load_che
 from evomotion.run.config import Config
 from evomotion.run.driver import Driver
 
-#: the keys a resume may change: limits, the evaluator, the loggers (results stay the same)
+#: the keys a resume may change: limits, the evaluator, the loggers, videos (results stay
+#: the same)
 RESUME_KEYS = frozenset(f"run.{k}" for k in (
     "generations", "max_evaluations", "target", "stagnation_generations", "stagnation_eps",
     "wall_seconds", "checkpoint_every", "evaluator", "workers", "chunks_per_worker", "address",
-    "loggers"))
+    "loggers", "videos"))
 
 
 def resume_config(run_dir: Path, study: Any = None,
@@ -44,9 +45,9 @@ def resume_config(run_dir: Path, study: Any = None,
     raw.setdefault("run", {})
     for key, value in (changes or {}).items():
         if key not in RESUME_KEYS:
-            raise InputError(f"{key}: resume only changes the limits, the evaluator and the "
-                             f"loggers ({', '.join(sorted(RESUME_KEYS))}); other keys would "
-                             "make the results differ from an uninterrupted run")
+            raise InputError(f"{key}: resume only changes the limits, the evaluator, the "
+                             f"loggers and videos ({', '.join(sorted(RESUME_KEYS))}); other "
+                             "keys would make the results differ from an uninterrupted run")
         raw["run"][key.split(".", 1)[1]] = value
     config = config_from_dict(study, raw)
     if changes:

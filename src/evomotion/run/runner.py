@@ -302,8 +302,15 @@ def _write_archive(driver: Any, state: Any, out_dir: Path) -> bool:
 def _hook(fn, ctx: RunContext, log) -> Any:
     if fn is None:
         return None
+    run_cfg = getattr(ctx.config, "run", None)
+    off = None if getattr(run_cfg, "videos", True) else "videos are off (run.videos = false)"
     try:
-        return fn(ctx)
+        if off is None:
+            return fn(ctx)
+        from evomotion.sim.render import videos_off
+
+        with videos_off(off):
+            return fn(ctx)
     except Exception as e:  # noqa: BLE001 - an artifact failure must not lose the run
         log(f"warning: {getattr(fn, '__name__', 'hook')} failed: {type(e).__name__}: {e}")
         return None

@@ -12,9 +12,12 @@ skip only the video.
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import io
 import subprocess
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -30,6 +33,22 @@ class RenderUnavailableError(RuntimeError):
 
 CAMERAS = ("follow", "kick", "overview")
 
+#: why videos are off in this context (``run.videos = false``), or None
+_VIDEOS_OFF: contextvars.ContextVar[str | None] = contextvars.ContextVar("videos_off",
+                                                                         default=None)
+
+
+@contextlib.contextmanager
+def videos_off(reason: str | None) -> Iterator[None]:
+    """Within the block, :func:`render_video` raises :class:`RenderUnavailableError` with
+    ``reason`` instead of rendering (every caller then skips only its video and logs why);
+    ``None`` leaves rendering on. The run loop uses it for ``run.videos = false``."""
+    token = _VIDEOS_OFF.set(reason)
+    try:
+        yield
+    finally:
+        _VIDEOS_OFF.reset(token)
+
 
 def render_video(qpos: np.ndarray, dt: float, out_path: str | Path, fps: int = 25,
                  width: int = 480, height: int = 352, model_path: Path = MODEL_PATH,
@@ -44,6 +63,9 @@ def render_video(qpos: np.ndarray, dt: float, out_path: str | Path, fps: int = 2
     quadruped of :mod:`evomotion.sim.quadruped`, about 0.6 m across) or
     ``"follow=BODY,DISTANCE_M,HEIGHT_M"`` (like ``"follow"`` for another robot: the camera
     follows ``BODY`` from ``DISTANCE_M`` away, looking at ``HEIGHT_M`` above the floor)."""
+    off = _VIDEOS_OFF.get()
+    if off is not None:
+        raise RenderUnavailableError(off)
     out_path = Path(out_path)
     if camera not in CAMERAS and not camera.startswith("follow="):
         raise ValueError(f"unknown camera {camera!r}; available: {', '.join(CAMERAS)}")

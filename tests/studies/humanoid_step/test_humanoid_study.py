@@ -47,6 +47,27 @@ def test_tiny_run_writes_artifacts(tmp_path):
     assert summary == replay(tmp_path / "best.motion", hold_s=0.2)
 
 
+def test_videos_off_skips_only_the_video(tmp_path):
+    """``run.videos = false``: every artifact but best.mp4, and the log says why; a resume
+    may turn videos back on."""
+    study = get_study("humanoid-step")
+    sets = ["algorithm.pop_size=4", "run.generations=1", "problem.intervals=4",
+            "problem.motion_s=0.4", "problem.hold_s=0.2", "problem.threads=1"]
+    res = run_study(study, resolve_config(study, None, [*sets, "run.videos=false"]), tmp_path,
+                    quiet=True)
+    assert res.exit_code == 0
+    assert (tmp_path / "best.motion").exists() and (tmp_path / "best_replay.json").exists()
+    assert not (tmp_path / "best.mp4").exists()
+    assert "best.mp4 skipped: videos are off (run.videos = false)" in \
+        (tmp_path / "log.txt").read_text()
+    from evomotion.run.resume import resume_config
+
+    _, cfg = resume_config(tmp_path, study, {"run.videos": True, "run.generations": 2})
+    assert cfg.run.videos is True
+    assert run_study(study, cfg, tmp_path, quiet=True, resume=True).exit_code == 0
+    assert (tmp_path / "best.mp4").stat().st_size > 1000
+
+
 def test_replay_lives_in_one_place():
     """``evomotion replay`` is the only replay command (no study-level copy)."""
     names = {c.name for c in cli.registered_commands}
