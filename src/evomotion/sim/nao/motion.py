@@ -23,6 +23,7 @@ Apache-2.0, Copyright Cyberbotics Ltd.; see ``motions/NOTICE.txt``), read with
 from __future__ import annotations
 
 import re
+from collections.abc import Collection
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -105,11 +106,12 @@ def _value(token: str) -> float | None:
     return v if np.isfinite(v) else None
 
 
-def read_motion(path: str | Path) -> Motion:
-    """Read a Webots ``.motion`` file (both header variants)."""
+def read_motion(path: str | Path, joints: Collection[str] | None = None) -> Motion:
+    """Read a Webots ``.motion`` file (both header variants); ``joints``: the joint names
+    it may use (default: the NAO's; another robot's channels, :mod:`evomotion.sim.robot`)."""
     path = Path(path)
     data = read_file_bytes(path, "motion file", MAX_MOTION_BYTES)
-    return parse_motion(decode_utf8(data, path), path)
+    return parse_motion(decode_utf8(data, path), path, joints)
 
 
 #: The Webots motions shipped in ``motions/`` (package data).
@@ -125,8 +127,10 @@ def shipped_motion(name: str) -> Motion:
     return parse_motion(res.read_text(encoding="utf-8-sig"), Path(str(res)))
 
 
-def parse_motion(text: str, path: str | Path = "<motion>") -> Motion:
-    """Parse the text of a ``.motion`` file; ``path`` names it in error messages."""
+def parse_motion(text: str, path: str | Path = "<motion>",
+                 known: Collection[str] | None = None) -> Motion:
+    """Parse the text of a ``.motion`` file; ``path`` names it in error messages; ``known``:
+    the joint names it may use (default: the NAO's)."""
     path = Path(path)
     text = text.removeprefix("\ufeff")
     lines = split_lines(text)
@@ -149,8 +153,11 @@ def parse_motion(text: str, path: str | Path = "<motion>") -> Motion:
     if not joints:
         raise FileFormatError(path, first, "expected at least one joint name")
     for name in joints:
-        if name not in NAO_JOINT_NAMES:
+        if known is None and name not in NAO_JOINT_NAMES:
             raise FileFormatError(path, first, f"unknown joint {name!r}; expected a NAO joint name")
+        if known is not None and name not in known:
+            raise FileFormatError(path, first, f"unknown joint {name!r}; expected one of the "
+                                  f"robot's: {', '.join(known)}")
     if len(set(joints)) != len(joints):
         raise FileFormatError(path, first, "expected each joint name once")
     times, names, rows = [], [], []

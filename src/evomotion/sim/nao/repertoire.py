@@ -58,11 +58,13 @@ def _integer(v: object) -> bool:
     return isinstance(v, int) and not isinstance(v, bool)
 
 
-def read_cell(folder: Path, entry: dict) -> Motion:
+def read_cell(folder: Path, entry: dict, joints: tuple[str, ...] | None = None) -> Motion:
+    """The motion of an index entry (``joints``: another robot's channels, default the
+    NAO's joints)."""
     from evomotion.sim.nao.motion import read_motion
 
     name = Path(str(entry["file"])).name  # no path outside the folder
-    return read_motion(folder / name)
+    return read_motion(folder / name, joints)
 
 
 def chain(motions: list[Motion]) -> Motion:

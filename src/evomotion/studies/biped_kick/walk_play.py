@@ -98,6 +98,9 @@ def walk(run: SceneRun, repertoire: Path, ctrl: np.ndarray, goal: np.ndarray,
     """Walk ``run`` to ``goal`` (x, y, heading) along the Bézier ``ctrl`` with the steps of
     ``repertoire``; returns the steps taken and the final error."""
     folder, index = read_index(repertoire)
+    if index.get("robot", "nao") != "nao":
+        raise InputError(f"{folder}: a repertoire of robot {index['robot']!r}; the kick "
+                         "walks the NAO (a humanoid-repertoire run without problem.robot)")
     entries = index["entries"]
     for name in ["ready.motion"] + [Path(str(e["file"])).name for e in entries]:
         if not (folder / name).is_file():

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from evomotion.core.checks import check_fields, check_number
+from evomotion.core.checks import check_fields, check_number, check_text
 from evomotion.core.problem import Evaluation, GenomeSpec, MeasureSpec
 from evomotion.errors import InputError
 from evomotion.sim import nao
@@ -59,6 +59,10 @@ class HumanoidRepertoireConfig:
     warp_nconmax: int = 16  # backend warp: contacts per world to start with (grown when short)
     batch_rollouts: int = 2048  # rollouts simulated (and recorded in memory) at once
     segment_s: float = 0.4  # fallen robots stop being simulated at these boundaries (s)
+    #: another biped than the NAO: a bundled spec name (op3, dm-humanoid) or a spec .toml
+    #: (sim/robot); the same step, scaled to its size, through a numerical leg IK
+    #: (robot_step.py); its [fall] thresholds apply unless fall_height_m / fall_tilt_rad are set
+    robot: str = ""
 
     def for_worker(self) -> HumanoidRepertoireConfig:
         return dataclasses.replace(self, threads=1) if self.threads == 0 else self
@@ -73,6 +77,7 @@ class HumanoidRepertoireConfig:
         check_number("problem.threads", self.threads, lo=0, hi=1024, integer=True)
         validate_backend(self)
         check_number("problem.segment_s", self.segment_s, lo=0.0, lo_open=True)
+        check_text("problem.robot", self.robot)
 
     def genome_dim(self) -> int:
         return len(step.GENES)
@@ -108,6 +113,7 @@ class HumanoidRepertoireProblem(BatchedRollouts):
         self.segment_steps = max(1, int(round(cfg.segment_s / self.dt)))
         self.state0 = nao.initial_state(self.model, step.ready_pose())
         self.work = ServoWork(self.model)
+        self.fall_height_m, self.fall_tilt_rad = cfg.fall_height_m, cfg.fall_tilt_rad
 
     def initial_population(self, n: int, rng: np.random.Generator) -> np.ndarray:
         """The in-place step of :data:`.step.DEFAULT` (CMA-ME's emitters start from it)."""
@@ -133,7 +139,7 @@ class HumanoidRepertoireProblem(BatchedRollouts):
         return ctrl, end
 
     def _fallen(self, states: np.ndarray) -> np.ndarray:
-        return fell(states, self.cfg.fall_height_m, self.cfg.fall_tilt_rad)
+        return fell(states, self.fall_height_m, self.fall_tilt_rad)
 
 
     def _evaluate_batch(self, genomes: np.ndarray) -> Evaluation:
@@ -147,7 +153,7 @@ class HumanoidRepertoireProblem(BatchedRollouts):
         at step ``end[P]`` (or at the fall, when it comes first)."""
         c = self.cfg
         track = torso_track(states)
-        fall = fall_step(track, c.fall_height_m, c.fall_tilt_rad)
+        fall = fall_step(track, self.fall_height_m, self.fall_tilt_rad)
         fell_ = fall <= end
         last = np.minimum(fall, end)
         rows = np.arange(len(states))
@@ -170,6 +176,12 @@ class HumanoidRepertoireProblem(BatchedRollouts):
 
 
 def make_problem(cfg: HumanoidRepertoireConfig) -> HumanoidRepertoireProblem:
+    """The NAO's repertoire, or with ``cfg.robot`` another biped's
+    (:class:`.robot_problem.RobotRepertoireProblem`)."""
     if not isinstance(cfg, HumanoidRepertoireConfig):
         raise InputError("humanoid-repertoire: expected a HumanoidRepertoireConfig")
+    if cfg.robot:
+        from evomotion.studies.humanoid_repertoire.robot_problem import RobotRepertoireProblem
+
+        return RobotRepertoireProblem(cfg)
     return HumanoidRepertoireProblem(cfg)

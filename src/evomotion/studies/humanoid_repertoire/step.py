@@ -22,6 +22,8 @@ Times are on the 20 ms key-pose grid of a Webots ``.motion``.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from evomotion.sim import nao
@@ -75,11 +77,28 @@ def _rot(a: np.ndarray, v: np.ndarray) -> np.ndarray:
     return np.stack([c * v[..., 0] - s * v[..., 1], s * v[..., 0] + c * v[..., 1]], -1)
 
 
-def poses(genes: np.ndarray) -> np.ndarray:
-    """Key poses ``[K, 22]`` (``nao.JOINTS`` order, rad) every 20 ms of one step, from the
-    ready pose to the ready pose."""
+@dataclass(frozen=True)
+class FootPlan:
+    """The Cartesian step of one genome on the 20 ms key-pose grid ``t`` [ms]: the torso's
+    (hip centre's) ground position ``torso[K, 2]`` and first-guess yaw ``yaw[K]``, each foot's
+    ground position ``[K, 2]``, yaw ``[K]`` and lift ``[K]`` (m, rad, in the robot's initial
+    frame), for the leading foot (``lead_is_left``) and the other one."""
+
+    t: np.ndarray
+    torso: np.ndarray
+    yaw: np.ndarray
+    lead: tuple[np.ndarray, np.ndarray, np.ndarray]
+    other: tuple[np.ndarray, np.ndarray, np.ndarray]
+    lead_is_left: bool
+
+
+def foot_plan(genes: np.ndarray, left0: np.ndarray, right0: np.ndarray,
+              durations: tuple[int, int] | None = None) -> FootPlan:
+    """The phases of the module doc for feet starting at ground positions ``left0`` and
+    ``right0`` [m] (relative to the torso); ``durations`` (shift, swing) [ms] default to the
+    genome's on the pose grid."""
     g = {n: float(v) for n, v in zip(NAMES, np.asarray(genes, float), strict=True)}
-    sh, sw = durations_ms(np.asarray(genes, float))
+    sh, sw = durations or durations_ms(np.asarray(genes, float))
     t = np.arange(0, 3 * sh + 2 * sw + 1, POSE_MS, dtype=float)
     sig = 1.0 if g["lead"] >= 0 else -1.0
     b = np.cumsum([0, sh, sw, sh, sw, sh]).astype(float)  # phase boundaries (ms)
@@ -92,6 +111,7 @@ def poses(genes: np.ndarray) -> np.ndarray:
     d = np.array([g["dx_m"], g["dy_m"]])
     th = g["dtheta_rad"]
     yaw_t = prog * th
+
     # sway: towards the stance foot (-sig side) during the first swing, then the lead's
     def shift(t0: float) -> np.ndarray:
         return _smooth((t - t0) / sh)
@@ -99,17 +119,23 @@ def poses(genes: np.ndarray) -> np.ndarray:
     side = -sig * shift(b[0]) + 2 * sig * shift(b[2]) - sig * shift(b[4])
     sway = g["sway_m"] * side
     torso = carry[:, None] * d + _rot(yaw_t, np.stack([np.zeros_like(t), sway], -1))
-    w = HIP_Y_M + WIDTH_M
-    lead0, other0 = np.array([0.0, sig * w]), np.array([0.0, -sig * w])
+    lead0, other0 = (left0, right0) if sig > 0 else (right0, left0)
     lead1, other1 = d + _rot(np.array(th), lead0), d + _rot(np.array(th), other0)
     lead = lead0 + u1[:, None] * (lead1 - lead0)
     other = other0 + u2[:, None] * (other1 - other0)
-    lead_yaw, other_yaw = u1 * th, u2 * th
     h = g["step_height_m"]
-    lift_lead = h * np.sin(np.pi * s1)
-    lift_other = h * np.sin(np.pi * s2)
+    return FootPlan(t, torso, yaw_t, (lead, u1 * th, h * np.sin(np.pi * s1)),
+                    (other, u2 * th, h * np.sin(np.pi * s2)), sig > 0)
+
+
+def poses(genes: np.ndarray) -> np.ndarray:
+    """Key poses ``[K, 22]`` (``nao.JOINTS`` order, rad) every 20 ms of one step, from the
+    ready pose to the ready pose."""
+    w = HIP_Y_M + WIDTH_M
+    fp = foot_plan(genes, np.array([0.0, w]), np.array([0.0, -w]))
     z0 = -(HIP_Z_M + LEG_HEIGHT_M)
-    feet = ((lead, lead_yaw, lift_lead, sig > 0), (other, other_yaw, lift_other, sig < 0))
+    feet = ((*fp.lead, fp.lead_is_left), (*fp.other, not fp.lead_is_left))
+    torso = fp.torso
 
     def legs(torso_yaw: np.ndarray) -> dict[bool, np.ndarray]:
         out = {}
@@ -122,7 +148,7 @@ def poses(genes: np.ndarray) -> np.ndarray:
     # the hip yaw-pitch is one motor, but a leg's IK value also depends on where its foot
     # is: the torso's yaw is corrected (secant steps) until both legs need the same value,
     # so the feet land where and as turned as planned
-    y0, y1 = yaw_t, yaw_t + 1e-3
+    y0, y1 = fp.yaw, fp.yaw + 1e-3
     f0 = _hyp_gap(legs(y0))
     for _ in range(6):
         f1 = _hyp_gap(legs(y1))
@@ -130,7 +156,7 @@ def poses(genes: np.ndarray) -> np.ndarray:
                          0.0)
         y0, f0, y1 = y1, f1, y1 - f1 * slope
     q = legs(y1)
-    out = np.broadcast_to(nao.pose_vector(), (t.size, len(nao.JOINTS))).copy()
+    out = np.broadcast_to(nao.pose_vector(), (fp.t.size, len(nao.JOINTS))).copy()
     out[:, _L_COLS], out[:, _R_COLS] = q[True], q[False]
     out[:, nao.JOINTS.index("RHipYawPitch")] = out[:, nao.JOINTS.index("LHipYawPitch")]
     return np.clip(out, _LO, _HI)

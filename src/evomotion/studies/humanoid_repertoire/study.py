@@ -14,7 +14,8 @@ from evomotion.studies.humanoid_repertoire.problem import (
     make_problem,
 )
 
-cli = typer.Typer(help="A repertoire of NAO steps (dx, dy, dtheta) by CMA-ME.",
+cli = typer.Typer(help="A repertoire of steps (dx, dy, dtheta) of a NAO or another biped "
+                       "(--robot) by CMA-ME.",
                   no_args_is_help=True)
 
 
@@ -42,9 +43,9 @@ def export_cmd(run: Path = typer.Argument(..., help="a humanoid-repertoire run f
                hold: float = typer.Option(2.0, "--hold", help="the run's hold (s), recorded "
                                                              "in index.json")) -> None:
     """Rebuild repertoire/ (one .motion per standing cell, index.json) from archive.npz."""
-    from evomotion.studies.humanoid_repertoire.artifacts import write_repertoire
+    from evomotion.studies.humanoid_repertoire.artifacts import run_problem, write_repertoire
 
-    entries = write_repertoire(Path(run), hold)
+    entries = write_repertoire(Path(run), hold, run_problem(Path(run)))
     typer.echo(f"{len(entries)} standing steps -> {Path(run) / 'repertoire'}")
 
 
@@ -74,9 +75,9 @@ ARTIFACTS = "evomotion.studies.humanoid_repertoire.artifacts"
 
 STUDY = Study(
     name="humanoid-repertoire",
-    description="A repertoire of NAO H25 steps in MuJoCo: each cell of a (dx, dy, dtheta) "
-                "grid holds the most stable step that does it, found by CMA-ME; one Webots "
-                ".motion per cell, pick and walk-to.",
+    description="A repertoire of NAO H25 steps in MuJoCo (or another biped's, --robot): "
+                "each cell of a (dx, dy, dtheta) grid holds the most stable step that does "
+                "it, found by CMA-ME; one Webots .motion per cell, pick and walk-to.",
     problem_config=HumanoidRepertoireConfig,
     make_problem=make_problem,
     defaults={

@@ -44,7 +44,7 @@ def pick(run: Path, dx: float, dy: float, dtheta_deg: float) -> dict:
         raise InputError("pick: --dx, --dy and --dtheta must be finite numbers")
     folder, index = read_index(run)
     m, entries = _measures(index)
-    scale = np.array([0.25, 0.16, 90.0])  # the archive's ranges (m, m, deg)
+    scale = _box_size(index)
     d = np.linalg.norm((m - [dx, dy, dtheta_deg]) / scale, axis=1)
     i = int(np.argmin(d))
     e = entries[i]
@@ -52,6 +52,17 @@ def pick(run: Path, dx: float, dy: float, dtheta_deg: float) -> dict:
             "measured": e["measured"], "objective": e["objective"],
             "requested": {"dx_m": dx, "dy_m": dy, "dtheta_deg": dtheta_deg},
             "normalised_distance": float(d[i])}
+
+
+def _box_size(index: dict) -> np.ndarray:
+    """The archive's ranges (m, m, deg): from the index's ``box``, else the NAO's."""
+    box = index.get("box")
+    try:
+        size = np.array(box["upper"], float) - np.array(box["lower"], float)
+    except (TypeError, KeyError, ValueError):
+        return np.array([0.25, 0.16, 90.0])
+    return size if size.shape == (3,) and np.all(np.isfinite(size) & (size > 0)) else \
+        np.array([0.25, 0.16, 90.0])
 
 
 def _compose(pose: np.ndarray, step: np.ndarray) -> np.ndarray:
@@ -137,10 +148,15 @@ def walk_to(run: Path, x: float, y: float, theta_deg: float, video: Path | None 
     if not idx:
         raise InputError("walk-to: the target is the start pose (nothing to do) or no "
                          "step of the repertoire gets closer to it")
-    motion = chain(with_pauses([read_cell(folder, entries[i]) for i in idx], settle_s))
+    problem = None if index.get("robot", "nao") == "nao" else _robot_problem(run)
+    joints = None if problem is None else problem.robot.joints
+    motion = chain(with_pauses([read_cell(folder, entries[i], joints) for i in idx], settle_s))
     out = out or Path(run) / f"walk_to_{x:+.2f}_{y:+.2f}_{theta_deg:+.0f}.motion"
     out.write_text(format_motion(motion))
-    summary, skipped = replay_motion(motion, video, hold_s)
+    if problem is None:
+        summary, skipped = replay_motion(motion, video, hold_s)
+    else:
+        summary, skipped = _play_on_robot(problem.robot, motion, video, hold_s)
     dx, dy = summary["displacement_m"]
     th = math.degrees(summary["heading_change_rad"])
     return {"target": {"x_m": x, "y_m": y, "theta_deg": theta_deg},
@@ -153,3 +169,32 @@ def walk_to(run: Path, x: float, y: float, theta_deg: float, video: Path | None 
             "fell": bool(summary["fell"]), "motion": str(out),
             "duration_s": motion.duration_s,
             "video": str(video) if video is not None and skipped is None else None}
+
+
+def _robot_problem(run: Path):
+    from evomotion.studies.humanoid_repertoire.artifacts import run_problem
+
+    problem = run_problem(Path(run))
+    if problem is None:
+        raise InputError(f"{run}: the repertoire names a robot, but config.toml has no "
+                         "problem.robot")
+    return problem
+
+
+def _play_on_robot(robot, motion, video: Path | None, hold_s: float
+                   ) -> tuple[dict, str | None]:
+    """Play ``motion`` on ``robot``, with a video when one is named."""
+    from evomotion.sim.render import RenderUnavailableError, render_video
+    from evomotion.sim.robot.play import play_motion, robot_camera
+
+    result = play_motion(robot, motion, hold_s)
+    skipped = None
+    if video is not None:
+        try:
+            if not robot.xml:
+                raise RenderUnavailableError("the robot's model cannot be written as MJCF")
+            render_video(result["qpos"], result["dt"], video, model_xml=robot.xml,
+                         camera=robot_camera(robot))
+        except RenderUnavailableError as exc:
+            skipped = str(exc)
+    return result["summary"], skipped

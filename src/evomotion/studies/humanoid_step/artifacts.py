@@ -94,15 +94,14 @@ def finalize_robot(ctx: RunContext) -> None:
                "time_to_fall_s": float(ev.metrics["time_to_fall_s"][0]),
                "torso_height_m": [float(track.xyz[0, 0, 2]), float(track.xyz[0, -1, 2])]}
     atomic_write_text(ctx.out_dir / "best_replay.json", json.dumps(summary, indent=2) + "\n")
-    height = float(track.xyz[0, 0, 2])
     video: Path | None = ctx.out_dir / "best.mp4"
     try:
         if not robot.xml:
             raise RuntimeError("the robot's edited model cannot be written as MJCF text")
+        from evomotion.sim.robot.play import robot_camera
+
         render_video(states[0, :, 1:1 + robot.model.nq], problem.dt, video,
-                     model_xml=robot.xml,
-                     camera=f"follow={robot.spec.torso},{max(1.1, 2.6 * height):.2f},"
-                            f"{0.6 * height:.2f}")
+                     model_xml=robot.xml, camera=robot_camera(robot))
     except (RenderUnavailableError, RuntimeError) as e:
         ctx.log(f"best.mp4 skipped: {e}")
         video = None
