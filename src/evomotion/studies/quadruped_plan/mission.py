@@ -116,14 +116,19 @@ class Mission:
         key = ("truth" if truth else "known", state.revealed, len(state.spawned))
         if key not in self._cache:
             hidden = self.hidden()
-            known = self.world.of_kind("obstacle") + [
-                hidden[i] for i in range(len(hidden)) if truth or i in state.revealed]
-            known += [Polygon("obstacle", np.array(v)) for v, _ in state.spawned
+            extra = [hidden[i] for i in range(len(hidden)) if truth or i in state.revealed]
+            extra += [Polygon("obstacle", np.array(v)) for v, _ in state.spawned
                       if v is not None]
             self._trim()
-            self._cache[key] = Terrain(self.world, self.model, known, self.body_clearance,
-                                       self.foot_clearance)
+            # the world's own obstacles once; what came into view is carved into a copy
+            self._cache[key] = self._base_terrain().with_obstacles(extra)
         return self._cache[key]
+
+    def _base_terrain(self) -> Terrain:
+        if "base" not in self._cache:
+            self._cache["base"] = Terrain(self.world, self.model, self.world.of_kind("obstacle"),
+                                          self.body_clearance, self.foot_clearance)
+        return self._cache["base"]
 
     def route(self, state: MissionState) -> Route:
         key = ("route", state.revealed, len(state.spawned), state.goal)
@@ -134,7 +139,7 @@ class Mission:
 
     def _trim(self) -> None:
         if len(self._cache) > 16:
-            self._cache = {"options": self._cache.get("options", [{}, {}, {}, {}])}
+            self._cache = {k: self._cache[k] for k in ("options", "base") if k in self._cache}
 
     def problem(self, real: tuple, target: tuple[float, float], tol: float,
                 terrain: Terrain) -> WalkProblem:

@@ -201,30 +201,33 @@ def rotation_limit(model: QuadrupedModel, state: tuple[float, ...], direction: f
     the two wedge edges) is an arc condition cos(theta - c) >= k or <= k on that circle."""
     move = -direction
     best = math.inf
-    pi, acos = math.pi, math.acos
+    pi, acos, atan2, sqrt = math.pi, math.acos, math.atan2, math.sqrt
     for i, (h, th, out_c, in_c, wedge) in enumerate(model._rot):
         px, py = state[3 + 2 * i], state[4 + 2 * i]
         r2 = px * px + py * py
         if r2 < EPS * EPS:
             return 0.0
-        r = math.sqrt(r2)
-        theta = math.atan2(py, px)
+        r = sqrt(r2)
+        theta = atan2(py, px)
         # keep inside the outer circle: an arc about the hip direction
         k = (r2 + out_c) / (2 * r * h)
         if k > -1.0:
-            off = (theta - th + pi) % TWO_PI - pi
-            best = min(best, acos(k if k < 1.0 else 1.0) - move * off)
+            v = acos(k if k < 1.0 else 1.0) - move * ((theta - th + pi) % TWO_PI - pi)
+            if v < best:
+                best = v
         # keep outside the inner circle: the forbidden arc lies ahead or behind
         k = (r2 + in_c) / (2 * r * h)
         if k < 1.0:
-            a = acos(k if k > -1.0 else -1.0)
-            best = min(best, TWO_PI - a - (move * (theta - th)) % TWO_PI)
+            v = TWO_PI - acos(k if k > -1.0 else -1.0) - (move * (theta - th)) % TWO_PI
+            if v < best:
+                best = v
         # keep on the inner side of both wedge edges
         for centre, nh in wedge:
             k = nh / r
             if k > -1.0:
-                off = (theta - centre + pi) % TWO_PI - pi
-                best = min(best, acos(k if k < 1.0 else 1.0) - move * off)
+                v = acos(k if k < 1.0 else 1.0) - move * ((theta - centre + pi) % TWO_PI - pi)
+                if v < best:
+                    best = v
         if best <= 0.0:
             return 0.0
     return best

@@ -132,6 +132,11 @@ class WalkProblem:
                                      (8, mid, model.nominal_angle)):
             for leg in range(4):
                 self._fixed.append((leg, rule0 + leg, *model.foot_at(leg, length, angle(leg))))
+        # per leg: (rule, fx, fy, the foot's part of the key) of rules 4 + leg and 8 + leg
+        self._fixed_keyed = [tuple((r, fx, fy, round(fx * self._q) * KEY_WEIGHT[3 + 2 * leg]
+                                    + round(fy * self._q) * KEY_WEIGHT[4 + 2 * leg])
+                                   for _, r, fx, fy in (self._fixed[leg], self._fixed[4 + leg]))
+                             for leg in range(4)]
         self._stable = model.min_margin - STABILITY_TOL
         self.parts = (0, 1, 2) if self.n_rules == 27 else (0, 1)
         # per leg: foot position -> moves; they depend on the model, rule set and grid only, so
@@ -252,11 +257,7 @@ class WalkProblem:
                                for part in moves)) for leg, moves in out]
         terrain = self.terrain
         if terrain is not None and out and not terrain.feet_open(s[0], s[1]):
-            c, sn = math.cos(s[2]), math.sin(s[2])
-            x, y, ok = s[0], s[1], terrain.foot_ok
-            out = [(leg, tuple(tuple(m for m in part
-                                     if ok(x + c * m[1] - sn * m[2], y + sn * m[1] + c * m[2]))
-                               for part in moves)) for leg, moves in out]
+            out = _feet_on_terrain(terrain, s, out)
         return out
 
     def _leg_options(self, leg: int, px: float, py: float) -> tuple[tuple, tuple, tuple]:
@@ -271,26 +272,53 @@ class WalkProblem:
         j = 3 + 2 * leg
         wx, wy = KEY_WEIGHT[j], KEY_WEIGHT[j + 1]
         own = round(px * q) * wx + round(py * q) * wy
-        hx, hy = self._hips[leg]
-        candidates = [[self._fixed[leg][1:]], [self._fixed[4 + leg][1:]], []]
+        parts = []
+        for rule, fx, fy, kp in self._fixed_keyed[leg]:  # rules 4 + leg and 8 + leg
+            if -1e-7 < fx - px < 1e-7 and -1e-7 < fy - py < 1e-7:
+                parts.append(())
+            else:
+                parts.append(((rule, fx, fy, kp - own),))
+        free = []
         if self.n_rules == 27:
+            hx, hy = self._hips[leg]
             lmax, lmin = self.model.l_max, self.model.l_min
             rx, ry = px - hx, py - hy
             length = math.hypot(rx, ry)
             ux, uy = rx / length, ry / length
             (mx, my), (nx, ny) = self._unit_max[leg], self._unit_min[leg]
-            candidates[2] = [(12 + leg, hx + lmax * ux, hy + lmax * uy),
-                             (16 + leg, hx + lmin * ux, hy + lmin * uy),
-                             (20 + leg, hx + length * mx, hy + length * my),
-                             (24 + leg, hx + length * nx, hy + length * ny)]
-        got = tuple(tuple((rule, fx, fy, round(fx * q) * wx + round(fy * q) * wy - own)
-                          for rule, fx, fy in part
-                          if not (-1e-7 < fx - px < 1e-7 and -1e-7 < fy - py < 1e-7))
-                    for part in candidates)
+            for rule, fx, fy in ((12 + leg, hx + lmax * ux, hy + lmax * uy),
+                                 (16 + leg, hx + lmin * ux, hy + lmin * uy),
+                                 (20 + leg, hx + length * mx, hy + length * my),
+                                 (24 + leg, hx + length * nx, hy + length * ny)):
+                if not (-1e-7 < fx - px < 1e-7 and -1e-7 < fy - py < 1e-7):
+                    free.append((rule, fx, fy, round(fx * q) * wx + round(fy * q) * wy - own))
+        got = (parts[0], parts[1], tuple(free))
         if len(cache) >= OPTIONS_CACHE:
             cache.clear()
         cache[(px, py)] = got
         return got
+
+
+def _feet_on_terrain(terrain: Any, s: tuple, options: list) -> list:
+    """``options`` of :meth:`WalkProblem.leg_options` less the moves that put a foot where
+    ``terrain.foot_ok`` refuses it (its grid lookup inlined: this is the hot path)."""
+    c, sn = math.cos(s[2]), math.sin(s[2])
+    x, y = s[0], s[1]
+    x0, y0, inv, nx, ny = terrain.x0, terrain.y0, terrain.inv, terrain.nx, terrain.ny
+    rows, thr = terrain._foot_rows, terrain.foot_thr
+    out = []
+    for leg, moves in options:
+        parts = []
+        for part in moves:
+            keep = []
+            for m in part:
+                i = int((x + c * m[1] - sn * m[2] - x0) * inv + 0.5)
+                j = int((y + sn * m[1] + c * m[2] - y0) * inv + 0.5)
+                if 0 <= i < nx and 0 <= j < ny and rows[i][j] >= thr:
+                    keep.append(m)
+            parts.append(keep)
+        out.append((leg, parts))
+    return out
 
 
 def _liftable(s: tuple, stable: float) -> list[bool]:

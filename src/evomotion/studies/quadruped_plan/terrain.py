@@ -22,6 +22,8 @@ keeps the search near its obstacle-free speed.
 
 from __future__ import annotations
 
+import copy
+import functools
 import math
 from collections.abc import Iterable
 
@@ -79,10 +81,24 @@ class Terrain:
         sdf[i0:i1, j0:j1] = np.minimum(sdf[i0:i1, j0:j1], signed_distance(window, poly))
 
     def _refresh(self) -> None:
+        self._body_flat = self.body_sdf.ravel()
         self._body_rows = self.body_sdf.tolist()
         self._foot_rows = self.foot_sdf.tolist()
         verts = [p.points for p in self.obstacles]
         self._verts = np.vstack(verts) if verts else np.zeros((0, 2))
+
+    def with_obstacles(self, extra: Iterable[Polygon]) -> Terrain:
+        """A copy that also knows the obstacles ``extra`` (only they are carved: the grids
+        are minima of per-polygon distances, so the result equals a terrain built with all
+        of them, bit for bit)."""
+        out = copy.copy(self)
+        out.obstacles = [*self.obstacles, *extra]
+        out.body_sdf, out.foot_sdf = self.body_sdf.copy(), self.foot_sdf.copy()
+        for p in out.obstacles[len(self.obstacles):]:
+            out._carve(out.body_sdf, p.points)
+            out._carve(out.foot_sdf, p.points)
+        out._refresh()
+        return out
 
     def reveal(self, polygon: Polygon) -> None:
         """Add an obstacle that has come into view (the grids are updated in place)."""
@@ -113,8 +129,9 @@ class Terrain:
         return bool(np.all(self.body_sdf[ij[..., 0], ij[..., 1]] >= self.body_thr))
 
     # -- the body's outline -----------------------------------------------------------------
-    def _outline(self, poses: np.ndarray) -> np.ndarray:
-        """Sample points of the body rectangle's outline at each pose ``[n, 3]``."""
+    @functools.cached_property
+    def _outline_local(self) -> np.ndarray:
+        """Sample points of the body rectangle's outline in the body frame ``[k, 2]``."""
         m = self.model
         a2, b2 = m.a / 2, m.b / 2
         corners = np.array([[-a2, b2], [-a2, -b2], [a2, -b2], [a2, b2]])
@@ -123,21 +140,41 @@ class Terrain:
             p, q = corners[k], corners[(k + 1) % 4]
             t = np.linspace(0, 1, max(2, int(np.ceil(np.hypot(*(q - p)) / SPACING)) + 1))
             rect.append(p + t[:, None] * (q - p))
-        local = np.vstack(rect)
+        return np.vstack(rect)
+
+    def _outline(self, poses: np.ndarray) -> np.ndarray:
+        """Sample points of the body rectangle's outline at each pose ``[n, 3]``."""
+        local = self._outline_local
         c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
         rot = np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)  # [n, 2, 2]
         return (poses[:, None, :2] + np.einsum("nij,kj->nki", rot, local)).reshape(-1, 2)
 
-    def _no_vertex_inside(self, poses: np.ndarray) -> bool:
+    def _no_vertex_inside(self, poses: np.ndarray, c: np.ndarray | None = None,
+                          s: np.ndarray | None = None) -> bool:
         if not len(self._verts):
             return True
         d = self._verts[None, :, :] - poses[:, None, :2]
-        c, s = np.cos(poses[:, 2])[:, None], np.sin(poses[:, 2])[:, None]
+        if c is None:
+            c, s = np.cos(poses[:, 2])[:, None], np.sin(poses[:, 2])[:, None]
         u, v = c * d[..., 0] + s * d[..., 1], -s * d[..., 0] + c * d[..., 1]
         return not np.any((np.abs(u) < self.model.a / 2) & (np.abs(v) < self.model.b / 2))
 
     def _sweep_clear(self, poses: np.ndarray) -> bool:
-        return self._points_clear(self._outline(poses)) and self._no_vertex_inside(poses)
+        """The body's outline at every pose ``[n, 3]`` clear of obstacles and no obstacle
+        vertex inside the body: ``_points_clear(_outline(poses))`` and
+        ``_no_vertex_inside(poses)``, the same arithmetic in fewer numpy calls (the hot
+        path of the walker's searches)."""
+        local = self._outline_local
+        c, s = np.cos(poses[:, 2])[:, None], np.sin(poses[:, 2])[:, None]
+        lx, ly = local[:, 0], local[:, 1]
+        i = np.rint((poses[:, 0:1] + (c * lx - s * ly) - self.x0) * self.inv)
+        j = np.rint((poses[:, 1:2] + (s * lx + c * ly) - self.y0) * self.inv)
+        if i.min() < 0 or j.min() < 0 or i.max() >= self.nx or j.max() >= self.ny:
+            return False
+        flat = (i * self.ny + j).astype(np.int64)
+        if not (self._body_flat[flat] >= self.body_thr).all():
+            return False
+        return self._no_vertex_inside(poses, c, s)
 
     # -- move checks (state = (x, y, phi, 8 body-frame feet, ...)) ------------------------
     @staticmethod
@@ -158,10 +195,18 @@ class Terrain:
         """May the body translate from its centre to (nx, ny)?"""
         d = math.hypot(nx - s[0], ny - s[1])
         k = int(math.ceil(d / QUICK_STEP))
-        r = self.r_hip + 0.5 * d / max(k, 1) + self.body_thr
-        dist = self.body_distance
-        if all(dist(s[0] + (nx - s[0]) * i / max(k, 1), s[1] + (ny - s[1]) * i / max(k, 1))
-               >= r for i in range(k + 1)):
+        kk = max(k, 1)
+        r = self.r_hip + 0.5 * d / kk + self.body_thr
+        # quick test: discs along the way clear (body_distance inlined: the hot path)
+        x, y, dx, dy = s[0], s[1], nx - s[0], ny - s[1]
+        x0, y0, inv, nxg, nyg, rows = self.x0, self.y0, self.inv, self.nx, self.ny, \
+            self._body_rows
+        for i in range(k + 1):
+            gi = int((x + dx * i / kk - x0) * inv + 0.5)
+            gj = int((y + dy * i / kk - y0) * inv + 0.5)
+            if not (0 <= gi < nxg and 0 <= gj < nyg) or rows[gi][gj] < r:
+                break
+        else:
             return True
         n = int(math.ceil(d / SPACING)) + 1
         t = np.linspace(0.0, 1.0, n)
