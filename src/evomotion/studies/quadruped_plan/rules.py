@@ -22,18 +22,29 @@ walker); 32 (step back, :mod:`.recovery`) is never searched, only executed.
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Hashable
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 from evomotion.studies.quadruped_plan.model import (
     EPS,
     STABILITY_TOL,
+    WORKSPACE_TOL,
     QuadrupedModel,
     rotation_limit,
     translation_limit,
 )
 from evomotion.studies.quadruped_plan.shifts import shift_moves, shifted
+
+try:  # the successors in C (setup.py builds it when a compiler is there); else Python
+    from evomotion.studies.quadruped_plan import _walkcore
+except ImportError:  # pragma: no cover - depends on the install
+    _walkcore = None
+if os.environ.get("EVOMOTION_PURE_PYTHON"):  # the reference implementation only
+    _walkcore = None
 
 RULE_SETS = {"A": 11, "B": 27}
 MIN_MOVE = 1e-4  # a body move shorter than this [units or rad] is not applicable
@@ -103,7 +114,7 @@ class WalkProblem:
                  sense: int = -1, zone: ExclusionZone | None = None,
                  pos_grid: float = POS_GRID, angle_grid: float = ANGLE_GRID,
                  terrain: Any = None, options_cache: list[dict] | None = None,
-                 shifts: bool = False) -> None:
+                 shifts: bool = False, compiled: bool = True) -> None:
         if rule_set not in RULE_SETS:
             raise ValueError(f"unknown rule set {rule_set!r}; available: A, B")
         self.model, self.goal, self.rule_set = model, goal, rule_set
@@ -147,6 +158,35 @@ class WalkProblem:
             if len(options_cache) == 4:
                 options_cache.append({})
             self._shift_cache = options_cache[4]
+        self.core = False
+        if compiled and _walkcore is not None and zone is None and not shifts:
+            # the same successors from compiled code (_walkcore.c; tested equal)
+            c = _walkcore.WalkCore(*self._core_args())
+            self.body_moves, self.leg_options = c.body_moves, c.leg_options
+            self.core = True
+
+    def _core_args(self) -> tuple:
+        """The constructor arguments of :class:`_walkcore.WalkCore` (see _walkcore.c)."""
+        m = self.model
+        numbers = [v for _, hx, hy, side in m._trans for v in (hx, hy, side)]
+        for h, th, out_c, in_c, wedge in m._rot:
+            numbers += [h, th, out_c, in_c, *wedge[0], *wedge[1]]
+        numbers += [1.0 / math.tan(m.sector_half_width), m.l_max, m.l_min, m.b / 3, EPS,
+                    WORKSPACE_TOL, MIN_MOVE, self._stable, m.l_max ** 2]
+        problem = [self.goal[0], self.goal[1], self._q, self.angle_grid, self.sense,
+                   1.0 if self.n_rules == 27 else 0.0]
+        fixed = [v for leg in range(4) for k in (leg, 4 + leg) for v in self._fixed[k][2:]]
+        units = [v for u in (self._unit_max, self._unit_min) for xy in u for v in xy]
+        t = self.terrain
+        terrain = None
+        if t is not None:
+            from evomotion.studies.quadruped_plan.terrain import QUICK_STEP, SPACING
+
+            outline = np.ascontiguousarray(t._outline_local, dtype=float)
+            terrain = (t, t.body_sdf, t.foot_sdf, t.x0, t.y0, t.inv, t.nx, t.ny, t.r_hip,
+                       t.body_thr, t.foot_thr, t.r_robot, outline, len(outline), m.a / 2,
+                       m.b / 2, SPACING, QUICK_STEP)
+        return numbers, problem, fixed, units, terrain, KEY_OFFSET
 
     def _with_key(self, v: tuple[float, ...]) -> tuple:
         """The state tuple: the 11 floats followed by the duplicate key (see :meth:`key`)."""

@@ -1,0 +1,13 @@
+"""Build hook for the one compiled module; everything else is in pyproject.toml.
+
+``evomotion.studies.quadruped_plan._walkcore`` (the walking problem's successors in C, the
+same results as the Python code it repeats) is optional: without a C compiler the install
+goes on and the Python code runs instead (docs/quadruped-plan.md, "Speed").
+"""
+
+from setuptools import Extension, setup
+
+setup(ext_modules=[Extension("evomotion.studies.quadruped_plan._walkcore",
+                             ["src/evomotion/studies/quadruped_plan/_walkcore.c"],
+                             extra_compile_args=["-O2", "-fno-fast-math", "-ffp-contract=off"],
+                             optional=True)])
