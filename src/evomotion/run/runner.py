@@ -299,6 +299,10 @@ def _write_archive(driver: Any, state: Any, out_dir: Path) -> bool:
     return True
 
 
+#: physics.json's robot keys: a run folder written before the NAO was recorded lacks them
+ROBOT_KEYS = ("robot", "robot_spec_sha256", "robot_mjcf_sha256")
+
+
 def _hook(fn, ctx: RunContext, log) -> Any:
     if fn is None:
         return None
@@ -348,6 +352,8 @@ def _record_physics(problem: Any, out_dir: Path | None, resume: bool, log) -> No
             before = None
         keys = ("backend", "device", "precision", "mujoco", "mujoco_warp", "deterministic",
                 "robot", "robot_spec_sha256", "robot_mjcf_sha256")
+        if isinstance(before, dict):  # a key a run folder's record lacks was not recorded
+            keys = tuple(k for k in keys if k in before or k not in ROBOT_KEYS)
         if isinstance(before, dict) and any(before.get(k) != now.get(k) for k in keys):
             log(f"note: resumed on other physics than the run started on ({PHYSICS_NAME}: "
                 f"{ {k: before.get(k) for k in keys if before.get(k) != now.get(k)} } -> "

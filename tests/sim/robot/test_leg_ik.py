@@ -24,7 +24,7 @@ def _mujoco_sole(robot, foot: str, pose: np.ndarray) -> tuple[np.ndarray, np.nda
     mujoco.mj_kinematics(m, d)
     t = m.body(robot.spec.torso).id
     r = d.xmat[t].reshape(3, 3)
-    sole = r.T @ (d.site_xpos[m.site(f"{foot}_sole").id] - d.xpos[t])
+    sole = r.T @ (d.site_xpos[m.site(robot.sole_site(foot)).id] - d.xpos[t])
     return sole, r.T @ d.xmat[m.body(robot.spec.feet[foot]).id].reshape(3, 3)
 
 

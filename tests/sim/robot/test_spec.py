@@ -51,13 +51,23 @@ def test_bundled_robot_builds_and_stands(name):
 
 
 def test_nao_spec_is_the_nao():
+    """The NAO's spec gives its studies' model, initial states, bounds and fall thresholds bit
+    for bit (the default robot of the humanoid studies is this spec)."""
     from evomotion.sim import nao
+    from evomotion.studies.humanoid_step.problem import servo_bounds
 
     robot = load_robot("nao")
     assert robot.joints == tuple(nao.JOINTS)
-    np.testing.assert_allclose(robot.pose, nao.pose_vector())
-    np.testing.assert_allclose(robot.state0, nao.initial_state(nao.load_model()), atol=2e-4)
-    assert robot.fall_height_m == nao.FALL_HEIGHT_M
+    np.testing.assert_array_equal(robot.pose, nao.pose_vector())
+    np.testing.assert_array_equal(robot.state0, nao.initial_state(nao.load_model()))
+    pose = nao.pose_vector() + 0.1
+    np.testing.assert_array_equal(robot.state_at(pose), nao.initial_state(nao.load_model(), pose))
+    assert (robot.fall_height_m, robot.fall_tilt_rad) == (nao.FALL_HEIGHT_M, nao.FALL_TILT_RAD)
+    lo, hi = servo_bounds(nao.load_model())  # seed Table 1 within the model's ranges
+    assert robot.evolved == nao.LEG_SERVOS
+    np.testing.assert_array_equal(robot.lower, lo)
+    np.testing.assert_array_equal(robot.upper, hi)
+    assert robot.sole_site("left") == "l_sole_site"
 
 
 @pytest.mark.skipif(not HAS_DM, reason="dm_control is not installed")
@@ -117,6 +127,21 @@ def test_spec_mistakes_name_file_line_and_expectation(tmp_path, change, line, me
     text = str(e.value)
     assert text.startswith(f"{path}:{line}: "), text
     assert message in text and "\n" not in text
+
+
+@pytest.mark.parametrize("soles,line,message", [
+    ('left = "l_sole_site"\nright = "nope"', 12, "[soles] right: no site 'nope' in the MJCF"),
+    ('left = "r_sole_site"\nright = "r_sole_site"', 11,
+     "site 'r_sole_site' is not on the foot body 'LFoot'"),
+    ('left = "l_sole_site"', 10, "[soles]: expected a site for every foot, missing 'right'"),
+    ('middle = "l_sole_site"', 11, "[soles] middle: not a foot of [feet]"),
+])
+def test_sole_site_mistakes(tmp_path, soles, line, message):
+    text = GOOD.replace("[fall]", f"[soles]\n{soles}\n\n[fall]")
+    path = _spec(tmp_path, text)
+    with pytest.raises(InputError) as e:
+        build_robot(read_spec(path))
+    assert str(e.value).startswith(f"{path}:{line}: ") and message in str(e.value), e.value
 
 
 def test_good_spec_builds(tmp_path):

@@ -6,6 +6,7 @@ import importlib.util
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -53,19 +54,36 @@ def test_robot_options_are_checked(tmp_path):
     assert r.returncode != 0 and "no such robot spec" in r.stderr and "Traceback" not in r.stderr
 
 
-def test_nao_through_the_robot_path_steps_like_the_nao():
-    """``--robot nao`` (the generic path) scores the NAO's initial pose like the NAO path."""
+def test_robot_nao_is_the_default_nao():
+    """``--robot nao`` names the default robot: the same problem, bit for bit, for the step,
+    the walk and the repertoire; a copy of its spec elsewhere runs the generic robot code."""
+    import shutil
+
+    from evomotion.sim.robot import SPECS_DIR
+
+    for name in ("humanoid-step", "humanoid-walk", "humanoid-repertoire"):
+        s = get_study(name)
+        base = s.make_problem(resolve_config(s, None, [*s.smoke, "problem.worlds=1"]
+                                             if name != "humanoid-repertoire" else
+                                             list(s.smoke)).problem)
+        assert base.is_nao and base.robot.name == "nao"
+        over = ["problem.robot=nao", *(["problem.worlds=1"]
+                                       if name != "humanoid-repertoire" else [])]
+        named = s.make_problem(resolve_config(s, None, [*s.smoke, *over]).problem)
+        assert type(named) is type(base) and named.is_nao
+        g = np.tile((base.genome.lower + base.genome.upper) / 2, (2, 1))
+        np.testing.assert_array_equal(base.evaluate(g).fitness, named.evaluate(g).fitness)
     s = get_study("humanoid-step")
-    base = resolve_config(s, None, list(s.smoke))
-    spec = resolve_config(s, None, [*s.smoke, "problem.robot=nao"])
-    p_nao, p_spec = s.make_problem(base.problem), s.make_problem(spec.problem)
-    assert p_nao.genome.dim == p_spec.genome.dim
-    np.testing.assert_allclose(p_spec.genome.lower, p_nao.genome.lower, atol=1e-5)
-    np.testing.assert_allclose(p_spec.genome.upper, p_nao.genome.upper, atol=1e-5)
-    g = np.tile((p_nao.genome.lower + p_nao.genome.upper) / 2, (2, 1))
-    a, b = p_nao.evaluate(g), p_spec.evaluate(g)
-    assert a.metrics["fell"][0] == b.metrics["fell"][0]
-    assert abs(a.metrics["time_to_fall_s"][0] - b.metrics["time_to_fall_s"][0]) < 0.2
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as d:
+        copy = Path(d) / "my_nao.toml"
+        shutil.copy(SPECS_DIR / "nao.toml", copy)
+        p = s.make_problem(resolve_config(s, None, [*s.smoke, f"problem.robot={copy}"]).problem)
+        assert not p.is_nao and p.robot.name == "nao"
+        with pytest.raises(InputError, match="for the NAO only"):
+            s.make_problem(resolve_config(s, None, [f"problem.robot={copy}",
+                                                    "problem.worlds=3"]).problem)
 
 
 def test_physics_json_pins_the_robot_and_a_changed_spec_is_noted(tmp_path):

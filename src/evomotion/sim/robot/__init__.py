@@ -4,9 +4,10 @@
 - :mod:`.build`: the robot built from it with ``mujoco.MjSpec`` (position servos in place of
   motors, sole sites and sensors) and checked against the model.
 
-Bundled specs (``specs/``): ``dm-humanoid`` and ``dm-quadruped`` (the dm_control suite's
-models, shipped in the ``dm-control`` wheel: extra ``[robots]``), ``op3`` (ROBOTIS OP3,
-authored in ``sim/models/op3`` from published data).
+Bundled specs (``specs/``): ``nao`` (the NAO H25, the humanoid studies' default robot),
+``dm-humanoid`` and ``dm-quadruped`` (the dm_control suite's models, shipped in the
+``dm-control`` wheel: extra ``[robots]``), ``op3`` (ROBOTIS OP3, authored in
+``sim/models/op3`` from published data).
 """
 
 from __future__ import annotations

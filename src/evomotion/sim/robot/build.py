@@ -74,6 +74,15 @@ class Robot:
         return (self.fall_height_m if height_m == FALL_HEIGHT_M else height_m,
                 self.fall_tilt_rad if tilt_rad == FALL_TILT_RAD else tilt_rad)
 
+    def sole_site(self, foot: str) -> str:
+        """The site whose position is the foot's sole (``[soles]``, else the one added)."""
+        return self.spec.soles.get(foot, f"{foot}_sole")
+
+    def state_at(self, pose: np.ndarray) -> np.ndarray:
+        """The initial state (``mjSTATE_FULLPHYSICS``) with the actuators' targets and the
+        joints at ``pose[nu]`` instead of the spec's pose (:func:`initial_state`)."""
+        return initial_state(self.spec, self.model, self.joints, np.asarray(pose, float))
+
     def sensor(self, name: str) -> slice:
         """Slice of ``sensordata`` of the sensor ``name`` (``<foot>_pos``, ``<foot>_floor``)."""
         i = self.model.sensor(name).id
@@ -143,10 +152,21 @@ def _feet(spec: RobotSpec, mj: mujoco.MjSpec, model: mujoco.MjModel) -> None:
         if not geoms:
             raise spec.error("feet", foot, f"body {body_name!r} has no collision geoms (no "
                              "sole geoms)")
-        centre = model.geom_pos[geoms].mean(axis=0)
-        mj.body(body_name).add_site(name=f"{foot}_sole", pos=centre, size=[0.005, 0, 0])
+        site = spec.soles.get(foot)
+        if site is None:
+            site = f"{foot}_sole"
+            centre = model.geom_pos[geoms].mean(axis=0)
+            mj.body(body_name).add_site(name=site, pos=centre, size=[0.005, 0, 0])
+        else:
+            try:
+                sid = model.site(site).id
+            except KeyError:
+                raise spec.error("soles", foot, f"no site {site!r} in the MJCF") from None
+            if model.site_bodyid[sid] != bid:
+                raise spec.error("soles", foot, f"site {site!r} is not on the foot body "
+                                 f"{body_name!r}")
         mj.add_sensor(name=f"{foot}_pos", type=mujoco.mjtSensor.mjSENS_FRAMEPOS,
-                      objtype=mujoco.mjtObj.mjOBJ_SITE, objname=f"{foot}_sole")
+                      objtype=mujoco.mjtObj.mjOBJ_SITE, objname=site)
         mj.add_sensor(name=f"{foot}_floor", type=mujoco.mjtSensor.mjSENS_CONTACT,
                       objtype=mujoco.mjtObj.mjOBJ_BODY, objname=body_name,
                       reftype=mujoco.mjtObj.mjOBJ_GEOM, refname=spec.floor,
@@ -282,7 +302,9 @@ def _keyframe_qpos(spec: RobotSpec, model) -> np.ndarray:
 
 def initial_state(spec: RobotSpec, model, joints, pose: np.ndarray) -> np.ndarray:
     """The robot at rest in ``pose``, upright facing +x, the lowest foot geom
-    ``clearance_m`` above the floor (``mjSTATE_FULLPHYSICS``)."""
+    ``clearance_m`` above the floor (``mjSTATE_FULLPHYSICS``); with ``[soles]``, the lowest
+    sole site ``clearance_m`` above it (the torso raised from the MJCF's own height by the
+    difference: :func:`evomotion.sim.nao.initial_data`'s rule, bit for bit)."""
     data = mujoco.MjData(model)
     data.qpos[:] = _keyframe_qpos(spec, model)
     data.qpos[3:7] = (1.0, 0.0, 0.0, 0.0)
@@ -290,6 +312,12 @@ def initial_state(spec: RobotSpec, model, joints, pose: np.ndarray) -> np.ndarra
         if model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT:
             data.qpos[model.jnt_qposadr[model.joint(j).id]] = v
     data.ctrl[:] = pose
+    if spec.soles:
+        mujoco.mj_kinematics(model, data)
+        low = min(float(data.site(s).xpos[2]) for s in spec.soles.values())
+        data.qpos[2] += spec.clearance_m - low
+        mujoco.mj_forward(model, data)
+        return _state(model, data)
     data.qpos[2] = 0.0
     mujoco.mj_kinematics(model, data)
     feet = {model.body(b).id for b in spec.feet.values()}
@@ -297,6 +325,10 @@ def initial_state(spec: RobotSpec, model, joints, pose: np.ndarray) -> np.ndarra
               if model.geom_bodyid[g] in feet)
     data.qpos[2] = spec.clearance_m - low
     mujoco.mj_forward(model, data)
+    return _state(model, data)
+
+
+def _state(model, data) -> np.ndarray:
     state = np.empty(mujoco.mj_stateSize(model, STATE_SPEC))
     mujoco.mj_getState(model, data, state, STATE_SPEC)
     return state

@@ -122,7 +122,7 @@ class LegChain:
         limited = robot.model.actuator_ctrllimited[self.columns].astype(bool)
         self.lower = np.where(limited, lo, -np.pi)
         self.upper = np.where(limited, hi, np.pi)
-        site = m.site(f"{foot}_sole").id
+        site = m.site(robot.sole_site(foot)).id
         self.sole = m.site_pos[site].copy()  # in the foot body's frame
         self.ready = pose[self.columns].copy()
 
@@ -222,7 +222,7 @@ def torso_frame_feet(robot, pose: np.ndarray) -> dict[str, tuple[np.ndarray, np.
     r_t = data.xmat[torso].reshape(3, 3)
     out = {}
     for foot, body in robot.spec.feet.items():
-        site = m.site(f"{foot}_sole").id
+        site = m.site(robot.sole_site(foot)).id
         out[foot] = (r_t.T @ (data.site_xpos[site] - data.xpos[torso]),
                      r_t.T @ data.xmat[m.body(body).id].reshape(3, 3))
     return out

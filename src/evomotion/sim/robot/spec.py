@@ -14,6 +14,10 @@ remove = ["ball"]        # bodies of the MJCF the robot does not need (optional)
 left = "left_foot"
 right = "right_foot"
 
+[soles]                  # optional: the MJCF's own sole sites (on the foot bodies); the initial
+left = "l_sole_site"     # state then puts the lowest of them clearance_m above the floor (else
+right = "r_sole_site"    # a site is added at the centre of each foot's collision geoms)
+
 [fall]
 height_m = 0.8           # fallen: torso origin lower than this (m) ...
 tilt_rad = 0.785         # ... or its up axis tilted more than this (rad)
@@ -59,6 +63,7 @@ from evomotion.errors import InputError
 SECTIONS = {
     "robot": {"name", "mjcf", "torso", "floor", "clearance_m", "keyframe", "remove"},
     "feet": None,  # free keys: foot name -> body
+    "soles": None,  # foot name -> a site of the MJCF on that foot (optional)
     "fall": {"height_m", "tilt_rad"},
     "servo": {"kp", "kv", "force"},
     "pose": None,  # joint -> angle
@@ -87,6 +92,7 @@ class RobotSpec:
     clearance_m: float = 0.0005
     keyframe: str | None = None
     feet: dict[str, str] = field(default_factory=dict)
+    soles: dict[str, str] = field(default_factory=dict)
     fall_height_m: float = 0.0
     fall_tilt_rad: float = math.pi / 4
     servo: dict[str, Any] | None = None
@@ -179,6 +185,17 @@ def read_spec(path: str | Path) -> RobotSpec:
     for key, body in feet.items():
         if not isinstance(body, str) or not body:
             raise InputError(f"{where('feet', key)}: [feet] {key}: expected a body name")
+    soles = raw.get("soles", {})
+    for key, site in soles.items():
+        if key not in feet:
+            raise InputError(f"{where('soles', key)}: [soles] {key}: not a foot of [feet] "
+                             f"({', '.join(feet)})")
+        if not isinstance(site, str) or not site:
+            raise InputError(f"{where('soles', key)}: [soles] {key}: expected a site name")
+    if soles and set(soles) != set(feet):
+        missing = sorted(set(feet) - set(soles))[0]
+        raise InputError(f"{where('soles')}: [soles]: expected a site for every foot, "
+                         f"missing {missing!r}")
     fall = raw.get("fall", {})
     if "height_m" not in fall:
         raise InputError(f"{where('fall') if 'fall' in raw else path}: [fall] height_m: "
@@ -224,8 +241,8 @@ def read_spec(path: str | Path) -> RobotSpec:
                          "names")
     kind, roles = _gait(raw.get("gait"), where)
     return RobotSpec(path, robot["name"], robot["mjcf"], robot["torso"], floor, clearance,
-                     keyframe, dict(feet), height, tilt, servo, pose, evolve, tuple(remove),
-                     kind, roles, lines)
+                     keyframe, dict(feet), dict(soles), height, tilt, servo, pose, evolve,
+                     tuple(remove), kind, roles, lines)
 
 
 def _gait(gait: dict | None, where) -> tuple[str | None, dict[str, tuple[str, ...]]]:

@@ -52,7 +52,7 @@ def write_repertoire(out_dir: Path, hold_s: float, problem: Any = None) -> list[
     from evomotion.run.archive_file import read_archive
     from evomotion.studies.humanoid_repertoire.problem import FALLEN_OBJECTIVE, MEASURES
 
-    robot = getattr(problem, "robot", None)
+    robot = None if getattr(problem, "is_nao", True) else problem.robot
     box = MEASURES if robot is None else problem.measure_spec
     motion_of = step_motion if robot is None else problem.motion
     a = read_archive(out_dir / "archive.npz")
@@ -91,13 +91,13 @@ def step_motion(genes: np.ndarray) -> Motion:
 
 
 def run_problem(run: Path) -> Any:
-    """The problem of a run folder (from its config.toml) when it is another robot's, else
-    None (the NAO's steps need no problem to be rebuilt)."""
+    """The problem of a run folder (from its config.toml) when it is another robot's than
+    the NAO, else None (the NAO's steps need no problem to be rebuilt)."""
     from evomotion.run.config import config_from_dict, config_from_run_dir
     from evomotion.studies import get_study
 
     name, raw = config_from_run_dir(run)
-    if not raw.get("problem", {}).get("robot"):
+    if raw.get("problem", {}).get("robot", "") in ("", "nao"):
         return None
     study = get_study(name)
     return study.make_problem(config_from_dict(study, raw).problem)
@@ -121,7 +121,7 @@ def finalize(ctx: RunContext) -> None:
     try:
         contact_sheet(ctx.out_dir / "repertoire", sheet,
                       ctx.out_dir / "repertoire" / "contact_sheet.mp4",
-                      robot=getattr(ctx.problem, "robot", None))
+                      robot=None if ctx.problem.is_nao else ctx.problem.robot)
     except RuntimeError as exc:  # no GL backend (RenderUnavailableError) or a render error
         ctx.log(f"contact_sheet.mp4 skipped: {exc}")
         return

@@ -59,9 +59,10 @@ class HumanoidRepertoireConfig:
     warp_nconmax: int = 16  # backend warp: contacts per world to start with (grown when short)
     batch_rollouts: int = 2048  # rollouts simulated (and recorded in memory) at once
     segment_s: float = 0.4  # fallen robots stop being simulated at these boundaries (s)
-    #: another biped than the NAO: a bundled spec name (op3, dm-humanoid) or a spec .toml
-    #: (sim/robot); the same step, scaled to its size, through a numerical leg IK
-    #: (robot_step.py); its [fall] thresholds apply unless fall_height_m / fall_tilt_rad are set
+    #: the robot: "" or "nao" (the NAO, through its closed-form leg IK), another bundled
+    #: biped (op3, dm-humanoid) or a spec .toml (sim/robot): the same step, scaled to its
+    #: size, through a numerical leg IK (robot_step.py); its [fall] thresholds apply unless
+    #: fall_height_m / fall_tilt_rad are set
     robot: str = ""
 
     def for_worker(self) -> HumanoidRepertoireConfig:
@@ -102,18 +103,23 @@ class HumanoidRepertoireProblem(BatchedRollouts):
     measure_spec = MEASURES
 
     def __init__(self, cfg: HumanoidRepertoireConfig | None = None) -> None:
+        from evomotion.sim.robot import load_robot
+
         self.cfg = cfg = cfg or HumanoidRepertoireConfig()
         cfg.validate()
-        self.model = nao.load_model()
+        self.robot = load_robot("nao")  # the NAO's spec: its model and initial state
+        self.is_nao = True
+        self.model = self.robot.model
         self.dt = float(self.model.opt.timestep)
         self.genome = GenomeSpec(step.LOWER.copy(), step.UPPER.copy(), names=step.NAMES)
         self.horizon_s = cfg.horizon_s()
         self.nstep = int(math.ceil(self.horizon_s / self.dt))
         self.sim = make_simulator(self.model, cfg, cfg.threads)
         self.segment_steps = max(1, int(round(cfg.segment_s / self.dt)))
-        self.state0 = nao.initial_state(self.model, step.ready_pose())
+        self.state0 = self.robot.state_at(step.ready_pose())
         self.work = ServoWork(self.model)
-        self.fall_height_m, self.fall_tilt_rad = cfg.fall_height_m, cfg.fall_tilt_rad
+        self.fall_height_m, self.fall_tilt_rad = self.robot.fall_thresholds(cfg.fall_height_m,
+                                                                            cfg.fall_tilt_rad)
 
     def initial_population(self, n: int, rng: np.random.Generator) -> np.ndarray:
         """The in-place step of :data:`.step.DEFAULT` (CMA-ME's emitters start from it)."""
@@ -180,7 +186,7 @@ def make_problem(cfg: HumanoidRepertoireConfig) -> HumanoidRepertoireProblem:
     (:class:`.robot_problem.RobotRepertoireProblem`)."""
     if not isinstance(cfg, HumanoidRepertoireConfig):
         raise InputError("humanoid-repertoire: expected a HumanoidRepertoireConfig")
-    if cfg.robot:
+    if cfg.robot not in ("", "nao"):
         from evomotion.studies.humanoid_repertoire.robot_problem import RobotRepertoireProblem
 
         return RobotRepertoireProblem(cfg)

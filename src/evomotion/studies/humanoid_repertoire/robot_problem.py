@@ -43,6 +43,7 @@ class RobotRepertoireProblem(HumanoidRepertoireProblem):
         self.cfg = cfg
         cfg.validate()
         r = self.robot = load_robot(cfg.robot)
+        self.is_nao = False
         if set(r.feet) != {"left", "right"}:
             raise InputError(f"problem.robot: {r.name} has feet {', '.join(r.feet)}; a step "
                              "needs a biped with feet 'left' and 'right'")

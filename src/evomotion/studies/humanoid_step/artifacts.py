@@ -22,7 +22,7 @@ def genome_motion(problem: HumanoidStepProblem, genome: np.ndarray) -> Motion:
     over the step time, as a Webots motion."""
     times_ms = np.arange(0, int(round(problem.cfg.motion_s * 1000)) + 1, POSE_MS)
     ctrl = problem.controls(np.atleast_2d(genome), times_ms / 1000.0)[0]
-    joints = nao.JOINTS if problem.robot is None else list(problem.robot.joints)
+    joints = nao.JOINTS if problem.is_nao else list(problem.robot.joints)
     return Motion(joints, times_ms, ctrl)
 
 
@@ -62,7 +62,7 @@ def finalize(ctx: RunContext) -> None:
     path = write_best_motion(ctx)
     if path is None:
         return
-    if ctx.problem.robot is not None:
+    if not ctx.problem.is_nao:
         return finalize_robot(ctx)
     write_exports(ctx)
     video: Path | None = ctx.out_dir / "best.mp4"

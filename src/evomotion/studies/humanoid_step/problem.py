@@ -48,11 +48,10 @@ import mujoco
 import numpy as np
 
 from evomotion.core.checks import check_choice, check_fields, check_number
-from evomotion.core.problem import Evaluation, GenomeSpec
+from evomotion.core.problem import Evaluation
 from evomotion.errors import InputError
 from evomotion.sim import nao
 from evomotion.sim.backend import BatchedRollouts, make_simulator, validate_backend
-from evomotion.sim.nao.scene import scene_xml, sensor_slices
 from evomotion.sim.rollout import fall_step, fell, torso_track
 from evomotion.studies.humanoid_step.encoding import ENCODINGS, ServoEncoding
 
@@ -71,11 +70,6 @@ FITNESSES = ("step", "seed")
 #: the floor; shorter gaps are contact flicker at touch-down, not a hop
 FLIGHT_MIN_STEPS = 3
 #: sole-floor contact sensors added to the model (1 while the sole touches the floor)
-CONTACT_SENSORS = """<contact name="l_floor" geom1="l_sole" geom2="floor" data="found"/>
-<contact name="r_floor" geom1="r_sole" geom2="floor" data="found"/>
-"""
-
-
 #: ``problem.intervals`` at most; ``problem.threads`` at most (one MjData per thread)
 MAX_INTERVALS = 10_000
 MAX_THREADS = 1024
@@ -119,9 +113,10 @@ class HumanoidStepConfig:
     warp_nconmax: int = 16  # backend warp: contacts per world to start with (grown when short)
     batch_rollouts: int = 2048  # rollouts simulated (and recorded in memory) at once
     segment_s: float = 0.2  # fallen robots stop being simulated at these boundaries (s)
-    #: another robot than the NAO: a bundled spec name (dm-humanoid, op3) or a spec .toml
-    #: (sim/robot); its [evolve] joints make the step, its [fall] thresholds apply unless
-    #: fall_height_m / fall_tilt_rad are set to other values than the NAO's defaults
+    #: the robot: "" or "nao" (the NAO, sim/robot/specs/nao.toml), another bundled spec name
+    #: (dm-humanoid, op3) or a spec .toml (sim/robot); its [evolve] joints make the step, its
+    #: [fall] thresholds apply unless fall_height_m / fall_tilt_rad are set to other values
+    #: than the NAO's defaults
     robot: str = ""
 
     def for_worker(self) -> HumanoidStepConfig:
@@ -152,6 +147,11 @@ class HumanoidStepConfig:
         steps = math.ceil((self.motion_s + self.hold_s) / NAO_TIMESTEP_S)
         rollouts = min(pop_size * self.worlds, self.batch_rollouts)
         return 2 * 8 * rollouts * steps * ROLLOUT_DOUBLES_PER_STEP
+
+
+def is_nao(robot: str) -> bool:
+    """Is ``problem.robot`` the NAO (the default, "" or its bundled spec's name)?"""
+    return robot in ("", "nao")
 
 
 def servo_bounds(model, scale: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
@@ -220,11 +220,7 @@ class HumanoidStepProblem(BatchedRollouts):
     def __init__(self, cfg: HumanoidStepConfig | None = None) -> None:
         self.cfg = cfg = cfg or HumanoidStepConfig()
         validate(cfg)
-        self.robot = None
-        if cfg.robot:
-            self._init_robot(cfg)
-        else:
-            self._init_nao(cfg)
+        self._init_robot(cfg)
         self.dt = float(self.model.opt.timestep)
         self.nstep = int(round((cfg.motion_s + cfg.hold_s) / self.dt))
         self.t_step = self.dt * np.arange(self.nstep)  # target applied during step i
@@ -238,35 +234,22 @@ class HumanoidStepProblem(BatchedRollouts):
                 self.model, Perturbation(), cfg.worlds - 1,
                 np.random.default_rng(max(cfg.world_seed, 0)), cfg.motion_s)
 
-    def _init_nao(self, cfg: HumanoidStepConfig) -> None:
-        """The NAO H25 (the default): seed Table 1 bounds, the model's sole sensors."""
-        self.model = mujoco.MjModel.from_xml_string(scene_xml(sensors=CONTACT_SENSORS))
-        lo, hi = servo_bounds(self.model, cfg.bounds_scale)
-        self.encoding = ServoEncoding(cfg.encoding, leg_initial_pose(), lo, hi, cfg.intervals,
-                                      cfg.motion_s)
-        self.genome: GenomeSpec = self.encoding.genome(nao.LEG_SERVOS)
-        self.leg_columns = np.array(nao.joint_columns(nao.LEG_SERVOS))
-        self.base = nao.pose_vector()
-        self.state0 = nao.initial_state(self.model)
-        data0 = nao.initial_data(self.model)
-        self.sole0 = 0.5 * (data0.site("l_sole_site").xpos + data0.site("r_sole_site").xpos)
-        slices = sensor_slices(self.model)
-        self.sole_columns = [slices[s] for s in ("l_sole", "r_sole")]
-        self.contact_columns = [slices["l_floor"].start, slices["r_floor"].start]
-        self.fall_height_m, self.fall_tilt_rad = cfg.fall_height_m, cfg.fall_tilt_rad
-
     def _init_robot(self, cfg: HumanoidStepConfig) -> None:
-        """Another biped (:mod:`evomotion.sim.robot`): its ``[evolve]`` joints and ranges
-        (shrunk towards the initial pose by ``bounds_scale``), feet ``left`` and ``right``."""
+        """The robot of its spec (:mod:`evomotion.sim.robot`; the NAO's, ``nao.toml``, by
+        default): its ``[evolve]`` joints and ranges (shrunk towards the initial pose by
+        ``bounds_scale``; the NAO's are seed Table 1 within its model's ranges), feet ``left``
+        and ``right``, ``[fall]`` thresholds. ``is_nao``: the NAO (no ``robot``, or ``nao``),
+        which alone has perturbed worlds and the NAO exports."""
         from evomotion.sim.robot import load_robot
 
-        r = self.robot = load_robot(cfg.robot)
+        self.is_nao = is_nao(cfg.robot)
+        r = self.robot = load_robot(cfg.robot or "nao")
         if set(r.feet) != {"left", "right"}:
             raise InputError(f"problem.robot: {r.name} has feet {', '.join(r.feet)}; a step "
                              "needs a biped with feet 'left' and 'right'")
         if not r.evolved:
             raise InputError(f"problem.robot: {r.spec.path} has no [evolve] joints")
-        if cfg.worlds > 1:
+        if cfg.worlds > 1 and not self.is_nao:
             raise InputError("problem.worlds > 1 (perturbed worlds) is for the NAO only; "
                              "use problem.worlds = 1 with problem.robot")
         self.model = r.model

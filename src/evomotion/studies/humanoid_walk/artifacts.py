@@ -35,7 +35,7 @@ def best_record(ctx: RunContext) -> dict[str, Any]:
     """The gait parameters by name, the period as played, and the walk's structure."""
     if not _ok(ctx.best_genome):
         return {}
-    if getattr(ctx.problem, "robot", None) is not None:
+    if not getattr(ctx.problem, "is_nao", True):
         return {"robot": ctx.problem.robot.name, "gait": dict(zip(
             ctx.problem.genome.names, (float(v) for v in ctx.best_genome), strict=True))}
     parts = walk_parts(ctx.best_genome, ctx.problem.cfg.walk_s)
@@ -49,7 +49,7 @@ def write_motions(ctx: RunContext) -> Motion | None:
     """``best.motion`` and its three parts; the whole walk (``None`` without a best)."""
     if not _ok(ctx.best_genome):
         return None
-    if getattr(ctx.problem, "robot", None) is not None:  # the robot's channels every 20 ms
+    if not getattr(ctx.problem, "is_nao", True):  # the robot's channels every 20 ms
         p = ctx.problem
         t_ms = np.arange(0, int(p.horizon_s * 1000) + 1, gait.POSE_MS)
         q = p.controls(np.atleast_2d(ctx.best_genome), t_ms / 1000.0)[0]
@@ -76,7 +76,7 @@ def finalize(ctx: RunContext) -> None:
     motion = write_motions(ctx)
     if motion is None:
         return
-    if getattr(ctx.problem, "robot", None) is not None:
+    if not getattr(ctx.problem, "is_nao", True):
         return finalize_robot(ctx)
     # best_naoqi.py and best_keyframes.json only when the walk passes the real-NAO checks
     write_run_exports(motion, ctx.out_dir, ctx.log)

@@ -91,8 +91,9 @@ class HumanoidWalkConfig:
     warp_nconmax: int = 16  # backend warp: contacts per world to start with (grown when short)
     batch_rollouts: int = 2048  # rollouts simulated (and recorded in memory) at once
     segment_s: float = 0.4  # fallen robots stop being simulated at these boundaries (s)
-    #: another robot than the NAO: a bundled spec name (op3, dm-humanoid, dm-quadruped) or a
-    #: spec .toml with a [gait] section; it walks the joint-space gait of robot_gait.py
+    #: the robot: "" or "nao" (the NAO: the gait of gait.py through its leg IK), another
+    #: bundled spec name (op3, dm-humanoid, dm-quadruped) or a spec .toml with a [gait]
+    #: section (the joint-space gait of robot_gait.py)
     robot: str = ""
 
     def for_worker(self) -> HumanoidWalkConfig:
@@ -146,9 +147,13 @@ class HumanoidWalkProblem(BatchedRollouts):
     metric_names = METRICS
 
     def __init__(self, cfg: HumanoidWalkConfig | None = None) -> None:
+        from evomotion.sim.robot import load_robot
+
         self.cfg = cfg = cfg or HumanoidWalkConfig()
         cfg.validate()
-        self.model = nao.load_model()
+        self.robot = load_robot("nao")  # the NAO's spec: its model and initial states
+        self.is_nao = True
+        self.model = self.robot.model
         self.dt = float(self.model.opt.timestep)
         self.genome = GenomeSpec(gait.LOWER.copy(), gait.UPPER.copy(), names=gait.NAMES)
         self.horizon_s = cfg.horizon_s()
@@ -210,7 +215,7 @@ class HumanoidWalkProblem(BatchedRollouts):
         """One initial state per genome (every walk starts in the same crouch: one state per
         distinct first pose is computed)."""
         poses, inverse = np.unique(first, axis=0, return_inverse=True)
-        states = np.stack([nao.initial_state(self.model, f) for f in poses])
+        states = np.stack([self.robot.state_at(f) for f in poses])
         return states[np.asarray(inverse).ravel()]
 
     def _fallen(self, states: np.ndarray) -> np.ndarray:
@@ -288,7 +293,7 @@ def make_problem(cfg: HumanoidWalkConfig):
     """The NAO walk, or with ``cfg.robot`` the joint-space gait of another robot."""
     if not isinstance(cfg, HumanoidWalkConfig):
         raise InputError("humanoid-walk: expected a HumanoidWalkConfig")
-    if cfg.robot:
+    if cfg.robot not in ("", "nao"):
         from evomotion.studies.humanoid_walk.robot_walk import RobotWalkProblem
 
         return RobotWalkProblem(cfg)

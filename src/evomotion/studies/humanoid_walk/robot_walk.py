@@ -42,6 +42,7 @@ class RobotWalkProblem(BatchedRollouts):
         self.cfg = cfg
         cfg.validate()
         r = self.robot = load_robot(cfg.robot)
+        self.is_nao = False
         if r.gait_kind is None:
             raise InputError(f"problem.robot: {r.spec.path} has no [gait] section (the "
                              "channels of hip_pitch, knee, ankle_pitch, ...)")
