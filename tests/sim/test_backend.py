@@ -7,7 +7,7 @@ import pytest
 
 from evomotion.errors import InputError
 from evomotion.run.config import resolve_config
-from evomotion.sim.backend import physics_record
+from evomotion.sim.backend import physics_record, robot_identity
 from evomotion.studies import get_study
 
 
@@ -32,7 +32,10 @@ def test_batches_of_rollouts_give_the_same_evaluation(name):
         np.testing.assert_array_equal(whole.metrics[k], parts.metrics[k], err_msg=k)
     assert len(whole) == 5
     rec = problem.physics_record()
-    assert rec["backend"] == "cpu" and rec == physics_record(problem.sim)
+    # the physics and the robot (the NAO's spec: its name and the SHA-256 of spec and MJCF)
+    assert rec["backend"] == "cpu" and rec == {**physics_record(problem.sim),
+                                               **robot_identity(problem.robot)}
+    assert rec["robot"] == "nao" and len(rec["robot_mjcf_sha256"]) == 64
     assert problem.device_memory(100) is None  # host memory only
 
 
