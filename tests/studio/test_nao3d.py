@@ -93,3 +93,39 @@ def test_recordings_are_cached_read_only_and_scenes_checked():
     assert record_poses(WAVE) is rec and not rec["pos"].flags.writeable
     with pytest.raises(InputError):
         record_poses(WAVE, scene="mars")
+
+
+def test_another_robots_motion_plays_on_that_robot(tmp_path):
+    """A run of another robot (problem.robot): its motions (its channels) play on it, from
+    its initial state, the recorded poses its own replay's."""
+    from evomotion.run.config import config_to_toml, resolve_config
+    from evomotion.sim.nao.motion import format_motion
+    from evomotion.sim.robot import load_robot
+    from evomotion.sim.robot.play import play_motion
+    from evomotion.studies import get_study
+    from evomotion.studies.humanoid_repertoire.problem import (
+        HumanoidRepertoireConfig,
+        make_problem,
+    )
+    from evomotion.studio.views import scene_of
+
+    p = make_problem(HumanoidRepertoireConfig(robot="op3", threads=1))
+    g = p.steps.default.copy()  # the in-place step: it stands
+    path = tmp_path / "step.motion"
+    path.write_text(format_motion(p.motion(g)))
+    rec = record_poses(path, "robot:op3", fps=25.0, hold_s=0.5)
+    robot = load_robot("op3")
+    ref = play_motion(robot, p.motion(g), hold_s=0.5)
+    assert not rec["fell"] and not ref["summary"]["fell"]
+    torso = list(rec["bodies"]).index(robot.model.body("body").id)
+    end = ref["qpos"][-1]
+    assert np.allclose(rec["body_pos"][-1, torso, :2], end[:2], atol=0.01)
+    assert len({g["body"] for g in geom_table(load_scene_model("robot:op3"))}) > 15
+    s = get_study("humanoid-repertoire")
+    for robot_name, scene in (("op3", "robot:op3"), ("nao", "nao"), ("", "nao")):
+        run = tmp_path / f"run-{robot_name or 'default'}"
+        run.mkdir()
+        cfg = resolve_config(s, None, [f"problem.robot={robot_name!r}"] if robot_name else [])
+        (run / "config.toml").write_text(config_to_toml(cfg))
+        assert scene_of(run) == scene
+    assert scene_of(tmp_path / "nothing") == "nao"

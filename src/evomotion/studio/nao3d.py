@@ -1,4 +1,5 @@
-"""The NAO (or the kick scene with its ball) playing a ``.motion`` in 3D in the browser.
+"""The NAO (or the kick scene with its ball, or another robot of :mod:`evomotion.sim.robot`)
+playing a ``.motion`` in 3D in the browser.
 
 The geometry is the simulation's own MJCF: :func:`geom_table` lists every geom MuJoCo's viewer
 draws by default (groups 0-2, alpha > 0; the NAO's visual geoms are group 1, its collision
@@ -17,7 +18,9 @@ rest in the motion's first pose (the kick scene: the ball at
 :func:`~evomotion.studies.biped_kick.scene.default_ball_xy`), rolled out with
 :class:`~evomotion.sim.rollout.BatchSimulator`; every ``1 / fps`` s (frame 0: the initial
 state) ``mj_kinematics`` turns the state's ``qpos`` into geom and body poses. The browser shows
-what the simulation did, falls included.
+what the simulation did, falls included. Scene ``"robot:<spec>"`` (a bundled spec name or a
+spec path, as ``--robot`` takes it): that robot from its initial state, the motion's channels
+interpolated by :func:`evomotion.sim.robot.play.motion_controls`, its own fall thresholds.
 """
 
 from __future__ import annotations
@@ -33,7 +36,7 @@ import numpy as np
 
 from evomotion.core.checks import check_choice, check_number
 
-SCENES = ("nao", "kick")
+SCENES = ("nao", "kick")  # and "robot:<spec>"
 VISUAL_GROUPS = (0, 1, 2)  # the groups MuJoCo's viewer shows by default
 _TYPES = {mujoco.mjtGeom.mjGEOM_BOX: "box", mujoco.mjtGeom.mjGEOM_SPHERE: "sphere",
           mujoco.mjtGeom.mjGEOM_CAPSULE: "capsule", mujoco.mjtGeom.mjGEOM_CYLINDER: "cylinder",
@@ -41,6 +44,7 @@ _TYPES = {mujoco.mjtGeom.mjGEOM_BOX: "box", mujoco.mjtGeom.mjGEOM_SPHERE: "spher
 _TYPES = {int(k): v for k, v in _TYPES.items()}
 _Y_TO_Z = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])  # +90 deg about x
 _MODELS: dict[str, mujoco.MjModel] = {}
+NAO_TORSO_HEIGHT_M = 0.33  # the NAO's torso origin standing: the default camera's scale
 _CACHE: dict[tuple, dict[str, Any]] = {}
 _CACHE_SIZE = 8
 
@@ -48,9 +52,12 @@ _CACHE_SIZE = 8
 def load_scene_model(scene: str = "nao") -> mujoco.MjModel:
     """The model of ``scene`` ("nao": the NAO on its floor, "kick": plus the ball); one shared
     instance per scene, not to be modified."""
-    check_choice("scene", scene, SCENES)
+    if not scene.startswith("robot:"):
+        check_choice("scene", scene, SCENES)
     if scene not in _MODELS:
-        if scene == "kick":
+        if scene.startswith("robot:"):
+            _MODELS[scene] = _robot(scene).model
+        elif scene == "kick":
             from evomotion.studies.biped_kick.scene import load_scene
 
             _MODELS[scene] = load_scene()
@@ -115,6 +122,12 @@ def _initial_state(model: mujoco.MjModel, scene: str, pose: np.ndarray) -> np.nd
     return nao.initial_state(model, pose)
 
 
+def _robot(scene: str) -> Any:
+    from evomotion.sim.robot import load_robot
+
+    return load_robot(scene.split(":", 1)[1])
+
+
 def _record(path: Path, scene: str, fps: float, hold_s: float) -> dict[str, Any]:
     from evomotion.sim import nao
     from evomotion.sim.nao.motion import read_motion
@@ -124,14 +137,22 @@ def _record(path: Path, scene: str, fps: float, hold_s: float) -> dict[str, Any]
     check_number("fps", fps, lo=0.0, lo_open=True, hi=1000.0)
     check_number("hold_s", hold_s, lo=0.0, hi=MAX_HOLD_S)
     model = load_scene_model(scene)
-    motion = read_motion(path)
+    robot = _robot(scene) if scene.startswith("robot:") else None
+    motion = read_motion(path, None if robot is None else robot.joints)
     dt = float(model.opt.timestep)
     nstep = int(np.ceil((motion.duration_s + hold_s) / dt))
-    first, ctrl = motion_targets(motion, dt, nstep)
-    state0 = _initial_state(model, scene, first)
+    if robot is None:
+        first, ctrl = motion_targets(motion, dt, nstep)
+        state0 = _initial_state(model, scene, first)
+        limits = nao.FALL_HEIGHT_M, nao.FALL_TILT_RAD
+    else:  # another robot: from its initial state, as the studies evaluate and play it
+        from evomotion.sim.robot.play import motion_controls
+
+        ctrl, state0 = motion_controls(robot, motion, dt, nstep), robot.state0
+        limits = robot.fall_height_m, robot.fall_tilt_rad
     with BatchSimulator(model, 1) as sim:
         states = sim.run(state0, ctrl[None])[0]
-    fall = int(fall_step(torso_track(states[None]), nao.FALL_HEIGHT_M, nao.FALL_TILT_RAD)[0])
+    fall = int(fall_step(torso_track(states[None]), *limits)[0])
     every = max(1, int(round(1.0 / (fps * dt))))
     steps = np.arange(0, nstep + 1, every)  # physics steps done before each frame
     qpos = np.concatenate([nao.state_qpos_all(model, state0)[None],
@@ -237,8 +258,12 @@ class NaoPlayer:
                             _add_geom(self.scene, g)
                 self.groups.append(group)
         look_x = 0.1 if scene == "kick" else 0.0
-        self.scene.move_camera(x=look_x + 0.75, y=-0.6, z=0.5, look_at_x=look_x, look_at_y=0.0,
-                               look_at_z=0.25, duration=0)
+        size = 1.0  # the NAO's camera, scaled for another robot by its torso height
+        if scene.startswith("robot:"):
+            size = max(0.5, float(_robot(scene).state0[3]) / NAO_TORSO_HEIGHT_M)
+        self.scene.move_camera(x=look_x + 0.75 * size, y=-0.6 * size, z=0.5 * size,
+                               look_at_x=look_x, look_at_y=0.0, look_at_z=0.25 * size,
+                               duration=0)
         self.show(0)
         self.timer = ui.timer(rec["frame_dt_s"], self.advance)
 

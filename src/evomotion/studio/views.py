@@ -1,6 +1,7 @@
 """The individual, per study, on a run's page.
 
-- NAO studies (step, walk, kick, repertoire): any ``.motion`` of the run played in 3D
+- NAO studies (step, walk, kick, repertoire): any ``.motion`` of the run played in 3D (on
+  the run's robot when it is another one than the NAO)
   (:mod:`.nao3d`); the kick in its scene with the ball, with its table of aimed kicks; the
   repertoire's heat map, where a click plays that cell's motion.
 - arm-ik: the board with the population of a generation and the seed's statistics of that
@@ -43,6 +44,20 @@ def _problem(study: str, run_dir: Path) -> Any:
     return s.make_problem(config_from_dict(s, raw).problem)
 
 
+def scene_of(run_dir: Path, default: str = "nao") -> str:
+    """The 3D scene of a run's motions: ``"robot:<spec>"`` for a run of another robot than
+    the NAO (its config's ``problem.robot``), else ``default``."""
+    from evomotion.run.config import config_from_run_dir
+
+    try:
+        _, raw = config_from_run_dir(run_dir)
+    except Exception:  # noqa: BLE001 - no readable config: the NAO's scene
+        return default
+    robot = raw.get("problem", {}).get("robot", "")
+    return f"robot:{robot}" if isinstance(robot, str) and robot not in ("", "nao") \
+        else default
+
+
 def motions_of(run_dir: Path) -> list[str]:
     """The run's ``.motion`` files, relative to the run folder (best first)."""
     found = sorted(p.relative_to(run_dir).as_posix() for p in run_dir.rglob("*.motion")
@@ -66,10 +81,11 @@ def render(study: str, root: Path, run_dir: Path) -> None:
         ui.label(f"the study view failed: {type(e).__name__}: {e}").classes("text-red-700")
 
 
-def _nao(ui, run_dir: Path, motions: list[str], scene: str = "nao",
+def _nao(ui, run_dir: Path, motions: list[str], scene: str | None = None,
          chosen: str | None = None) -> Any:
     from evomotion.studio.nao3d import NaoPlayer
 
+    scene = scene or scene_of(run_dir)
     if not motions:
         ui.label("no .motion in this run yet (written at checkpoints and at the end)")
         return None
