@@ -101,7 +101,13 @@ static PyObject *make_key(WalkCore *c, const double idx[KEY_FIELDS]) {
             uint64_t f = (uint64_t)((int64_t)idx[i] + FIELD_MAX);
             for (int b = 0; b < KEY_BITS / 8; b++) buf[i * 5 + b] = (unsigned char)(f >> (8 * b));
         }
+#if PY_VERSION_HEX >= 0x030D0000
+        return PyLong_FromUnsignedNativeBytes(buf, sizeof buf,
+                                              Py_ASNATIVEBYTES_LITTLE_ENDIAN
+                                                  | Py_ASNATIVEBYTES_UNSIGNED_BUFFER);
+#else
         return _PyLong_FromByteArray(buf, sizeof buf, 1, 0);
+#endif
     }
     PyObject *acc = c->key_offset;
     Py_INCREF(acc);
