@@ -47,7 +47,8 @@ def run_cmd(
     overwrite: Annotated[bool, typer.Option(
         "--overwrite", help="Empty --out first if it already holds a run")] = False,
     robot: Annotated[str | None, typer.Option(
-        help="Another robot: a bundled spec (dm-humanoid, op3) or a spec .toml")] = None,
+        help="The robot: a bundled spec (nao, the default; op3, dm-humanoid, dm-quadruped) "
+             "or a spec .toml (recorded as an absolute path)")] = None,
 ) -> None:
     """Run STUDY and write a run folder (config, stats, checkpoints, plots, artifacts)."""
     from evomotion.run.config import resolve_config
@@ -61,6 +62,10 @@ def run_cmd(
 
         if "robot" not in {f.name for f in dataclasses.fields(s.problem_config)}:
             raise InputError(f"--robot: study {s.name!r} runs only its own robot")
+        from evomotion.sim.robot import spec_path
+
+        if spec_path(robot).resolve().parent != spec_path("nao").parent:  # a spec file:
+            robot = str(Path(robot).resolve())  # recorded absolute, so resume works anywhere
         overrides.insert(0, f"problem.robot={robot!r}")
     for key, val in (("evaluator", evaluator), ("workers", workers), ("address", address)):
         if val is not None:

@@ -50,6 +50,14 @@ def videos_off(reason: str | None) -> Iterator[None]:
         _VIDEOS_OFF.reset(token)
 
 
+def check_videos_on() -> None:
+    """Raise :class:`RenderUnavailableError` where :func:`videos_off` is in force (before
+    the work of a video is done: its simulation, say)."""
+    off = _VIDEOS_OFF.get()
+    if off is not None:
+        raise RenderUnavailableError(off)
+
+
 def render_video(qpos: np.ndarray, dt: float, out_path: str | Path, fps: int = 25,
                  width: int = 480, height: int = 352, model_path: Path = MODEL_PATH,
                  model_xml: str | None = None, camera: str = "follow") -> Path:
@@ -63,9 +71,7 @@ def render_video(qpos: np.ndarray, dt: float, out_path: str | Path, fps: int = 2
     quadruped of :mod:`evomotion.sim.quadruped`, about 0.6 m across) or
     ``"follow=BODY,DISTANCE_M,HEIGHT_M"`` (like ``"follow"`` for another robot: the camera
     follows ``BODY`` from ``DISTANCE_M`` away, looking at ``HEIGHT_M`` above the floor)."""
-    off = _VIDEOS_OFF.get()
-    if off is not None:
-        raise RenderUnavailableError(off)
+    check_videos_on()
     out_path = Path(out_path)
     if camera not in CAMERAS and not camera.startswith("follow="):
         raise ValueError(f"unknown camera {camera!r}; available: {', '.join(CAMERAS)}")

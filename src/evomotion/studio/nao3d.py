@@ -54,10 +54,10 @@ def load_scene_model(scene: str = "nao") -> mujoco.MjModel:
     instance per scene, not to be modified."""
     if not scene.startswith("robot:"):
         check_choice("scene", scene, SCENES)
+    if scene.startswith("robot:"):  # load_robot caches it (and reloads an edited spec)
+        return _robot(scene).model
     if scene not in _MODELS:
-        if scene.startswith("robot:"):
-            _MODELS[scene] = _robot(scene).model
-        elif scene == "kick":
+        if scene == "kick":
             from evomotion.studies.biped_kick.scene import load_scene
 
             _MODELS[scene] = load_scene()

@@ -53,7 +53,8 @@ def scene_of(run_dir: Path, default: str = "nao") -> str:
         _, raw = config_from_run_dir(run_dir)
     except Exception:  # noqa: BLE001 - no readable config: the NAO's scene
         return default
-    robot = raw.get("problem", {}).get("robot", "")
+    problem = raw.get("problem")
+    robot = problem.get("robot", "") if isinstance(problem, dict) else ""
     return f"robot:{robot}" if isinstance(robot, str) and robot not in ("", "nao") \
         else default
 

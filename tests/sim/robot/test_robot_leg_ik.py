@@ -74,3 +74,63 @@ def test_a_foot_without_leg_joints_is_one_line(tmp_path):
                                                           "right": "body"}})()})()
     with pytest.raises(InputError, match="no leg joints"):
         LegChain(fake, "left", robot.pose)
+
+
+TOY = """<mujoco model="toy">
+  <compiler angle="radian"/>
+  <option timestep="0.002"/>
+  <worldbody>
+    <geom name="floor" type="plane" size="5 5 0.1"/>
+    <body name="torso" pos="0 0 0.6">
+      <freejoint name="root"/>
+      <geom type="box" size="0.05 0.1 0.1" mass="2"/>
+      {legs}
+    </body>
+  </worldbody>
+  <actuator>{servos}</actuator>
+</mujoco>"""
+LEG = """<body name="{s}thigh" pos="0 {y} -0.1">
+  <joint name="{s}_hip_r" axis="1 0 0" range="-0.5 0.5"/>
+  <joint name="{s}_hip_p" axis="0 1 0" range="-1 1"/>
+  <geom type="capsule" fromto="0 0 0 0 0 -0.2" size="0.02" mass="0.5"/>
+  <body name="{s}shin" pos="0 0 -0.2">
+    <joint name="{s}_knee" axis="0 1 0" range="-0.2 2" ref="{ref}"/>
+    <geom type="capsule" fromto="0 0 0 0 0 -0.2" size="0.02" mass="0.3"/>
+    <body name="{s}foot" pos="0 0 -0.2">
+      <joint name="{s}_ank_p" axis="0 1 0" range="-1 1"/>
+      <joint name="{s}_ank_r" axis="1 0 0" range="-0.5 0.5"/>
+      <geom type="box" pos="0.02 0 -0.02" size="0.06 0.03 0.01" mass="0.2"/>
+    </body>
+  </body>
+</body>"""
+
+
+def test_a_joint_reference_angle_is_kept(tmp_path):
+    """MuJoCo turns a hinge by its angle less its ``ref``: the FK does too (a knee with
+    ref = 0.3 on one leg), and the ready pose's feet are the IK's fixed point."""
+    legs = LEG.format(s="l", y=0.06, ref=0.3) + LEG.format(s="r", y=-0.06, ref=0.0)
+    joints = [f"{s}_{j}" for s in "lr" for j in ("hip_r", "hip_p", "knee", "ank_p", "ank_r")]
+    servos = "".join(f'<position joint="{j}" kp="50" ctrlrange="-0.2 1"/>' for j in joints)
+    (tmp_path / "toy.xml").write_text(TOY.format(legs=legs, servos=servos))
+    (tmp_path / "toy.toml").write_text(
+        '[robot]\nname = "toy"\nmjcf = "toy.xml"\ntorso = "torso"\n\n'
+        '[feet]\nleft = "lfoot"\nright = "rfoot"\n\n[fall]\nheight_m = 0.2\n\n'
+        '[pose]\nl_knee = 0.4\nr_knee = 0.4\n')
+    from evomotion.sim.robot import build_robot, read_spec
+
+    robot = build_robot(read_spec(tmp_path / "toy.toml"))
+    rng = np.random.default_rng(4)
+    for foot in ("left", "right"):
+        leg = LegChain(robot, foot, robot.pose)
+        q = rng.uniform(leg.lower, leg.upper, (3, len(leg.joints)))
+        sole, rot, _, _ = leg.fk(q)
+        for i in range(3):
+            pose = robot.pose.copy()
+            pose[leg.columns] = q[i]
+            want_p, want_r = torso_frame_feet(robot, pose)[foot]
+            np.testing.assert_allclose(sole[i], want_p, atol=1e-12)
+            np.testing.assert_allclose(rot[i], want_r, atol=1e-12)
+        p0, r0 = torso_frame_feet(robot, robot.pose)[foot]
+        q0, err, _ = leg.solve(p0[None], r0[None])
+        np.testing.assert_allclose(q0[0], leg.ready, atol=1e-9)
+        assert err[0] < 1e-9

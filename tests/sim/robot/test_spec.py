@@ -196,3 +196,20 @@ def test_reader_fuzz_only_input_errors(tmp_path, text):
         build_robot(read_spec(path))
     except InputError as e:
         assert "\n" not in str(e)
+
+
+def test_a_bundled_name_wins_over_a_folder_of_that_name(tmp_path, monkeypatch):
+    """``evomotion run humanoid-step --out nao`` makes ./nao: the NAO is still the bundled
+    spec, and a path to a spec still works."""
+    from evomotion.sim.robot import SPECS_DIR
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "nao").mkdir()
+    (tmp_path / "op3").write_text("not a spec")
+    assert spec_path("nao") == SPECS_DIR / "nao.toml"
+    assert spec_path("op3") == SPECS_DIR / "op3.toml"
+    assert load_robot("nao").name == "nao"
+    mine = tmp_path / "sub" / "nao.toml"
+    mine.parent.mkdir()
+    mine.write_text((SPECS_DIR / "nao.toml").read_text())
+    assert spec_path("sub/nao.toml") == Path("sub/nao.toml")

@@ -81,7 +81,7 @@ def test_short_run_on_op3_writes_a_repertoire_that_pick_export_and_walk_to_use(t
     res = run_study(s, cfg, tmp_path, quiet=True)
     assert res.exit_code == 0
     index = json.loads((tmp_path / "repertoire" / "index.json").read_text())
-    assert index["robot"] == "op3" and index["entries"]
+    assert index["robot"] == "op3" and index["is_nao"] is False and index["entries"]
     assert index["box"]["upper"][0] > 0.15  # scaled to the OP3
     assert not (tmp_path / "repertoire" / "ready.motion").exists()
     robot = make_problem(cfg.problem).robot
@@ -94,6 +94,10 @@ def test_short_run_on_op3_writes_a_repertoire_that_pick_export_and_walk_to_use(t
     assert r["cell"] in [e["cell"] for e in index["entries"]]
     w = walk_to(tmp_path, 0.05, 0.0, 0.0, out=tmp_path / "chain.motion", hold_s=0.2)
     assert w["steps"] >= 1 and read_motion(tmp_path / "chain.motion", robot.joints)
+    # the repertoire folder itself works too (its run folder holds the config)
+    w2 = walk_to(tmp_path / "repertoire", 0.05, 0.0, 0.0, out=tmp_path / "c2.motion",
+                 hold_s=0.2)
+    assert w2["reached"] == w["reached"]
     with pytest.raises(Exception, match="unknown joint"):
         read_motion(tmp_path / "chain.motion")  # not NAO joints
     from typer.testing import CliRunner
@@ -112,3 +116,35 @@ def test_a_robot_without_left_and_right_feet_is_one_line():
     pytest.importorskip("dm_control")
     with pytest.raises(InputError, match="left' and 'right"):
         make_problem(HumanoidRepertoireConfig(robot="dm-quadruped"))
+
+
+def test_the_horizon_holds_the_longest_step_on_the_pose_grid(op3):
+    """Phases are rounded to the 20 ms grid: the longest one may round up, and its hold
+    must still fit (measured where a replay of its .motion measures it)."""
+    g = op3.genome.upper.copy()
+    g[step.INDEX["lead"]] = 1.0
+    m = op3.motion(g)
+    assert m.duration_s <= op3.steps.max_duration_s + 1e-12
+    _, end = op3.controls(g[None])
+    assert end[0] == int(np.ceil((m.duration_s + op3.cfg.hold_s) / op3.dt)) - 1 < op3.nstep
+
+
+def test_a_copy_of_the_nao_spec_is_another_robot(tmp_path):
+    """The repertoire of a copy of nao.toml (another path) is another robot's: generic step,
+    walk-to plays it on the copy's model, the kick refuses it; old indexes without is_nao
+    count as the NAO's."""
+    import shutil
+
+    from evomotion.sim.nao.repertoire import is_nao_repertoire
+    from evomotion.sim.robot import SPECS_DIR
+
+    copy = tmp_path / "my_nao.toml"
+    shutil.copy(SPECS_DIR / "nao.toml", copy)
+    p = make_problem(HumanoidRepertoireConfig(robot=str(copy), threads=1))
+    assert not p.is_nao and p.robot.name == "nao"
+    assert is_nao_repertoire({"robot": "nao"}) and not is_nao_repertoire({"robot": "op3"})
+    assert not is_nao_repertoire({"robot": "nao", "is_nao": False})
+    with pytest.raises(InputError, match="make_problem"):
+        from evomotion.studies.humanoid_repertoire.problem import HumanoidRepertoireProblem
+
+        HumanoidRepertoireProblem(HumanoidRepertoireConfig(robot="op3"))

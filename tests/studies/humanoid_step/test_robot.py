@@ -105,3 +105,29 @@ def test_physics_json_pins_the_robot_and_a_changed_spec_is_noted(tmp_path):
     spec.write_text(spec.read_text().replace("height_m = 0.18", "height_m = 0.170"))
     run_study(s, cfg, tmp_path / "r", quiet=True, resume=True)
     assert "resumed on other physics" in (tmp_path / "r" / "log.txt").read_text()
+
+
+def test_cli_records_a_spec_path_absolute(tmp_path):
+    """``--robot rel/spec.toml`` is recorded absolute: the run resumes from another folder."""
+    import shutil
+
+    from evomotion.sim.robot import SPECS_DIR
+
+    (tmp_path / "specs").mkdir()
+    shutil.copy(SPECS_DIR / "op3.toml", tmp_path / "specs" / "op3.toml")
+    text = (tmp_path / "specs" / "op3.toml").read_text()
+    (tmp_path / "specs" / "op3.toml").write_text(
+        text.replace('mjcf = "evomotion:sim/models/op3/op3.xml"',
+                     'mjcf = "evomotion:sim/models/op3/op3.xml"  # a copy'))
+    args = [sys.executable, "-m", "evomotion.cli", "run", "humanoid-step", "--robot",
+            "specs/op3.toml", "--out", "r", "-q", "--set", "run.generations=0",
+            *[a for kv in get_study("humanoid-step").smoke for a in ("--set", kv)],
+            "--set", "run.videos=false"]
+    r = subprocess.run(args, cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    cfg = (tmp_path / "r" / "config.toml").read_text()
+    assert f'robot = "{(tmp_path / "specs" / "op3.toml").resolve()}"' in cfg
+    r = subprocess.run([sys.executable, "-m", "evomotion.cli", "resume", str(tmp_path / "r"),
+                        "--set", "run.generations=1", "-q"], cwd=tmp_path.parent,
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0 and "Traceback" not in r.stderr, r.stderr

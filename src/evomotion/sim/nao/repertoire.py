@@ -58,6 +58,13 @@ def _integer(v: object) -> bool:
     return isinstance(v, int) and not isinstance(v, bool)
 
 
+def is_nao_repertoire(index: dict) -> bool:
+    """Was the repertoire evolved for the NAO (its own step, the bundled NAO)? Indexes
+    written before ``is_nao`` existed name their robot only (and were all the NAO's)."""
+    flag = index.get("is_nao")
+    return flag if isinstance(flag, bool) else index.get("robot", "nao") == "nao"
+
+
 def read_cell(folder: Path, entry: dict, joints: tuple[str, ...] | None = None) -> Motion:
     """The motion of an index entry (``joints``: another robot's channels, default the
     NAO's joints)."""

@@ -27,13 +27,15 @@ def bundled_specs() -> list[str]:
 
 
 def spec_path(name_or_path: str) -> Path:
-    """The spec file of a bundled name or a path; a one-line error for neither."""
+    """The spec file of a bundled name or a path; a one-line error for neither. A bundled
+    name (``nao``, ``op3``, ...) means the bundled spec even where the working directory holds
+    a file or folder of that name (``evomotion run ... --out nao``)."""
     path = Path(name_or_path)
+    bundled = SPECS_DIR / f"{name_or_path}.toml"
+    if path.suffix != ".toml" and len(path.parts) == 1 and bundled.is_file():
+        return bundled  # a bundled name wins over a file or folder of that name here
     if path.suffix == ".toml" or path.exists():
         return path
-    bundled = SPECS_DIR / f"{name_or_path}.toml"
-    if bundled.is_file():
-        return bundled
     raise InputError(f"unknown robot {name_or_path!r}; bundled: {', '.join(bundled_specs())} "
                      "(or a path to a spec .toml)")
 

@@ -15,8 +15,9 @@ A leg is the chain of hinge joints from the *pelvis*, the lowest body that carri
 (the torso for the NAO and the OP3, the dm_control humanoid's pelvis under its abdomen
 joints), down to the foot body; joints above the pelvis stay at the ready pose. Forward
 kinematics follows MuJoCo's ``mj_kinematics`` for bodies and hinge joints (body ``pos`` and
-``quat`` in the parent's frame, rotation about the joint axis through its anchor), in the
-torso's frame; ``tests/sim/robot/test_leg_ik.py`` checks it against ``mj_kinematics``.
+``quat`` in the parent's frame, rotation by the angle less the joint's ``ref`` about the
+joint axis through its anchor), in the torso's frame;
+``tests/sim/robot/test_robot_leg_ik.py`` checks it against ``mj_kinematics``.
 """
 
 from __future__ import annotations
@@ -64,7 +65,8 @@ def rotation_vector(r: np.ndarray) -> np.ndarray:
 class _Link:
     pos: np.ndarray  # body position in its parent's frame
     rot: np.ndarray  # body orientation in its parent's frame [3, 3]
-    joints: tuple[tuple[np.ndarray, np.ndarray], ...]  # (anchor, axis) in the body frame
+    joints: tuple[tuple[np.ndarray, np.ndarray, float], ...]  # (anchor, axis, ref) in the
+    # body frame; MuJoCo turns a hinge by its angle minus the reference angle qpos0 (``ref``)
 
 
 class LegChain:
@@ -108,7 +110,8 @@ class LegChain:
                 if name not in robot.joints:
                     raise InputError(f"{robot.spec.path}: leg joint {name!r} of foot "
                                      f"{foot!r} has no actuator")
-                js.append((m.jnt_pos[j].copy(), m.jnt_axis[j].copy()))
+                js.append((m.jnt_pos[j].copy(), m.jnt_axis[j].copy(),
+                           float(m.qpos0[m.jnt_qposadr[j]])))
                 names.append(name)
             links.append(_Link(m.body_pos[body].copy(), _quat_mat(m.body_quat[body]),
                                tuple(js)))
@@ -138,11 +141,11 @@ class LegChain:
         for link in self.links:
             pos = pos + rot @ link.pos
             rot = rot @ link.rot
-            for jpos, jaxis in link.joints:
+            for jpos, jaxis, ref in link.joints:
                 anchor = pos + rot @ jpos
                 axes.append(rot @ jaxis)
                 anchors.append(anchor)
-                rot = rot @ _axis_rot(jaxis, q[:, k])
+                rot = rot @ _axis_rot(jaxis, q[:, k] - ref)
                 pos = anchor - rot @ jpos
                 k += 1
         sole = pos + rot @ self.sole

@@ -30,7 +30,7 @@ import numpy as np
 from evomotion.errors import InputError
 from evomotion.sim import nao
 from evomotion.sim.nao.motion import Motion
-from evomotion.sim.nao.repertoire import read_cell, read_index
+from evomotion.sim.nao.repertoire import is_nao_repertoire, read_cell, read_index
 from evomotion.sim.nao.replay import motion_targets
 from evomotion.sim.rollout import fall_step, torso_track
 from evomotion.studies.biped_kick.planning import bezier, wrap
@@ -98,9 +98,10 @@ def walk(run: SceneRun, repertoire: Path, ctrl: np.ndarray, goal: np.ndarray,
     """Walk ``run`` to ``goal`` (x, y, heading) along the Bézier ``ctrl`` with the steps of
     ``repertoire``; returns the steps taken and the final error."""
     folder, index = read_index(repertoire)
-    if index.get("robot", "nao") != "nao":
-        raise InputError(f"{folder}: a repertoire of robot {index['robot']!r}; the kick "
-                         "walks the NAO (a humanoid-repertoire run without problem.robot)")
+    if not is_nao_repertoire(index):
+        raise InputError(f"{folder}: a repertoire of robot {index.get('robot')!r} (not the "
+                         "NAO's own step); the kick walks the NAO (a humanoid-repertoire run "
+                         "without problem.robot)")
     entries = index["entries"]
     for name in ["ready.motion"] + [Path(str(e["file"])).name for e in entries]:
         if not (folder / name).is_file():

@@ -77,6 +77,7 @@ def write_repertoire(out_dir: Path, hold_s: float, problem: Any = None) -> list[
         atomic_write_text(folder / "ready.motion", format_motion(ready_motion()))
     atomic_write_text(folder / INDEX, json.dumps({
         "robot": "nao" if robot is None else robot.name,
+        "is_nao": robot is None,  # the NAO's own step (a copy of nao.toml is another robot)
         "box": {"lower": box.lower.tolist(), "upper": box.upper.tolist()},
         "measures": list(a.measure_names), "cells": a.cells, "archived": int(a.cell.size),
         "fallen": int((~up).sum()), "outside_box": int((up & ~inside).sum()),
@@ -97,7 +98,9 @@ def run_problem(run: Path) -> Any:
     from evomotion.studies import get_study
 
     name, raw = config_from_run_dir(run)
-    if raw.get("problem", {}).get("robot", "") in ("", "nao"):
+    problem = raw.get("problem")
+    robot = problem.get("robot", "") if isinstance(problem, dict) else ""
+    if not isinstance(robot, str) or robot in ("", "nao"):
         return None
     study = get_study(name)
     return study.make_problem(config_from_dict(study, raw).problem)
@@ -132,8 +135,9 @@ def contact_sheet(folder: Path, entries: list[dict], video: Path, hold_s: float 
                   robot: Any = None) -> Path:
     """One video of the cells' steps, each replayed on its own from the ready pose (cut to
     the next one when its hold ends); ``robot``: another robot than the NAO."""
-    from evomotion.sim.render import render_video
+    from evomotion.sim.render import check_videos_on, render_video
 
+    check_videos_on()
     if robot is None:
         from evomotion.sim.nao.replay import simulate_motion
 

@@ -107,6 +107,9 @@ class HumanoidRepertoireProblem(BatchedRollouts):
 
         self.cfg = cfg = cfg or HumanoidRepertoireConfig()
         cfg.validate()
+        if cfg.robot not in ("", "nao"):
+            raise InputError(f"problem.robot = {cfg.robot!r}: build another robot's repertoire "
+                             "with make_problem(cfg) (RobotRepertoireProblem)")
         self.robot = load_robot("nao")  # the NAO's spec: its model and initial state
         self.is_nao = True
         self.model = self.robot.model

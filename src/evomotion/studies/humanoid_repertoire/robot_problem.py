@@ -42,7 +42,7 @@ class RobotRepertoireProblem(HumanoidRepertoireProblem):
 
         self.cfg = cfg
         cfg.validate()
-        r = self.robot = load_robot(cfg.robot)
+        r = self.robot = load_robot(cfg.robot or "nao")
         self.is_nao = False
         if set(r.feet) != {"left", "right"}:
             raise InputError(f"problem.robot: {r.name} has feet {', '.join(r.feet)}; a step "

@@ -34,7 +34,6 @@ NAO_HIP_TO_SOLE_M = step.LEG_HEIGHT_M + nao.FOOT_HEIGHT_M
 NAO_HALF_WIDTH_M = step.HIP_Y_M + step.WIDTH_M
 LENGTH_GENES = ("dx_m", "dy_m", "step_height_m")
 TIME_GENES = ("shift_s", "swing_s")
-MAX_IK_ERROR_M = 0.002  # the sole within 2 mm of its target (else the step is not the plan)
 
 
 def hip_to_sole(leg: LegChain) -> float:
@@ -66,7 +65,8 @@ class RobotStep:
         self.factor = factor
         self.lower, self.upper = step.LOWER * factor, step.UPPER * factor
         self.default = step.DEFAULT * factor
-        self.max_duration_s = step.MAX_DURATION_S * math.sqrt(self.scale)
+        sh, sw = step.durations_ms(self.upper)  # the longest phases, on the pose grid
+        self.max_duration_s = (3 * sh + 2 * sw) / 1000.0
 
     def measure_spec(self, nao: MeasureSpec) -> MeasureSpec:
         """The NAO's measure box with its lengths scaled to this robot."""

@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from evomotion.errors import InputError
-from evomotion.sim.nao.repertoire import chain, read_cell, read_index
+from evomotion.sim.nao.repertoire import chain, is_nao_repertoire, read_cell, read_index
 
 
 def _measures(index: dict) -> tuple[np.ndarray, list[dict]]:
@@ -148,7 +148,7 @@ def walk_to(run: Path, x: float, y: float, theta_deg: float, video: Path | None 
     if not idx:
         raise InputError("walk-to: the target is the start pose (nothing to do) or no "
                          "step of the repertoire gets closer to it")
-    problem = None if index.get("robot", "nao") == "nao" else _robot_problem(run)
+    problem = None if is_nao_repertoire(index) else _robot_problem(folder)
     joints = None if problem is None else problem.robot.joints
     motion = chain(with_pauses([read_cell(folder, entries[i], joints) for i in idx], settle_s))
     out = out or Path(run) / f"walk_to_{x:+.2f}_{y:+.2f}_{theta_deg:+.0f}.motion"
@@ -171,13 +171,15 @@ def walk_to(run: Path, x: float, y: float, theta_deg: float, video: Path | None 
             "video": str(video) if video is not None and skipped is None else None}
 
 
-def _robot_problem(run: Path):
+def _robot_problem(folder: Path):
+    """The problem of the run whose repertoire is ``folder`` (its run folder holds it)."""
     from evomotion.studies.humanoid_repertoire.artifacts import run_problem
 
-    problem = run_problem(Path(run))
+    run = folder.parent
+    problem = run_problem(run)
     if problem is None:
-        raise InputError(f"{run}: the repertoire names a robot, but config.toml has no "
-                         "problem.robot")
+        raise InputError(f"{run}: the repertoire is another robot's than the NAO, but the "
+                         "run's config.toml has no problem.robot")
     return problem
 
 

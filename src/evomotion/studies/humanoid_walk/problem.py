@@ -151,6 +151,9 @@ class HumanoidWalkProblem(BatchedRollouts):
 
         self.cfg = cfg = cfg or HumanoidWalkConfig()
         cfg.validate()
+        if cfg.robot not in ("", "nao"):
+            raise InputError(f"problem.robot = {cfg.robot!r}: build another robot's walk with "
+                             "make_problem(cfg) (RobotWalkProblem)")
         self.robot = load_robot("nao")  # the NAO's spec: its model and initial states
         self.is_nao = True
         self.model = self.robot.model
