@@ -9,5 +9,7 @@ from setuptools import Extension, setup
 
 setup(ext_modules=[Extension("evomotion.studies.quadruped_plan._walkcore",
                              ["src/evomotion/studies/quadruped_plan/_walkcore.c"],
-                             extra_compile_args=["-O2", "-fno-fast-math", "-ffp-contract=off"],
+                             # no FMA contraction, sin and cos called as Python calls them
+                             extra_compile_args=["-O2", "-fno-fast-math", "-ffp-contract=off",
+                                                 "-fno-builtin-sin", "-fno-builtin-cos"],
                              optional=True)])

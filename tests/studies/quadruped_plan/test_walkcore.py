@@ -38,7 +38,13 @@ def test_the_core_is_built_where_a_compiler_is():
 
 
 def _norm(x):
-    return tuple(_norm(v) for v in x) if isinstance(x, list | tuple) else x
+    """Lists and tuples alike (callers only iterate); floats bit for bit (-0.0 too)."""
+    if isinstance(x, list | tuple):
+        return tuple(_norm(v) for v in x)
+    if isinstance(x, float):
+        return ("float", x.hex())
+    assert type(x) is int, type(x)
+    return x
 
 
 def _pair(p: WalkProblem) -> WalkProblem:
@@ -117,10 +123,17 @@ def test_what_is_not_a_state_is_a_type_error():
             p.leg_options(bad)
     with pytest.raises(RuntimeError, match="not initialised"):
         rules._walkcore.WalkCore.__new__(rules._walkcore.WalkCore).body_moves(s)
-    nan = (math.nan, *s[1:])
-    for problem in (p, _pair(p)):  # the same error as the Python successors (round(nan))
-        with pytest.raises(ValueError, match="NaN"):
-            problem.body_moves(nan)
+    for bad_value in (math.nan, math.inf):  # an error from both, never silent results
+        for i in (0, 2, 5):
+            state = (*s[:i], bad_value, *s[i + 1:])
+            for problem in (p, _pair(p)):
+                with pytest.raises((ValueError, OverflowError)):
+                    problem.body_moves(state)
+                    problem.leg_options(state)
+    core = rules._walkcore.WalkCore(*p._core_args())
+    with pytest.raises(RuntimeError, match="once"):
+        core.__init__(*p._core_args())
+    assert _norm(core.body_moves(s)) == _norm(_pair(p).body_moves(s))
 
 
 @compiled
@@ -157,3 +170,44 @@ def test_body_moves_near_obstacles_equal_the_python_ones(world):
             assert _norm(p.leg_options(s)) == _norm(ref.leg_options(s))
             swept += terrain.body_distance(x, y) < terrain.r_hip + 3.0
     assert swept > 20  # many of them near an obstacle
+
+
+@compiled
+def test_feet_far_away_and_a_foot_on_its_hip_are_the_python_results():
+    """Leg-move keys of feet beyond 2^52 grid steps are exact Python ints; a foot on its
+    hip (set B) is the Python code's ZeroDivisionError; a foot far on the wrong side of its
+    hip is its math domain error."""
+    p = make_problem(QuadrupedPlanConfig(rule_set="B"))
+    ref = _pair(p)
+    s = p.start()
+    far = p.make_state((*s[:3], -1e15, *s[4:11]))
+    assert _norm(p.leg_options(far)) == _norm(ref.leg_options(far))
+    hx, hy = p.model.hips[0]
+    on_hip = p.make_state((*s[:3], hx, hy, *s[5:11]))
+    lift = rules._liftable(on_hip, p._stable)
+    if lift[0]:
+        for problem in (p, ref):
+            with pytest.raises(ZeroDivisionError):
+                problem.leg_options(on_hip)
+    wrong = p.make_state((*s[:3], hx + 1.5, hy - 0.1, *s[5:11]))
+    for problem in (p, ref):  # ux < -l_min below its hip: math.sqrt of a negative number
+        with pytest.raises(ValueError, match="math domain error"):
+            problem.body_moves(wrong)
+
+
+@compiled
+def test_bad_terrain_arguments_are_errors_not_crashes():
+    w = load_world("corridor")
+    m = Mission(w, QuadrupedModel(), "A")
+    p = m.problem(tuple(m.start().real), w.goal, 0.25, m.terrain(m.start(), truth=True))
+    args = list(p._core_args())
+    t = list(args[4])
+    for i, value in ((6, 2 ** 32), (7, 0), (16, -0.1), (17, math.nan), (13, -1)):
+        bad = list(t)
+        bad[i] = value
+        with pytest.raises(ValueError):
+            rules._walkcore.WalkCore(*args[:4], tuple(bad), args[5])
+    bad = list(t)
+    bad[1] = np.zeros(3)  # not the grid's size
+    with pytest.raises(ValueError, match="grid's size"):
+        rules._walkcore.WalkCore(*args[:4], tuple(bad), args[5])

@@ -13,6 +13,8 @@
  * checks every successor of many states, and the sweeps, against the Python code.
  *
  * Not covered (the Python code runs instead): the exclusion zone, the body shifts 28-31.
+ * A state with a NaN or infinite value is refused (ValueError; the Python code fails on most
+ * of them too, with a ValueError or OverflowError).
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
@@ -36,11 +38,11 @@ typedef struct {
     double unit_max[4][2], unit_min[4][2];
     /* the terrain (or none) */
     PyObject *terrain;
-    PyObject *body_obj, *foot_obj;
+    Py_buffer views[3]; /* body, foot, outline: held until dealloc (no resize meanwhile) */
+    int nviews, initialised, tried;
     const double *body, *foot;
     double tx0, ty0, inv, r_hip, body_thr, foot_thr, r_robot, half_a, half_b, spacing, quick;
     Py_ssize_t nx, ny, n_outline;
-    PyObject *outline_obj;
     const double *outline; /* the body outline's sample points in the body frame [k, 2] */
     /* Python objects used */
     PyObject *hypot, *key_offset, *shift[KEY_FIELDS], *one;
@@ -83,6 +85,10 @@ static int read_state(PyObject *s, double v[11]) {
         PyObject *o = PyTuple_GET_ITEM(s, i);
         v[i] = PyFloat_AsDouble(o);
         if (v[i] == -1.0 && PyErr_Occurred()) return -1;
+        if (!isfinite(v[i])) { /* the Python successors fail with a ValueError too */
+            PyErr_Format(PyExc_ValueError, "state: expected finite numbers, got %R", o);
+            return -1;
+        }
     }
     return 0;
 }
@@ -154,7 +160,18 @@ static double heading_error(WalkCore *c, const double s[11]) {
     return diff;
 }
 
-static double translation_limit(WalkCore *c, const double s[11], double sign) {
+/* math.sqrt: a ValueError below 0 (returns -1 with the error set) */
+static int py_sqrt(double x, double *out) {
+    if (x < 0.0) {
+        PyErr_SetString(PyExc_ValueError, "math domain error");
+        return -1;
+    }
+    *out = sqrt(x);
+    return 0;
+}
+
+/* the limit in *out; -1 with a Python error set where math.sqrt would raise */
+static int translation_limit(WalkCore *c, const double s[11], double sign, double *out) {
     double best = INFINITY;
     for (int i = 0; i < 4; i++) {
         int j = 3 + 2 * i;
@@ -165,12 +182,15 @@ static double translation_limit(WalkCore *c, const double s[11], double sign) {
         double u = r > 0 ? ry + sqrt(r) : ry;
         if (u < t) t = u;
         if (ux < c->lmin - c->workspace_tol && ry > 0) {
-            u = ry - sqrt(c->lmin * c->lmin - ux * ux);
+            double root;
+            if (py_sqrt(c->lmin * c->lmin - ux * ux, &root)) return -1;
+            u = ry - root;
             if (u < t) t = u;
         }
         if (t < best) best = t;
     }
-    return best > 0.0 ? best : 0.0;
+    *out = best > 0.0 ? best : 0.0;
+    return 0;
 }
 
 static double rotation_limit(WalkCore *c, const double s[11], double direction) {
@@ -253,19 +273,6 @@ static double body_distance(WalkCore *c, double x, double y) {
 static int foot_ok(WalkCore *c, double x, double y) {
     Py_ssize_t k;
     return grid_index(c, x, y, &k) && c->foot[k] >= c->foot_thr;
-}
-
-static PyObject *state_tuple(const double s[11], PyObject *key) {
-    PyObject *t = PyTuple_New(12);
-    if (!t) return NULL;
-    for (int i = 0; i < 11; i++) {
-        PyObject *f = PyFloat_FromDouble(s[i]);
-        if (!f) { Py_DECREF(t); return NULL; }
-        PyTuple_SET_ITEM(t, i, f);
-    }
-    Py_INCREF(key);
-    PyTuple_SET_ITEM(t, 11, key);
-    return t;
 }
 
 /* numpy.linspace(0.0, stop, n) as numpy computes it (arange * step, the last = stop) */
@@ -366,7 +373,9 @@ static int translation_ok(WalkCore *c, const double s[11], double nx, double ny)
             break;
     }
     if (i > k) return 1;
-    Py_ssize_t n = (Py_ssize_t)(ceil(d / c->spacing) + 1.0);
+    double nd = ceil(d / c->spacing) + 1.0;
+    if (!(nd >= 1.0 && nd < 1e6)) { PyErr_SetString(PyExc_ValueError, "distance"); return -1; }
+    Py_ssize_t n = (Py_ssize_t)nd;
     double *t = PyMem_Malloc((size_t)n * sizeof(double));
     if (!t) { PyErr_NoMemory(); return -1; }
     linspace0(1.0, n, t);
@@ -401,7 +410,7 @@ static PyObject *translate(WalkCore *c, const double s[11], double dist) {
 }
 
 static int ready(WalkCore *c) {
-    if (c->hypot) return 1;
+    if (c->initialised) return 1;
     PyErr_SetString(PyExc_RuntimeError, "WalkCore was not initialised");
     return 0;
 }
@@ -434,7 +443,8 @@ static PyObject *WalkCore_body_moves(WalkCore *c, PyObject *state) {
     double gx = c->gx - s[0], gy = c->gy - s[1];
     double along = -sin(s[2]) * gx + cos(s[2]) * gy;
     double sign = c->sense ? (double)c->sense : (along >= 0 ? 1.0 : -1.0);
-    double limit = translation_limit(c, s, sign);
+    double limit;
+    if (translation_limit(c, s, sign, &limit)) goto fail;
     if (limit >= c->b3 - c->eps) {
         PyObject *child = translate(c, s, sign * c->b3);
         if (!child) goto fail;
@@ -458,9 +468,21 @@ fail:
 
 /* ---- leg moves (WalkProblem.leg_options) ------------------------------------------------- */
 
+/* a - b of two integral doubles as a Python int, exactly (Python's ints) */
+static PyObject *int_difference(double a, double b) {
+    if (fabs(a) < 4503599627370496.0 && fabs(b) < 4503599627370496.0) /* 2^52: exact */
+        return PyLong_FromDouble(a - b);
+    PyObject *x = PyLong_FromDouble(a), *y = PyLong_FromDouble(b), *r = NULL;
+    if (x && y) r = PyNumber_Subtract(x, y);
+    Py_XDECREF(x);
+    Py_XDECREF(y);
+    return r;
+}
+
 /* (fx_idx - px_idx) << 40 j + (fy_idx - py_idx) << 40 (j + 1) as a Python int */
-static PyObject *key_change(WalkCore *c, int j, double dix, double diy) {
-    PyObject *a = PyLong_FromDouble(dix), *b = PyLong_FromDouble(diy);
+static PyObject *key_change(WalkCore *c, int j, double fix, double pix, double fiy,
+                            double piy) {
+    PyObject *a = int_difference(fix, pix), *b = int_difference(fiy, piy);
     PyObject *sa = NULL, *sb = NULL, *r = NULL;
     if (a && b) sa = PyNumber_Lshift(a, c->shift[j]);
     if (sa) sb = PyNumber_Lshift(b, c->shift[j + 1]);
@@ -478,8 +500,8 @@ static int add_move(WalkCore *c, PyObject *part, long rule, int j, double fx, do
                     double sn) {
     if (same_place(fx, fy, px, py)) return 0;
     if (filter && !foot_ok(c, s[0] + cs * fx - sn * fy, s[1] + sn * fx + cs * fy)) return 0;
-    PyObject *dk = key_change(c, j, nearbyint(fx * c->q) - nearbyint(px * c->q),
-                              nearbyint(fy * c->q) - nearbyint(py * c->q));
+    PyObject *dk = key_change(c, j, nearbyint(fx * c->q), nearbyint(px * c->q),
+                              nearbyint(fy * c->q), nearbyint(py * c->q));
     if (!dk) return -1;
     PyObject *m = Py_BuildValue("(lddN)", rule, fx, fy, dk);
     if (!m) return -1;
@@ -514,6 +536,10 @@ static PyObject *WalkCore_leg_options(WalkCore *c, PyObject *state) {
         if (c->set_b) {
             double hx = c->hx[leg], hy = c->hy[leg], rx = px - hx, ry = py - hy, length;
             if (py_hypot(c, rx, ry, &length)) goto fail_parts;
+            if (length == 0.0) {
+                PyErr_SetString(PyExc_ZeroDivisionError, "float division by zero");
+                goto fail_parts;
+            }
             double ux = rx / length, uy = ry / length;
             double t[4][3] = {
                 {12 + leg, hx + c->lmax * ux, hy + c->lmax * uy},
@@ -558,20 +584,19 @@ static int get_doubles(PyObject *seq, double *out, Py_ssize_t n, const char *wha
     return 0;
 }
 
-static const double *grid_data(PyObject *arr, Py_ssize_t n, PyObject **keep) {
-    Py_buffer view;
-    if (PyObject_GetBuffer(arr, &view, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT)) return NULL;
-    int ok = view.itemsize == 8 && view.format && strcmp(view.format, "d") == 0
-             && view.len == n * 8;
-    const double *data = (const double *)view.buf;
-    PyBuffer_Release(&view);
-    if (!ok) {
-        PyErr_SetString(PyExc_ValueError, "terrain arrays: expected C-contiguous float64");
+/* the float64 data of ``arr`` (n values); its buffer view is kept until dealloc */
+static const double *grid_data(WalkCore *c, PyObject *arr, Py_ssize_t n) {
+    Py_buffer *view = &c->views[c->nviews];
+    if (PyObject_GetBuffer(arr, view, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT)) return NULL;
+    if (!(view->itemsize == 8 && view->format && strcmp(view->format, "d") == 0
+          && view->len / 8 == n && view->len % 8 == 0)) {
+        PyBuffer_Release(view);
+        PyErr_SetString(PyExc_ValueError, "terrain arrays: expected C-contiguous float64 of "
+                        "the grid's size");
         return NULL;
     }
-    Py_INCREF(arr); /* the array (not resized by Terrain) stays alive with the core */
-    Py_XSETREF(*keep, arr);
-    return data;
+    c->nviews++;
+    return (const double *)view->buf;
 }
 
 /* WalkCore(model_numbers, problem_numbers, fixed_targets, units, terrain, key_offset)
@@ -584,6 +609,11 @@ static const double *grid_data(PyObject *arr, Py_ssize_t n, PyObject **keep) {
  *           foot_thr, r_robot, outline [k, 2], k, a / 2, b / 2, SPACING, QUICK_STEP) */
 static int WalkCore_init(WalkCore *c, PyObject *args, PyObject *kw) {
     (void)kw;
+    if (c->tried) { /* half-set fields of a failed or earlier call are never reused */
+        PyErr_SetString(PyExc_RuntimeError, "WalkCore is initialised once");
+        return -1;
+    }
+    c->tried = 1;
     PyObject *model, *problem, *fixed, *units, *terrain, *offset;
     if (!PyArg_ParseTuple(args, "OOOOOO", &model, &problem, &fixed, &units, &terrain, &offset))
         return -1;
@@ -626,11 +656,21 @@ static int WalkCore_init(WalkCore *c, PyObject *args, PyObject *kw) {
                               &nx, &ny, &r_hip, &body_thr, &foot_thr, &r_robot, &outline,
                               &n_outline, &half_a, &half_b, &spacing, &quick))
             return -1;
-        c->body = grid_data(body, nx * ny, &c->body_obj);
+        if (nx < 1 || ny < 1 || nx > PY_SSIZE_T_MAX / 8 / ny || n_outline < 0
+            || n_outline > PY_SSIZE_T_MAX / 16) {
+            PyErr_SetString(PyExc_ValueError, "terrain: bad grid or outline size");
+            return -1;
+        }
+        if (!(isfinite(spacing) && spacing > 0 && isfinite(quick) && quick > 0
+              && isfinite(inv) && inv > 0)) {
+            PyErr_SetString(PyExc_ValueError, "terrain: expected spacings > 0");
+            return -1;
+        }
+        c->body = grid_data(c, body, nx * ny);
         if (!c->body) return -1;
-        c->foot = grid_data(foot, nx * ny, &c->foot_obj);
+        c->foot = grid_data(c, foot, nx * ny);
         if (!c->foot) return -1;
-        c->outline = grid_data(outline, 2 * n_outline, &c->outline_obj);
+        c->outline = grid_data(c, outline, 2 * n_outline);
         if (!c->outline) return -1;
         c->n_outline = n_outline; c->half_a = half_a; c->half_b = half_b;
         c->spacing = spacing; c->quick = quick;
@@ -639,12 +679,13 @@ static int WalkCore_init(WalkCore *c, PyObject *args, PyObject *kw) {
         c->tx0 = x0; c->ty0 = y0; c->inv = inv; c->nx = nx; c->ny = ny;
         c->r_hip = r_hip; c->body_thr = body_thr; c->foot_thr = foot_thr; c->r_robot = r_robot;
     }
+    c->initialised = 1;
     return 0;
 }
 
 static void WalkCore_dealloc(WalkCore *c) {
-    Py_XDECREF(c->terrain); Py_XDECREF(c->body_obj); Py_XDECREF(c->foot_obj);
-    Py_XDECREF(c->outline_obj);
+    for (int i = 0; i < c->nviews; i++) PyBuffer_Release(&c->views[i]);
+    Py_XDECREF(c->terrain);
     Py_XDECREF(c->hypot); Py_XDECREF(c->key_offset);
     for (int i = 0; i < KEY_FIELDS; i++) Py_XDECREF(c->shift[i]);
     Py_TYPE(c)->tp_free((PyObject *)c);

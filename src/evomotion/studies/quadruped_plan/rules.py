@@ -43,7 +43,7 @@ try:  # the successors in C (setup.py builds it when a compiler is there); else 
     from evomotion.studies.quadruped_plan import _walkcore
 except ImportError:  # pragma: no cover - depends on the install
     _walkcore = None
-if os.environ.get("EVOMOTION_PURE_PYTHON"):  # the reference implementation only
+if os.environ.get("EVOMOTION_PURE_PYTHON", "0") not in ("", "0"):  # the Python code only
     _walkcore = None
 
 RULE_SETS = {"A": 11, "B": 27}
@@ -184,8 +184,8 @@ class WalkProblem:
 
             outline = np.ascontiguousarray(t._outline_local, dtype=float)
             terrain = (t, t.body_sdf, t.foot_sdf, t.x0, t.y0, t.inv, t.nx, t.ny, t.r_hip,
-                       t.body_thr, t.foot_thr, t.r_robot, outline, len(outline), m.a / 2,
-                       m.b / 2, SPACING, QUICK_STEP)
+                       t.body_thr, t.foot_thr, t.r_robot, outline, len(outline),
+                       t.model.a / 2, t.model.b / 2, SPACING, QUICK_STEP)
         return numbers, problem, fixed, units, terrain, KEY_OFFSET
 
     def _with_key(self, v: tuple[float, ...]) -> tuple:

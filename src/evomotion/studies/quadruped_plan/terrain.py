@@ -85,7 +85,7 @@ class Terrain:
         self._body_rows = self.body_sdf.tolist()
         self._foot_rows = self.foot_sdf.tolist()
         verts = [p.points for p in self.obstacles]
-        self._verts = np.vstack(verts) if verts else np.zeros((0, 2))
+        self._verts = np.vstack(verts).astype(float) if verts else np.zeros((0, 2))
 
     def with_obstacles(self, extra: Iterable[Polygon]) -> Terrain:
         """A copy that also knows the obstacles ``extra`` (only they are carved: the grids
@@ -155,7 +155,8 @@ class Terrain:
             return True
         d = self._verts[None, :, :] - poses[:, None, :2]
         if c is None:
-            c, s = np.cos(poses[:, 2])[:, None], np.sin(poses[:, 2])[:, None]
+            c = np.array([math.cos(p) for p in poses[:, 2]])[:, None]
+            s = np.array([math.sin(p) for p in poses[:, 2]])[:, None]
         u, v = c * d[..., 0] + s * d[..., 1], -s * d[..., 0] + c * d[..., 1]
         return not np.any((np.abs(u) < self.model.a / 2) & (np.abs(v) < self.model.b / 2))
 
@@ -165,7 +166,9 @@ class Terrain:
         ``_no_vertex_inside(poses)``, the same arithmetic in fewer numpy calls (the hot
         path of the walker's searches)."""
         local = self._outline_local
-        c, s = np.cos(poses[:, 2])[:, None], np.sin(poses[:, 2])[:, None]
+        # the C library's cos and sin (math's), as the compiled successors use them
+        c = np.array([math.cos(p) for p in poses[:, 2]])[:, None]
+        s = np.array([math.sin(p) for p in poses[:, 2]])[:, None]
         lx, ly = local[:, 0], local[:, 1]
         i = np.rint((poses[:, 0:1] + (c * lx - s * ly) - self.x0) * self.inv)
         j = np.rint((poses[:, 1:2] + (s * lx + c * ly) - self.y0) * self.inv)
