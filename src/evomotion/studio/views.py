@@ -55,8 +55,9 @@ def scene_of(run_dir: Path, default: str = "nao") -> str:
         return default
     problem = raw.get("problem")
     robot = problem.get("robot", "") if isinstance(problem, dict) else ""
-    return f"robot:{robot}" if isinstance(robot, str) and robot not in ("", "nao") \
-        else default
+    from evomotion.sim.robot import is_nao
+
+    return f"robot:{robot}" if isinstance(robot, str) and not is_nao(robot) else default
 
 
 def motions_of(run_dir: Path) -> list[str]:

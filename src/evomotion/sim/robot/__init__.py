@@ -40,6 +40,21 @@ def spec_path(name_or_path: str) -> Path:
                      "(or a path to a spec .toml)")
 
 
+def is_nao(robot: str) -> bool:
+    """Does a study's ``problem.robot`` name the NAO (the default "" or its bundled spec's
+    name ``nao``)? A copy of ``nao.toml`` under another path is another robot."""
+    return robot in ("", "nao")
+
+
+def load_nao(robot: str, other: str) -> Robot:
+    """The NAO of a NAO-only problem class; a one-line error naming ``other`` (the class
+    for another robot) when ``robot`` is not the NAO."""
+    if not is_nao(robot):
+        raise InputError(f"problem.robot = {robot!r}: another robot's problem is built by "
+                         f"make_problem(cfg) ({other})")
+    return load_robot("nao")
+
+
 _CACHE: dict[str, Robot] = {}  # key: path, mtime and size of the spec
 
 
@@ -57,5 +72,5 @@ def load_robot(name_or_path: str) -> Robot:
     return _CACHE[key]
 
 
-__all__ = ["Robot", "RobotSpec", "build_robot", "bundled_specs", "load_robot", "read_spec",
-           "spec_path"]
+__all__ = ["Robot", "RobotSpec", "build_robot", "bundled_specs", "is_nao", "load_nao",
+           "load_robot", "read_spec", "spec_path"]

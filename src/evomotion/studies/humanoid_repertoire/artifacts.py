@@ -95,12 +95,13 @@ def run_problem(run: Path) -> Any:
     """The problem of a run folder (from its config.toml) when it is another robot's than
     the NAO, else None (the NAO's steps need no problem to be rebuilt)."""
     from evomotion.run.config import config_from_dict, config_from_run_dir
+    from evomotion.sim.robot import is_nao
     from evomotion.studies import get_study
 
     name, raw = config_from_run_dir(run)
     problem = raw.get("problem")
     robot = problem.get("robot", "") if isinstance(problem, dict) else ""
-    if not isinstance(robot, str) or robot in ("", "nao"):
+    if not isinstance(robot, str) or is_nao(robot):
         return None
     study = get_study(name)
     return study.make_problem(config_from_dict(study, raw).problem)

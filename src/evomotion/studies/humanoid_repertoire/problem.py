@@ -103,14 +103,11 @@ class HumanoidRepertoireProblem(BatchedRollouts):
     measure_spec = MEASURES
 
     def __init__(self, cfg: HumanoidRepertoireConfig | None = None) -> None:
-        from evomotion.sim.robot import load_robot
+        from evomotion.sim.robot import load_nao
 
         self.cfg = cfg = cfg or HumanoidRepertoireConfig()
         cfg.validate()
-        if cfg.robot not in ("", "nao"):
-            raise InputError(f"problem.robot = {cfg.robot!r}: build another robot's repertoire "
-                             "with make_problem(cfg) (RobotRepertoireProblem)")
-        self.robot = load_robot("nao")  # the NAO's spec: its model and initial state
+        self.robot = load_nao(cfg.robot, "RobotRepertoireProblem")  # model, initial state
         self.is_nao = True
         self.model = self.robot.model
         self.dt = float(self.model.opt.timestep)
@@ -189,7 +186,9 @@ def make_problem(cfg: HumanoidRepertoireConfig) -> HumanoidRepertoireProblem:
     (:class:`.robot_problem.RobotRepertoireProblem`)."""
     if not isinstance(cfg, HumanoidRepertoireConfig):
         raise InputError("humanoid-repertoire: expected a HumanoidRepertoireConfig")
-    if cfg.robot not in ("", "nao"):
+    from evomotion.sim.robot import is_nao
+
+    if not is_nao(cfg.robot):
         from evomotion.studies.humanoid_repertoire.robot_problem import RobotRepertoireProblem
 
         return RobotRepertoireProblem(cfg)

@@ -149,11 +149,6 @@ class HumanoidStepConfig:
         return 2 * 8 * rollouts * steps * ROLLOUT_DOUBLES_PER_STEP
 
 
-def is_nao(robot: str) -> bool:
-    """Is ``problem.robot`` the NAO (the default, "" or its bundled spec's name)?"""
-    return robot in ("", "nao")
-
-
 def servo_bounds(model, scale: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
     """Seed Table 1 intersected with the model's joint ranges for ``nao.LEG_SERVOS``; with
     ``scale < 1`` each interval shrinks towards the initial pose by that factor."""
@@ -240,7 +235,7 @@ class HumanoidStepProblem(BatchedRollouts):
         ``bounds_scale``; the NAO's are seed Table 1 within its model's ranges), feet ``left``
         and ``right``, ``[fall]`` thresholds. ``is_nao``: the NAO (no ``robot``, or ``nao``),
         which alone has perturbed worlds and the NAO exports."""
-        from evomotion.sim.robot import load_robot
+        from evomotion.sim.robot import is_nao, load_robot
 
         self.is_nao = is_nao(cfg.robot)
         r = self.robot = load_robot(cfg.robot or "nao")

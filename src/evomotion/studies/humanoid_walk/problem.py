@@ -147,14 +147,11 @@ class HumanoidWalkProblem(BatchedRollouts):
     metric_names = METRICS
 
     def __init__(self, cfg: HumanoidWalkConfig | None = None) -> None:
-        from evomotion.sim.robot import load_robot
+        from evomotion.sim.robot import load_nao
 
         self.cfg = cfg = cfg or HumanoidWalkConfig()
         cfg.validate()
-        if cfg.robot not in ("", "nao"):
-            raise InputError(f"problem.robot = {cfg.robot!r}: build another robot's walk with "
-                             "make_problem(cfg) (RobotWalkProblem)")
-        self.robot = load_robot("nao")  # the NAO's spec: its model and initial states
+        self.robot = load_nao(cfg.robot, "RobotWalkProblem")  # model and initial states
         self.is_nao = True
         self.model = self.robot.model
         self.dt = float(self.model.opt.timestep)
@@ -296,7 +293,9 @@ def make_problem(cfg: HumanoidWalkConfig):
     """The NAO walk, or with ``cfg.robot`` the joint-space gait of another robot."""
     if not isinstance(cfg, HumanoidWalkConfig):
         raise InputError("humanoid-walk: expected a HumanoidWalkConfig")
-    if cfg.robot not in ("", "nao"):
+    from evomotion.sim.robot import is_nao
+
+    if not is_nao(cfg.robot):
         from evomotion.studies.humanoid_walk.robot_walk import RobotWalkProblem
 
         return RobotWalkProblem(cfg)
