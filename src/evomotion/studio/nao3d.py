@@ -52,10 +52,9 @@ _CACHE_SIZE = 8
 def load_scene_model(scene: str = "nao") -> mujoco.MjModel:
     """The model of ``scene`` ("nao": the NAO on its floor, "kick": plus the ball); one shared
     instance per scene, not to be modified."""
-    if not scene.startswith("robot:"):
-        check_choice("scene", scene, SCENES)
     if scene.startswith("robot:"):  # load_robot caches it (and reloads an edited spec)
         return _robot(scene).model
+    check_choice("scene", scene, SCENES)
     if scene not in _MODELS:
         if scene == "kick":
             from evomotion.studies.biped_kick.scene import load_scene

@@ -148,3 +148,15 @@ def test_a_copy_of_the_nao_spec_is_another_robot(tmp_path):
         from evomotion.studies.humanoid_repertoire.problem import HumanoidRepertoireProblem
 
         HumanoidRepertoireProblem(HumanoidRepertoireConfig(robot="op3"))
+
+
+def test_the_nao_box_size_is_its_measure_spec():
+    from evomotion.studies.humanoid_repertoire.problem import MEASURES
+    from evomotion.studies.humanoid_repertoire.use import NAO_BOX_SIZE, _box_size
+
+    np.testing.assert_allclose(NAO_BOX_SIZE, MEASURES.upper - MEASURES.lower)
+    np.testing.assert_allclose(_box_size({}), NAO_BOX_SIZE)
+    np.testing.assert_allclose(_box_size({"box": {"lower": [0, 0, 0], "upper": [1, 2, 3]}}),
+                               [1, 2, 3])
+    np.testing.assert_allclose(_box_size({"box": {"lower": [0, 0], "upper": "x"}}),
+                               NAO_BOX_SIZE)

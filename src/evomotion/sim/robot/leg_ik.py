@@ -8,8 +8,8 @@ pseudoinverse and damped least squares methods", 2004, eq. 11):
 
     dq = J^T (J J^T + lambda^2 I)^-1 e,        q <- clip(q + dq, lo, hi)
 
-with ``e`` the sole's position error and ``w_rot`` times its orientation error (rotation
-vector), solved for every pose of a batch at once (numpy, no Python loop over poses).
+with ``e`` the sole's position error and ``ROT_WEIGHT_M`` times its orientation error
+(rotation vector), solved for every pose of a batch at once (numpy, no Python loop over poses).
 
 A leg is the chain of hinge joints from the *pelvis*, the lowest body that carries both feet
 (the torso for the NAO and the OP3, the dm_control humanoid's pelvis under its abdomen
@@ -90,10 +90,7 @@ class LegChain:
                 raise InputError(f"{robot.spec.path}: foot {foot!r} does not hang from the "
                                  "torso")
         chain.reverse()
-        data = mujoco.MjData(m)
-        mujoco.mj_setState(m, data, robot.state0, mujoco.mjtState.mjSTATE_FULLPHYSICS)
-        _set_pose(robot, data, pose)
-        mujoco.mj_kinematics(m, data)
+        data = _kinematics(robot, pose)
         r_t = data.xmat[torso].reshape(3, 3)
         # the pelvis in the torso's frame (fixed: joints above it stay at the ready pose)
         self.base_pos = r_t.T @ (data.xpos[pelvis] - data.xpos[torso])
@@ -206,21 +203,24 @@ def _pelvis(m: mujoco.MjModel, feet: list[int]) -> int:
     return next(b for b in ancestors(feet[0]) if b in common)
 
 
-def _set_pose(robot, data: mujoco.MjData, pose: np.ndarray) -> None:
+def _kinematics(robot, pose: np.ndarray) -> mujoco.MjData:
+    """MjData of the robot's initial state with its actuated joints at ``pose[nu]``, after
+    ``mj_kinematics``."""
     m = robot.model
+    data = mujoco.MjData(m)
+    mujoco.mj_setState(m, data, robot.state0, mujoco.mjtState.mjSTATE_FULLPHYSICS)
     for a, name in enumerate(robot.joints):
         if m.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT:
             data.qpos[m.jnt_qposadr[m.joint(name).id]] = pose[a]
+    mujoco.mj_kinematics(m, data)
+    return data
 
 
 def torso_frame_feet(robot, pose: np.ndarray) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """Each foot's sole position and orientation in the torso frame at ``pose``
     (``mj_kinematics``)."""
     m = robot.model
-    data = mujoco.MjData(m)
-    mujoco.mj_setState(m, data, robot.state0, mujoco.mjtState.mjSTATE_FULLPHYSICS)
-    _set_pose(robot, data, pose)
-    mujoco.mj_kinematics(m, data)
+    data = _kinematics(robot, pose)
     torso = m.body(robot.spec.torso).id
     r_t = data.xmat[torso].reshape(3, 3)
     out = {}

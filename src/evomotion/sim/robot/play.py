@@ -56,8 +56,8 @@ def play_motion(robot, motion: Motion, hold_s: float = 1.0, nthread: int = 1) ->
     return {"summary": summary, "qpos": states[0, :, 1:1 + model.nq], "dt": dt}
 
 
-def robot_camera(robot, back: float = 2.6) -> str:
+def robot_camera(robot, back: float = 2.6, least_m: float = 1.1) -> str:
     """The render camera for ``robot``: follow its torso from ``back`` times the torso's
-    start height away (at least 1.1 m), looking at 0.6 of that height."""
+    start height away (at least ``least_m``), looking at 0.6 of that height."""
     height = float(robot.state0[3])  # time, then the free joint's x, y, z
-    return f"follow={robot.spec.torso},{max(1.1, back * height):.2f},{0.6 * height:.2f}"
+    return f"follow={robot.spec.torso},{max(least_m, back * height):.2f},{0.6 * height:.2f}"

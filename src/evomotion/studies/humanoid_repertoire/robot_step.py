@@ -25,6 +25,7 @@ import numpy as np
 
 from evomotion.core.problem import MeasureSpec
 from evomotion.sim import nao
+from evomotion.sim.nao.leg_ik import rot_z
 from evomotion.sim.robot.leg_ik import LegChain, torso_frame_feet
 from evomotion.studies.humanoid_repertoire import step
 
@@ -49,7 +50,6 @@ class RobotStep:
     feet ``left`` and ``right``)."""
 
     def __init__(self, robot) -> None:
-        self.robot = robot
         self.pose = robot.pose
         self.feet0 = torso_frame_feet(robot, robot.pose)
         self.legs = {f: LegChain(robot, f, robot.pose) for f in ("left", "right")}
@@ -62,7 +62,6 @@ class RobotStep:
             factor[step.INDEX[n]] = math.sqrt(self.scale)
         half_width = 0.5 * abs(self.feet0["left"][0][1] - self.feet0["right"][0][1])
         factor[step.INDEX["sway_m"]] = half_width / NAO_HALF_WIDTH_M
-        self.factor = factor
         self.lower, self.upper = step.LOWER * factor, step.UPPER * factor
         self.default = step.DEFAULT * factor
         sh, sw = step.durations_ms(self.upper)  # the longest phases, on the pose grid
@@ -93,12 +92,8 @@ class RobotStep:
                 rel = step._rot(-p.yaw, xy - p.torso)
                 targets.append(np.stack([rel[:, 0], rel[:, 1], pos0[2] + lift], -1))
                 yaws.append(yaw - p.yaw)
-            yaw = np.concatenate(yaws)
-            c, s = np.cos(yaw), np.sin(yaw)
-            rz = np.zeros((yaw.size, 3, 3))
-            rz[:, 0, 0], rz[:, 0, 1], rz[:, 1, 0], rz[:, 1, 1], rz[:, 2, 2] = c, -s, s, c, 1.0
             leg = self.legs[foot]
-            q, err, _ = leg.solve(np.concatenate(targets), rz @ rot0)
+            q, err, _ = leg.solve(np.concatenate(targets), rot_z(np.concatenate(yaws)) @ rot0)
             np.maximum.at(worst, rows, err)
             for i, part in enumerate(np.split(q, np.cumsum(sizes)[:-1])):
                 out[i][:, leg.columns] = part

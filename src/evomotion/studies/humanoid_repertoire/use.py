@@ -54,15 +54,19 @@ def pick(run: Path, dx: float, dy: float, dtheta_deg: float) -> dict:
             "normalised_distance": float(d[i])}
 
 
+#: the NAO archive's ranges (m, m, deg): problem.MEASURES, for indexes without a box
+NAO_BOX_SIZE = (0.25, 0.16, 90.0)
+
+
 def _box_size(index: dict) -> np.ndarray:
     """The archive's ranges (m, m, deg): from the index's ``box``, else the NAO's."""
     box = index.get("box")
     try:
         size = np.array(box["upper"], float) - np.array(box["lower"], float)
     except (TypeError, KeyError, ValueError):
-        return np.array([0.25, 0.16, 90.0])
-    return size if size.shape == (3,) and np.all(np.isfinite(size) & (size > 0)) else \
-        np.array([0.25, 0.16, 90.0])
+        size = None
+    ok = size is not None and size.shape == (3,) and np.all(np.isfinite(size) & (size > 0))
+    return size if ok else np.array(NAO_BOX_SIZE)
 
 
 def _compose(pose: np.ndarray, step: np.ndarray) -> np.ndarray:

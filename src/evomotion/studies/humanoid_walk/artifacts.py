@@ -115,15 +115,15 @@ def finalize_robot(ctx: RunContext) -> None:
                "walk_s": float(walk_s[0]), "horizon_s": p.horizon_s}
     summary["fell"] = bool(summary["fell"])
     atomic_write_text(ctx.out_dir / "best_replay.json", json.dumps(summary, indent=2) + "\n")
-    height = float(states[0, 0, 3])
     back = 3.0 if p.kind == "biped" else 6.0  # a quadruped is longer than it is tall
     video: Path | None = ctx.out_dir / "best.mp4"
     try:
         if not p.robot.xml:
             raise RuntimeError("the robot's edited model cannot be written as MJCF text")
+        from evomotion.sim.robot.play import robot_camera
+
         render_video(states[0, :, 1:1 + p.model.nq], p.dt, video, model_xml=p.robot.xml,
-                     camera=f"follow={p.robot.spec.torso},{max(1.2, back * height):.2f},"
-                            f"{0.6 * height:.2f}")
+                     camera=robot_camera(p.robot, back, least_m=1.2))
     except (RenderUnavailableError, RuntimeError) as e:
         ctx.log(f"best.mp4 skipped: {e}")
         video = None

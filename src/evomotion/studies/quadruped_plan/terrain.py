@@ -100,13 +100,6 @@ class Terrain:
         out._refresh()
         return out
 
-    def reveal(self, polygon: Polygon) -> None:
-        """Add an obstacle that has come into view (the grids are updated in place)."""
-        self.obstacles.append(polygon)
-        self._carve(self.body_sdf, polygon.points)
-        self._carve(self.foot_sdf, polygon.points)
-        self._refresh()
-
     # -- scalar reads ---------------------------------------------------------------------
     def body_distance(self, x: float, y: float) -> float:
         i, j = int((x - self.x0) * self.inv + 0.5), int((y - self.y0) * self.inv + 0.5)
@@ -122,12 +115,6 @@ class Terrain:
         return 0 <= i < self.nx and 0 <= j < self.ny and \
             self._foot_rows[i][j] >= self.r_robot + self.foot_thr
 
-    def _points_clear(self, pts: np.ndarray) -> bool:
-        ij = np.rint((pts - [self.x0, self.y0]) * self.inv).astype(np.int64)
-        if np.any(ij < 0) or np.any(ij[..., 0] >= self.nx) or np.any(ij[..., 1] >= self.ny):
-            return False
-        return bool(np.all(self.body_sdf[ij[..., 0], ij[..., 1]] >= self.body_thr))
-
     # -- the body's outline -----------------------------------------------------------------
     @functools.cached_property
     def _outline_local(self) -> np.ndarray:
@@ -142,33 +129,22 @@ class Terrain:
             rect.append(p + t[:, None] * (q - p))
         return np.vstack(rect)
 
-    def _outline(self, poses: np.ndarray) -> np.ndarray:
-        """Sample points of the body rectangle's outline at each pose ``[n, 3]``."""
-        local = self._outline_local
-        c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
-        rot = np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)  # [n, 2, 2]
-        return (poses[:, None, :2] + np.einsum("nij,kj->nki", rot, local)).reshape(-1, 2)
-
     def _no_vertex_inside(self, poses: np.ndarray, c: np.ndarray | None = None,
                           s: np.ndarray | None = None) -> bool:
         if not len(self._verts):
             return True
         d = self._verts[None, :, :] - poses[:, None, :2]
         if c is None:
-            c = np.array([math.cos(p) for p in poses[:, 2]])[:, None]
-            s = np.array([math.sin(p) for p in poses[:, 2]])[:, None]
+            c, s = _cos_sin(poses[:, 2])
         u, v = c * d[..., 0] + s * d[..., 1], -s * d[..., 0] + c * d[..., 1]
         return not np.any((np.abs(u) < self.model.a / 2) & (np.abs(v) < self.model.b / 2))
 
     def _sweep_clear(self, poses: np.ndarray) -> bool:
-        """The body's outline at every pose ``[n, 3]`` clear of obstacles and no obstacle
-        vertex inside the body: ``_points_clear(_outline(poses))`` and
-        ``_no_vertex_inside(poses)``, the same arithmetic in fewer numpy calls (the hot
-        path of the walker's searches)."""
+        """The body's outline at every pose ``[n, 3]`` clear of obstacles (the body grid at
+        the nearest node of each outline sample, at least ``body_thr``) and no obstacle
+        vertex inside the body (the hot path of the walker's searches)."""
         local = self._outline_local
-        # the C library's cos and sin (math's), as the compiled successors use them
-        c = np.array([math.cos(p) for p in poses[:, 2]])[:, None]
-        s = np.array([math.sin(p) for p in poses[:, 2]])[:, None]
+        c, s = _cos_sin(poses[:, 2])
         lx, ly = local[:, 0], local[:, 1]
         i = np.rint((poses[:, 0:1] + (c * lx - s * ly) - self.x0) * self.inv)
         j = np.rint((poses[:, 1:2] + (s * lx + c * ly) - self.y0) * self.inv)
@@ -225,3 +201,10 @@ class Terrain:
         if not self._sweep_clear(np.array([s[:3]], dtype=float)):
             return "the body is in or near an obstacle"
         return None
+
+
+def _cos_sin(phis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Columns ``[n, 1]`` of cos and sin of ``phis`` by the C library (``math``), as the
+    compiled successors (_walkcore.c) take them."""
+    return (np.array([math.cos(p) for p in phis])[:, None],
+            np.array([math.sin(p) for p in phis])[:, None])
