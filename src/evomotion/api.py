@@ -11,8 +11,6 @@ one-line :class:`~evomotion.errors.InputError` naming it.
 
 from __future__ import annotations
 
-import json
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -23,6 +21,9 @@ from evomotion.core.problem import Problem
 from evomotion.errors import InputError
 from evomotion.run.runner import RunResult
 from evomotion.studies.base import Study
+from evomotion.textio import read_file_bytes, read_json
+
+MAX_LOG_BYTES = 64 * 1024 * 1024
 
 
 @dataclass(frozen=True)
@@ -118,10 +119,9 @@ def run(problem_or_study: Any, config: dict[str, Any] | None = None,
 
 
 def _read_toml(path: Path) -> dict[str, Any]:
-    try:
-        return tomllib.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as e:
-        raise InputError(f"{path}: not a readable TOML file ({e})") from None
+    from evomotion.run.config import load_toml
+
+    return load_toml(path)
 
 
 @dataclass(frozen=True)
@@ -167,8 +167,8 @@ def load_run(path: str | Path) -> Run:
     best = _read_json(root / "best.json")
     physics = _read_json(root / "physics.json")
     log_path = root / "log.txt"
-    log = tuple(log_path.read_text(encoding="utf-8", errors="replace").splitlines()) \
-        if log_path.is_file() else ()
+    log = tuple(read_file_bytes(log_path, "run log", MAX_LOG_BYTES).decode(
+        "utf-8", "replace").splitlines()) if log_path.exists() else ()
     artifacts = {str(p.relative_to(root)): p for p in sorted(root.rglob("*"))
                  if p.is_file() and p.name not in _ENGINE_FILES
                  and "checkpoints" not in p.relative_to(root).parts
@@ -178,11 +178,8 @@ def load_run(path: str | Path) -> Run:
 
 
 def _read_json(path: Path) -> dict[str, Any] | None:
-    if not path.is_file():
+    if not path.exists():
         return None
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, ValueError) as e:
-        raise InputError(f"{path}: not readable JSON ({e})") from None
+    data = read_json(path, "JSON file", finite=False)  # best.json may hold null, not NaN
     return data if isinstance(data, dict) else None
 

@@ -116,6 +116,24 @@ def resume_cmd(
     _finish(run_study(s, cfg, run_dir, quiet=quiet, resume=True), quiet)
 
 
+@app.command("stop")
+def stop_cmd(
+    run_dir: Annotated[Path, typer.Argument(help="A running run's folder")],
+) -> None:
+    """Stop a running run as Ctrl-C would (it checkpoints; 'evomotion resume' continues it).
+
+    Only a live process that verifiably is that run is signalled (the pid, start time, boot
+    and host its run.lock records); a stale lock is reported, and nothing is signalled."""
+    import signal
+
+    from evomotion.run.lock import signal_owner
+
+    if not (run_dir / "run.lock").exists():
+        raise InputError(f"{run_dir}: not a run folder with a run.lock")
+    pid = signal_owner(run_dir, signal.SIGTERM)
+    typer.echo(f"sent SIGTERM to the run's process {pid}", err=True)
+
+
 @app.command("plot")
 def plot_cmd(
     run_dirs: Annotated[list[Path], typer.Argument(help="One or more run folders")],
@@ -247,6 +265,19 @@ def main(argv: list[str] | None = None) -> None:
         typer.echo(f"error: {e}; the last completed generation is checkpointed: continue with "
                    "'evomotion resume RUN_DIR --evaluator serial' (or process)", err=True)
         sys.exit(4)
+    except OSError as e:  # a file the checks above did not foresee (a disk that failed)
+        from evomotion.outfile import reason
+
+        where = f"{e.filename}: " if getattr(e, "filename", None) else ""
+        typer.echo(f"error: {where}{reason(e)}", err=True)
+        sys.exit(2)
+    except KeyboardInterrupt:  # before a run loop began (a run's own is a checkpoint)
+        typer.echo("error: interrupted", err=True)
+        sys.exit(130)
+    except MemoryError:
+        typer.echo("error: out of memory (an input asked for more than this machine has)",
+                   err=True)
+        sys.exit(2)
 
 
 if __name__ == "__main__":

@@ -8,9 +8,13 @@ file can only ever raise :class:`~evomotion.errors.FileFormatError`.
 
 from __future__ import annotations
 
+import json
+import math
 import os
+import re
 import stat
 from pathlib import Path
+from typing import Any
 
 from evomotion.errors import FileFormatError
 
@@ -25,7 +29,9 @@ def _size_text(n: int) -> str:
 def read_file_bytes(path: str | Path, what: str = "file",
                     max_bytes: int = MAX_FILE_BYTES) -> bytes:
     """The bytes of ``path``, or :class:`FileFormatError` (missing, not a regular file,
-    unreadable, larger than ``max_bytes``). The size is checked before anything is read."""
+    unreadable, larger than ``max_bytes``). Nothing but a regular file is opened for reading
+    (a FIFO would block, ``/dev/zero`` never ends), and the size is checked before anything
+    is read."""
     path = Path(path)
     try:
         st = os.stat(path)
@@ -33,20 +39,39 @@ def read_file_bytes(path: str | Path, what: str = "file",
         raise FileFormatError(path, None, f"expected an existing {what}") from None
     except (OSError, ValueError) as e:
         raise FileFormatError(path, None, f"expected a readable {what} ({_reason(e)})") from None
-    if stat.S_ISDIR(st.st_mode):
-        raise FileFormatError(path, None, f"expected a {what}, got a directory")
+    _check_regular(path, st.st_mode, what)
     if st.st_size > max_bytes:
         raise FileFormatError(path, None, f"expected a {what} of at most "
                                           f"{_size_text(max_bytes)}, got {_size_text(st.st_size)}")
     try:
-        with open(path, "rb") as f:
-            data = f.read(max_bytes + 1)  # a pipe or a growing file cannot exceed the limit
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)  # swapped for a FIFO: no block
     except (OSError, ValueError) as e:
         raise FileFormatError(path, None, f"expected a readable {what} ({_reason(e)})") from None
+    try:
+        _check_regular(path, os.fstat(fd).st_mode, what)
+        with os.fdopen(fd, "rb") as f:
+            fd = -1
+            data = f.read(max_bytes + 1)  # a growing file cannot exceed the limit
+    except OSError as e:
+        raise FileFormatError(path, None, f"expected a readable {what} ({_reason(e)})") from None
+    finally:
+        if fd >= 0:
+            os.close(fd)
     if len(data) > max_bytes:
         raise FileFormatError(path, None, f"expected a {what} of at most "
                                           f"{_size_text(max_bytes)}")
     return data
+
+
+def _check_regular(path: Path, mode: int, what: str) -> None:
+    if stat.S_ISDIR(mode):
+        raise FileFormatError(path, None, f"expected a {what}, got a directory")
+    if not stat.S_ISREG(mode):
+        kind = next((n for t, n in ((stat.S_ISFIFO, "a FIFO"), (stat.S_ISSOCK, "a socket"),
+                                    (stat.S_ISCHR, "a character device"),
+                                    (stat.S_ISBLK, "a block device")) if t(mode)),
+                    "not a regular file")
+        raise FileFormatError(path, None, f"expected a regular {what}, got {kind}")
 
 
 def _reason(e: BaseException) -> str:
@@ -91,3 +116,68 @@ def read_text_lines(path: str | Path, what: str = "file",
     """The lines of a UTF-8 text file (see :func:`split_lines`); every failure is a
     :class:`FileFormatError` naming the file (and the line of a bad byte)."""
     return split_lines(decode_utf8(read_file_bytes(path, what, max_bytes), path))
+
+
+#: Default deepest nesting of a JSON document a reader accepts (this program writes <= 4)
+MAX_JSON_DEPTH = 32
+_JSON_TOKENS = re.compile(r'"(?:[^"\\]|\\.)*"|[\[\]{}]')
+
+
+def json_depth(text: str, limit: int) -> int:
+    """The nesting depth of the JSON ``text`` (strings skipped), counted only up to
+    ``limit + 1`` (the scan stops there: a hostile document costs no more than that)."""
+    depth = deepest = 0
+    for m in _JSON_TOKENS.finditer(text):
+        c = m.group()
+        if c in "[{":
+            depth += 1
+            if depth > deepest:
+                deepest = depth
+                if deepest > limit:
+                    break
+        elif c in "]}":
+            depth -= 1
+    return deepest
+
+
+def loads_json(text: str, path: str | Path, max_depth: int = MAX_JSON_DEPTH,
+               finite: bool = True) -> Any:
+    """The JSON document ``text`` (from ``path``); nested deeper than ``max_depth``, not
+    JSON, or (when ``finite``) holding ``NaN``/``Infinity`` or a number too large for a float
+    is one :class:`FileFormatError` naming the file and line."""
+    if json_depth(text, max_depth) > max_depth:
+        raise FileFormatError(path, None, f"expected JSON nested at most {max_depth} deep")
+
+    def constant(name: str) -> float:
+        if finite:
+            raise _NonFiniteError(name)
+        return float(name)
+
+    def number(s: str) -> float:
+        v = float(s)
+        if finite and not math.isfinite(v):
+            raise _NonFiniteError(s)
+        return v
+
+    try:
+        return json.loads(text, parse_constant=constant, parse_float=number)
+    except _NonFiniteError as e:
+        raise FileFormatError(path, None, f"expected finite numbers, got {str(e)[:40]}"
+                              ) from None
+    except json.JSONDecodeError as e:
+        raise FileFormatError(path, e.lineno, f"column {e.colno}: invalid JSON: {e.msg}"
+                              ) from None
+    except (RecursionError, ValueError) as e:  # ValueError: an integer of > 4300 digits
+        raise FileFormatError(path, None, f"invalid JSON ({type(e).__name__})") from None
+
+
+class _NonFiniteError(Exception):
+    pass
+
+
+def read_json(path: str | Path, what: str = "JSON file", max_bytes: int = MAX_FILE_BYTES,
+              max_depth: int = MAX_JSON_DEPTH, finite: bool = True) -> Any:
+    """The JSON document at ``path``, read with :func:`read_file_bytes` and parsed with
+    :func:`loads_json` (every failure one :class:`FileFormatError`)."""
+    data = read_file_bytes(path, what, max_bytes)
+    return loads_json(decode_utf8(data, path), path, max_depth, finite)

@@ -91,8 +91,17 @@ def test_directory_is_one_line(tmp_path):
 
 
 def test_missing_file_is_one_line(tmp_path):
-    with pytest.raises(InputError, match="cannot read config"):
+    with pytest.raises(InputError, match="expected an existing TOML file"):
         resolve_config(F, tmp_path / "nope.toml")
+
+
+def test_fifo_and_device_are_refused_without_blocking(tmp_path):
+    fifo = tmp_path / "c.toml"
+    os.mkfifo(fifo)
+    with pytest.raises(InputError, match="expected a regular TOML file, got a FIFO"):
+        resolve_config(F, fifo)
+    with pytest.raises(InputError, match="got a character device"):
+        resolve_config(F, "/dev/zero")
 
 
 @pytest.mark.skipif(os.geteuid() == 0, reason="root reads any file")
@@ -100,7 +109,7 @@ def test_unreadable_file_is_one_line(tmp_path):
     f = tmp_path / "c.toml"
     f.write_text("[run]\n")
     f.chmod(0)
-    with pytest.raises(InputError, match="cannot read config"):
+    with pytest.raises(InputError, match="expected a readable TOML file"):
         resolve_config(F, f)
 
 

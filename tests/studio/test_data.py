@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import socket
 import subprocess
@@ -38,16 +39,29 @@ def test_finished_run_is_listed_with_its_last_row(tmp_path):
     assert not r.resumable and data.list_runs(tmp_path, "arm-ik") == []
 
 
+def _lock(pid, host=None, start=None):
+    from evomotion.run.lock import boot_id, process_start
+
+    return json.dumps({"pid": pid, "host": host or socket.gethostname(),
+                       "start": process_start(pid) if start is None else start,
+                       "boot": boot_id(), "command": "evomotion"}) + "\n"
+
+
 def test_status_from_lock_and_log(tmp_path):
     d = _run(tmp_path, "a")
-    host = socket.gethostname()
-    (d / "run.lock").write_text(f"pid {os.getpid()} on {host}\n")
-    assert data.run_status(d)[0] == "running"
-    dead = subprocess.Popen([sys.executable, "-c", "pass"])
-    dead.wait()
-    (d / "run.lock").write_text(f"pid {dead.pid} on {host}\n")
-    assert data.run_status(d)[:2] == ("interrupted", "killed")
-    assert data.summarize(tmp_path, d).resumable
+    # a live process that is an evomotion command line, named with its start time: running
+    live = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)", "evomotion"])
+    try:
+        (d / "run.lock").write_text(_lock(live.pid))
+        assert data.run_status(d) == ("running", "", live.pid)
+        assert not data.summarize(tmp_path, d).resumable
+    finally:
+        live.kill()
+        live.wait()
+    # the process is gone (kill -9): the lock is stale, the run resumable
+    status, detail, pid = data.run_status(d)
+    assert (status, pid) == ("stale", None) and f"pid {live.pid}" in detail
+    assert "stale" in detail and data.summarize(tmp_path, d).resumable
     (d / "run.lock").write_text("")
     with open(d / "log.txt", "a") as fh:
         fh.write("resumed at generation 8 with evaluator serial\n")

@@ -16,8 +16,9 @@ from __future__ import annotations
 import io
 import json
 import math
+import os
 import re
-import zipfile
+import stat
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -25,11 +26,16 @@ from typing import Any
 import numpy as np
 
 from evomotion.errors import InputError
-from evomotion.run.folder import atomic_write_bytes, atomic_write_text
+from evomotion.npzio import read_npz
+from evomotion.outfile import atomic_write_bytes, atomic_write_text
+from evomotion.run.history import NAME as HISTORY_NAME
+from evomotion.textio import decode_utf8, loads_json, read_file_bytes
 
 NAME = re.compile(r"gen-(\d{6,})\.json")
 ARRAYS = re.compile(r"gen-(\d{6,})\.npz")
-MAX_META_BYTES = 256 * 1024 * 1024
+MAX_META_BYTES = 64 * 1024 * 1024
+MAX_META_DEPTH = 16  # a checkpoint's JSON is 4 deep; a driver's state may add a few levels
+MAX_ARRAYS_BYTES = 1 << 30  # the largest population arrays a checkpoint holds (1 GiB)
 
 
 class CheckpointError(ValueError):
@@ -95,19 +101,16 @@ def read_checkpoint(run_dir: Path, name: str) -> tuple[dict[str, np.ndarray], di
     ck = run_dir / "checkpoints"
     path = ck / name
     try:
-        if path.stat().st_size > MAX_META_BYTES:
-            raise CheckpointError("larger than any checkpoint this program writes")
-        meta = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, ValueError, RecursionError) as e:
-        raise CheckpointError(f"unreadable ({type(e).__name__})") from None
+        meta = loads_json(decode_utf8(read_file_bytes(path, "checkpoint", MAX_META_BYTES),
+                                      path), path, max_depth=MAX_META_DEPTH, finite=False)
+    except InputError as e:
+        raise CheckpointError(f"unreadable ({str(e).split(': ', 1)[-1][:120]})") from None
     check_meta(meta, run_dir)
-    npz = ck / meta["arrays_file"]
     try:
-        with np.load(npz, allow_pickle=False) as z:
-            arrays = {k: z[k] for k in z.files}
-    except (OSError, ValueError, EOFError, zipfile.BadZipFile, KeyError) as e:
-        raise CheckpointError(f"{meta['arrays_file']} is unreadable ({type(e).__name__})") \
-            from None
+        arrays = read_npz(ck / meta["arrays_file"], "checkpoint arrays", MAX_ARRAYS_BYTES)
+    except InputError as e:
+        raise CheckpointError(f"{meta['arrays_file']} is unreadable "
+                              f"({str(e).split(': ', 1)[-1][:160]})") from None
     return arrays, meta
 
 
@@ -141,16 +144,29 @@ def check_meta(meta: Any, run_dir: Path) -> None:
         raise CheckpointError("counters.best_metrics: expected names and numbers")
     if c.get("stop_reason") is not None and not isinstance(c["stop_reason"], str):
         raise CheckpointError("counters.stop_reason: expected a string or null")
+    if c.get("finished") is not None and not isinstance(c["finished"], bool):
+        raise CheckpointError("counters.finished: expected true, false or absent")
     if meta.get("generation") != max(c["generation"], 0):
         raise CheckpointError("generation: does not match counters.generation")
-    for key, file in (("stats_offset", "stats.csv"), ("log_offset", "log.txt")):
+    for key, file in (("stats_offset", "stats.csv"), ("log_offset", "log.txt"),
+                      ("history_offset", HISTORY_NAME)):
+        if key == "history_offset" and key not in c:
+            continue  # a run without history, or written before it was recorded
         off = _int(c, key, 0)
         path = run_dir / file
-        size = path.stat().st_size if path.exists() else 0
+        try:
+            st = os.stat(path)
+        except FileNotFoundError:
+            st = None
+        except OSError as e:
+            raise CheckpointError(f"{file}: unreadable ({e.strerror})") from None
+        if st is not None and not stat.S_ISREG(st.st_mode):
+            raise CheckpointError(f"{file}: expected a regular file")
+        size = st.st_size if st is not None else 0
         if off > size:
             raise CheckpointError(f"counters.{key}: {off} is past the end of {file} "
-                                  f"({size} bytes)")
-        if off > 0:
+                                  f"({size} bytes: the file was cut or replaced)")
+        if off > 0 and key != "history_offset":
             with open(path, "rb") as fh:
                 fh.seek(off - 1)
                 if fh.read(1) != b"\n":

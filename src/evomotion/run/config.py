@@ -118,19 +118,10 @@ def _decode(path: Path, data: bytes) -> str:
 def load_toml(path: Path) -> dict[str, Any]:
     """The TOML document at ``path``; every problem with it is a one-line :class:`InputError`
     (unreadable, a directory, too large, not UTF-8, not TOML: ``FILE:LINE: ...``)."""
-    path, is_dir = Path(path), False
-    try:
-        is_dir = path.is_dir()
-        with path.open("rb") as fh:
-            data = fh.read(MAX_CONFIG_BYTES + 1)
-    except OSError as e:
-        if is_dir:
-            raise InputError(f"{path}: expected a TOML file, got a directory") from None
-        raise InputError(f"{path}: cannot read config ({e.strerror or e})") from None
-    except ValueError as e:  # e.g. an embedded NUL in the path
-        raise InputError(f"{str(path)!r}: cannot read config ({e})") from None
-    if len(data) > MAX_CONFIG_BYTES:
-        raise InputError(f"{path}: expected a config of at most {MAX_CONFIG_BYTES} bytes")
+    from evomotion.textio import read_file_bytes
+
+    path = Path(path)
+    data = read_file_bytes(path, "TOML file", MAX_CONFIG_BYTES)
     text = _decode(path, data)
     try:
         return tomllib.loads(text)

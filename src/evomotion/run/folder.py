@@ -1,10 +1,17 @@
-"""Run folders and atomic file writes."""
+"""Run folders: made, marked as a run's own, emptied only of what runs wrote.
+
+A run folder carries :data:`~evomotion.outfile.RUN_MARKER`, written when a run starts in an
+empty folder; it lists the top-level names runs wrote there (the run loop's files at the start,
+and every file written through :mod:`evomotion.outfile` after). ``--overwrite`` removes only
+those, and refuses a folder holding anything else, naming it: a folder that merely holds a
+``config.toml`` beside a thesis is never emptied.
+"""
 
 from __future__ import annotations
 
 import json
 import os
-import tempfile
+import re
 import time
 from pathlib import Path
 from typing import Any
@@ -12,19 +19,38 @@ from typing import Any
 import numpy as np
 
 from evomotion.errors import InputError
+from evomotion.outfile import (
+    RUN_MARKER,
+    WriteError,
+    atomic_write_bytes,  # noqa: F401 - the run loop's writers, re-exported
+    atomic_write_text,
+    read_marker,
+    reason,
+    write_marker,
+)
+from evomotion.run.lock import LOCK_NAME
 
 RUN_MARKERS = ("config.toml", "stats.csv", "checkpoints")
+#: what the run loop itself writes in every run folder (recorded in the marker when a run starts)
+RUN_FILES = ("config.toml", "stats.csv", "log.txt", "checkpoints", "run.lock", "physics.json",
+             "best.json", "plots", "population.bin", "archive.npz", "finish.json")
+_SHOWN = 5
 
 
 def holds_run(path: Path) -> bool:
-    """Whether ``path`` already holds (part of) a run folder."""
+    """Whether ``path`` already holds (part of) a run: a run's config, stats or checkpoints."""
     return any((path / m).exists() for m in RUN_MARKERS)
+
+
+def is_run_folder(path: Path) -> bool:
+    """Whether ``path`` carries the marker a run writes (:data:`RUN_MARKER`)."""
+    return read_marker(Path(path)) is not None
 
 
 def make_run_dir(study: str, out: Path | str | None = None, root: Path | str = "runs") -> Path:
     """``out`` if given (created), else ``runs/<study>-<YYYYmmdd-HHMMSS>[-N]``; every problem
-    creating it is one :class:`InputError` line. (Whether the folder already holds a run is
-    the run loop's check, under the folder's lock: :func:`evomotion.run.runner.run_study`.)"""
+    creating it is one :class:`InputError` line. (Whether the folder may take a new run is
+    the run loop's check, under the folder's lock: :func:`prepare_new_run`.)"""
     if out is not None:
         path = Path(out)
     else:
@@ -34,78 +60,129 @@ def make_run_dir(study: str, out: Path | str | None = None, root: Path | str = "
         while path.exists():
             n += 1
             path = Path(root) / f"{study}-{stamp}-{n}"
-    if path.exists() and not path.is_dir():
-        raise InputError(f"--out {path}: expected a folder, found a file")
     try:
+        if path.exists() and not path.is_dir():
+            raise InputError(f"--out {path}: expected a folder, found a file")
         path.mkdir(parents=True, exist_ok=True)
-        probe = path / f".write-test-{os.getpid()}"
+        probe = path / f".write-test-{os.getpid()}.tmp"
         probe.touch()
         probe.unlink()
-    except OSError as e:
+    except (OSError, ValueError) as e:
         raise InputError(f"--out {path}: cannot create the run folder "
-                         f"({e.strerror or type(e).__name__})") from None
+                         f"({reason(e)})") from None
     return path
 
 
-def empty_run_dir(path: Path, keep: tuple[str, ...] = ("run.lock",)) -> None:
-    """Remove everything in the run folder ``path`` but ``keep`` (``--overwrite``)."""
+_TEMPORARY = re.compile(r"\..+\.tmp(\.[A-Za-z0-9]{1,8})?")
+
+
+def _is_temporary(name: str) -> bool:
+    """A temporary file of the one writer (``.NAME.XXXX.tmp``, or ``.tmp.mp4`` and such for
+    writers that choose their format by the extension)."""
+    return _TEMPORARY.fullmatch(name) is not None
+
+
+def _listing(path: Path) -> list[str]:
+    try:
+        return sorted(p.name for p in path.iterdir())
+    except OSError as e:
+        raise InputError(f"{path}: cannot list the folder ({reason(e)})") from None
+
+
+def foreign_entries(path: Path) -> list[str]:
+    """The entries of ``path`` that no run wrote: not named in its marker (every entry, when
+    there is no marker), other than the lock, the marker and temporary files."""
+    doc = read_marker(path)
+    own = set(doc["files"]) if doc is not None else set()
+    return [n for n in _listing(path) if n not in own and n not in (LOCK_NAME, RUN_MARKER)
+            and not _is_temporary(n)]
+
+
+def _names(names: list[str]) -> str:
+    more = f" and {len(names) - _SHOWN} more" if len(names) > _SHOWN else ""
+    return ", ".join(names[:_SHOWN]) + more
+
+
+def check_new_run(path: Path, overwrite: bool = False) -> None:
+    """Refuse (one :class:`InputError` line, nothing touched) a folder that cannot take a new
+    run: one holding anything no run wrote, or (unless ``overwrite``) a run."""
+    path = Path(path)
+    if not path.exists():
+        return
+    marked = is_run_folder(path)
+    foreign = foreign_entries(path)
+    if foreign:
+        if not marked and (path / "config.toml").is_file() and (path / "checkpoints").is_dir():
+            raise InputError(f"{path}: the folder holds a run written before run folders were "
+                             f"marked ({RUN_MARKER}); continue it with 'evomotion resume "
+                             f"{path}', or choose another --out (--overwrite only empties "
+                             "folders a run marked as its own; nothing was deleted)")
+        what = "--overwrite removes only what runs wrote" if overwrite else \
+            "a new run needs an empty or new folder"
+        raise InputError(f"{path}: the folder holds files no run wrote ({_names(foreign)}); "
+                         f"{what}, so nothing was deleted: choose another --out")
+    if holds_run(path) and not overwrite:
+        raise InputError(f"{path}: the folder already holds a run; continue it with "
+                         f"'evomotion resume {path}' or start it again with --overwrite")
+
+
+def prepare_new_run(path: Path, study: str, overwrite: bool = False) -> None:
+    """Make the (locked) folder ``path`` ready for a new run of ``study``: it must be empty,
+    or be a run folder (marker) that holds nothing but what runs wrote there; one that holds a
+    run is refused unless ``overwrite``, which then removes only what runs wrote. Anything
+    else in the folder is named in a one-line :class:`InputError`, and nothing is deleted."""
+    path = Path(path)
+    check_new_run(path, overwrite)
+    if holds_run(path):
+        _remove_own(path)
+    doc = read_marker(path)
+    kept = [n for n in (doc["files"] if doc else []) if (path / n).exists()]
+    try:
+        write_marker(path, study, [*kept, *RUN_FILES])
+    except OSError as e:
+        raise WriteError(f"{path / RUN_MARKER}: cannot mark the run folder ({reason(e)})"
+                         ) from None
+
+
+def _remove_own(path: Path) -> None:
+    """Remove what the marker names (links as links, never what they point at) and temporary
+    files; the lock and the marker stay."""
     import shutil
 
-    if not holds_run(path):
-        raise InputError(f"{path}: not a run folder; --overwrite only empties run folders")
-    for child in path.iterdir():
-        if child.name in keep:
+    own = set(read_marker(path)["files"])
+    for name in _listing(path):
+        if name in (LOCK_NAME, RUN_MARKER) or not (name in own or _is_temporary(name)):
             continue
-        if child.is_dir() and not child.is_symlink():
-            shutil.rmtree(child)
-        else:
-            child.unlink()
+        child = path / name
+        try:
+            if child.is_dir() and not child.is_symlink():
+                shutil.rmtree(child)
+            else:
+                child.unlink()
+        except OSError as e:
+            raise WriteError(f"{child}: cannot remove it for --overwrite ({reason(e)})"
+                             ) from None
 
 
-def clean_temporaries(run_dir: Path) -> int:
-    """Remove the temporary files an interrupted atomic write left behind; their number."""
+def clean_temporaries(run_dir: Path, depth: int = 4) -> int:
+    """Remove the temporary files interrupted atomic writes left in the run folder (and its
+    folders, ``depth`` levels down, links not followed); their number."""
     n = 0
-    for d in (run_dir, run_dir / "checkpoints"):
-        if d.is_dir():
-            for tmp in d.glob(".*.tmp"):
-                tmp.unlink(missing_ok=True)
+    todo = [(Path(run_dir), 0)]
+    while todo:
+        d, level = todo.pop()
+        try:
+            entries = list(os.scandir(d))
+        except OSError:
+            continue
+        for e in entries:
+            if e.is_dir(follow_symlinks=False):
+                if level + 1 < depth:
+                    todo.append((Path(e.path), level + 1))
+            elif _is_temporary(e.name) and e.is_file(follow_symlinks=False):
+                Path(e.path).unlink(missing_ok=True)
                 n += 1
     return n
-
-
-def atomic_write_bytes(path: Path | str, data: bytes) -> None:
-    """Write ``data`` to ``path`` via a temporary file and ``os.replace`` (crash-safe)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    _fsync_dir(path.parent)
-
-
-def _fsync_dir(folder: Path) -> None:
-    """Make a rename in ``folder`` durable (POSIX; a no-op where folders cannot be opened)."""
-    try:
-        fd = os.open(folder, os.O_RDONLY)
-    except OSError:
-        return
-    try:
-        os.fsync(fd)
-    except OSError:
-        pass
-    finally:
-        os.close(fd)
-
-
-def atomic_write_text(path: Path | str, text: str) -> None:
-    atomic_write_bytes(path, text.encode())
 
 
 def _jsonable(obj: Any) -> Any:
@@ -118,10 +195,10 @@ def _jsonable(obj: Any) -> Any:
     raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
 
 
-def write_json(path: Path | str, obj: Any) -> None:
+def write_json(path: Path | str, obj: Any, mkdir: bool = False) -> None:
     """Atomic JSON write; numpy arrays become lists, non-finite floats ``null``."""
     text = json.dumps(_clean(obj), indent=2, default=_jsonable, allow_nan=False)
-    atomic_write_text(path, text + "\n")
+    atomic_write_text(path, text + "\n", "JSON file", mkdir)
 
 
 def _clean(obj: Any) -> Any:

@@ -15,11 +15,14 @@ from pathlib import Path
 import numpy as np
 
 from evomotion.errors import FileFormatError
+from evomotion.outfile import append_bytes, open_append, truncate_file
+from evomotion.textio import read_file_bytes
 
 NAME = "population.bin"
 _HEADER = 3
 #: a record claiming more values than this is damage, not a population
 MAX_VALUES = 1 << 28
+MAX_HISTORY_BYTES = 1 << 30  # read_history reads the whole file
 
 
 class HistoryWriter:
@@ -27,15 +30,14 @@ class HistoryWriter:
 
     def __init__(self, path: Path) -> None:
         self.path = Path(path)
-        self.path.touch()
+        open_append(self.path, "population history", binary=True).close()
 
     @property
     def offset(self) -> int:
         return self.path.stat().st_size
 
     def truncate(self, offset: int) -> None:
-        with open(self.path, "r+b") as fh:
-            fh.truncate(offset)
+        truncate_file(self.path, offset, "population history")
 
     def write(self, generation: int, population: np.ndarray, fitness: np.ndarray) -> None:
         pop = np.asarray(population, dtype="<f8")
@@ -44,15 +46,15 @@ class HistoryWriter:
         n, d = pop.shape
         rec = np.concatenate([np.array([generation, n, d], "<f8"), pop.ravel(),
                               np.asarray(fitness, "<f8").ravel()[:n]])
-        with open(self.path, "ab") as fh:
-            fh.write(rec.tobytes())
+        append_bytes(self.path, rec.tobytes(), "population history")
 
 
 def read_history(path: Path | str) -> list[tuple[int, np.ndarray, np.ndarray]]:
     """``[(generation, population[n, d], fitness[n]), ...]``; one
     :class:`~evomotion.errors.FileFormatError` line for a damaged file."""
     path = Path(path)
-    raw = np.fromfile(path, dtype="<f8")
+    data = read_file_bytes(path, "population history", MAX_HISTORY_BYTES)
+    raw = np.frombuffer(data[:len(data) - len(data) % 8], dtype="<f8")
     out: list[tuple[int, np.ndarray, np.ndarray]] = []
     i = 0
     while i + _HEADER <= raw.size:

@@ -11,6 +11,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from evomotion.errors import InputError  # noqa: E402
+from evomotion.outfile import save_figure  # noqa: E402
 from evomotion.run.stats import read_stats, step_values  # noqa: E402
 
 
@@ -19,6 +20,7 @@ def plot_fitness(stats_csv: Path, out_stem: Path, title: str = "") -> list[Path]
     s = read_stats(stats_csv)
     if not s:
         raise InputError(f"{stats_csv}: no generations recorded")
+    _columns(s, stats_csv, ("generation", "max", "mean", "min"))
     fig, ax = plt.subplots(figsize=(6.4, 4.0))
     g = s["generation"]
     mark = "o" if len(g) <= 30 else None  # a short run (a few search batches) stays visible
@@ -37,6 +39,9 @@ def plot_runs(stats_csvs: list[Path], out_stem: Path, column: str = "best_so_far
               title: str = "") -> list[Path]:
     """Median and interquartile band of ``column`` against evaluations over several runs."""
     runs = [read_stats(p) for p in stats_csvs]
+    for r, p in zip(runs, stats_csvs, strict=True):
+        if r:
+            _columns(r, p, ("evaluations", column))
     runs = [r for r in runs if r]
     if not runs:
         raise InputError("no run has any recorded generation")
@@ -57,22 +62,31 @@ def plot_runs(stats_csvs: list[Path], out_stem: Path, column: str = "best_so_far
 
 def _save(fig, out_stem: Path, tight: bool = True) -> list[Path]:
     out_stem = Path(out_stem)
-    out_stem.parent.mkdir(parents=True, exist_ok=True)
     paths = [out_stem.with_suffix(".png"), out_stem.with_suffix(".svg")]
-    if tight:
-        fig.tight_layout()
-    for p in paths:
-        fig.savefig(p, dpi=120)
-    plt.close(fig)
+    try:
+        if tight:
+            fig.tight_layout()
+        for p in paths:
+            save_figure(fig, p, "plot", mkdir=True, dpi=120)
+    finally:
+        plt.close(fig)
     return paths
+
+
+def _columns(s: dict, stats_csv: Path, names: tuple[str, ...]) -> None:
+    missing = [c for c in names if c not in s]
+    if missing:
+        raise InputError(f"{stats_csv}: expected the columns {', '.join(names)} in its header "
+                         f"line, missing {', '.join(missing)}")
 
 
 def plot_qd(stats_csv: Path, out_stem: Path, title: str = "") -> list[Path]:
     """Coverage, QD-score, best objective and archive size against evaluations (the
     ``stats.csv`` columns of a quality-diversity run)."""
     s = read_stats(stats_csv)
-    if not s or "coverage" not in s:
-        raise InputError(f"{stats_csv}: no quality-diversity columns (coverage, qd_score)")
+    if not s or not {"coverage", "qd_score", "qd_best", "evaluations"} <= set(s):
+        raise InputError(f"{stats_csv}: no quality-diversity columns (coverage, qd_score, "
+                         "qd_best)")
     fig, axes = plt.subplots(1, 3, figsize=(11.0, 3.4))
     e = s["evaluations"]
     for ax, key, label in zip(axes, ("coverage", "qd_score", "qd_best"),

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import re
 import signal
 import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
+from evomotion.outfile import append_text, open_append, truncate_file
 from evomotion.run.console import Reporter
 
 
@@ -18,7 +20,7 @@ class RunLog:
     def __init__(self, path: Path | None, reporter: Reporter | None = None) -> None:
         self.path = path
         if self.path is not None:
-            self.path.touch()
+            open_append(self.path, "run log").close()
         self.reporter = reporter
         self.lines: list[str] = []
 
@@ -30,17 +32,27 @@ class RunLog:
         if self.path is None:
             del self.lines[offset:]
             return
-        with open(self.path, "r+b") as fh:
-            fh.truncate(offset)
+        truncate_file(self.path, offset, "run log")
 
     def __call__(self, msg: str) -> None:
+        msg = one_line(msg)
         if self.path is None:
             self.lines.append(msg)
         else:
-            with open(self.path, "a", encoding="utf-8") as fh:
-                fh.write(msg.rstrip("\n") + "\n")
+            append_text(self.path, msg + "\n", "run log")
         if self.reporter is not None:
             self.reporter.line(msg)
+
+
+_CONTROL = re.compile(r"[\x00-\x08\x0a-\x1f\x7f\u2028\u2029\x85]")
+
+
+def one_line(msg: str) -> str:
+    """``msg`` as one log line: a newline, carriage return or other control character in it
+    (from a file name, a robot name, an error) is shown escaped, so no text can forge a line
+    that the studio or a reader takes for the run's own."""
+    msg = str(msg).rstrip("\n")
+    return _CONTROL.sub(lambda m: m.group().encode("unicode_escape").decode("ascii"), msg)
 
 
 @contextmanager

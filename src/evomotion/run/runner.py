@@ -24,6 +24,7 @@ import numpy as np
 
 from evomotion.core.state import rng_state
 from evomotion.errors import InputError
+from evomotion.outfile import WriteError
 from evomotion.run.ask_tell import AskTellDriver, make_optimizer
 from evomotion.run.checkpoint import save_checkpoint
 from evomotion.run.config import Config, config_to_toml
@@ -33,9 +34,9 @@ from evomotion.run.driver import Driver
 from evomotion.run.evaluators import SerialEvaluator, make_evaluator
 from evomotion.run.folder import (
     atomic_write_text,
+    check_new_run,
     clean_temporaries,
-    empty_run_dir,
-    holds_run,
+    prepare_new_run,
     write_json,
 )
 from evomotion.run.history import NAME as HISTORY_NAME
@@ -91,15 +92,16 @@ def run_study(study: Any, config: Config, out_dir: Path | str | None = None,
             raise InputError("resume needs a run folder")
         return _run(study, config, None, True, False, problem, evaluator)
     out_dir = Path(out_dir)
-    if not resume and holds_run(out_dir) and not overwrite:
-        raise InputError(f"{out_dir}: the folder already holds a run; continue it with "
-                         f"'evomotion resume {out_dir}' or start it again with --overwrite")
+    if not resume:
+        check_new_run(out_dir, overwrite)  # refused before the lock file is made
     if resume and not (out_dir / "checkpoints").is_dir():
         raise InputError(f"{out_dir}: no checkpoint to resume from (no checkpoints/ folder)")
     out_dir.mkdir(parents=True, exist_ok=True)
-    with RunLock(out_dir) as lock:
-        if not resume and overwrite and holds_run(out_dir):
-            empty_run_dir(out_dir)
+    # SIGTERM is Ctrl-C from the moment the lock names this process (a stop from the studio
+    # during the set-up ends the run cleanly, not by the signal's default)
+    with sigterm_as_interrupt(), RunLock(out_dir) as lock:
+        if not resume:
+            prepare_new_run(out_dir, study.name, overwrite)
         return _run(study, config, out_dir, quiet, resume, problem, evaluator,
                     stale_owner=lock.stale_owner)
 
@@ -131,24 +133,29 @@ def _run(study: Any, config: Config, out_dir: Path | None, quiet: bool, resume: 
     history = HistoryWriter(out_dir / HISTORY_NAME) if out_dir is not None and rc.history_every \
         else None
 
+    finish_only = False  # a resume that only writes the final artifacts
     if resume:
         state, rng, c, notes = restore(out_dir, driver, config)
         done = c.get("stop_reason")
         if done not in (None, "interrupted"):
-            if driver.stop(state) is not None:
-                raise InputError(f"{out_dir}: the run already finished ({done}); it cannot be "
-                                 "continued")
-            if limit_reached(config, c, driver.best(state)[1], sgn):
-                raise InputError(f"{out_dir}: the run already finished ({done}); raise its "
-                                 "limit to continue, e.g. --set run.generations=N")
-        c["stop_reason"] = None
+            ended = driver.stop(state) is not None
+            if ended or limit_reached(config, c, driver.best(state)[1], sgn):
+                if c.get("finished") is not False:
+                    raise InputError(f"{out_dir}: the run already finished ({done}); " + (
+                        "it cannot be continued" if ended else
+                        "raise its limit to continue, e.g. --set run.generations=N"))
+                finish_only = True
+        c["stop_reason"] = done if finish_only else None
+        c.pop("finished", None)
         stats.truncate(c["stats_offset"])
         if history is not None:
             history.truncate(c.get("history_offset", 0))
         log.truncate(c["log_offset"])
         for line in notes:
             log(line)
-        log(f"resumed at generation {c['generation']} with evaluator {rc.evaluator}")
+        log(f"resumed at generation {c['generation']} to write the final artifacts (the "
+            "run was stopped while writing them)" if finish_only else
+            f"resumed at generation {c['generation']} with evaluator {rc.evaluator}")
     else:
         rng = np.random.default_rng(rc.seed)
         state = driver.init(rng)
@@ -166,9 +173,10 @@ def _run(study: Any, config: Config, out_dir: Path | None, quiet: bool, resume: 
 
     own_evaluator = evaluator is None  # a given evaluator is the caller's to close
     if own_evaluator:
-        evaluator = SerialEvaluator(lambda _cfg: problem, None) if rc.evaluator == "serial" \
-            else make_evaluator(rc.evaluator, study.make_problem, config.problem, rc.workers,
-                                rc.chunks_per_worker, rc.address)
+        evaluator = SerialEvaluator(lambda _cfg: problem, None) \
+            if rc.evaluator == "serial" or finish_only else \
+            make_evaluator(rc.evaluator, study.make_problem, config.problem, rc.workers,
+                           rc.chunks_per_worker, rc.address)
 
     def snapshot() -> tuple[dict, dict]:
         a, m = driver.state_arrays(state)
@@ -191,7 +199,7 @@ def _run(study: Any, config: Config, out_dir: Path | None, quiet: bool, resume: 
     record = config_record(config)
     snap = snapshot() if save else None  # Ctrl-C in the first step still leaves a checkpoint
     t_start = time.perf_counter() - c["wall_s"]
-    reason = None
+    reason = c["stop_reason"] if finish_only else None
     try:
         with sigterm_as_interrupt():
             while reason is None:
@@ -256,7 +264,10 @@ def _run(study: Any, config: Config, out_dir: Path | None, quiet: bool, resume: 
         loggers.close()
     if own_evaluator:
         evaluator.close()
-    if snap is not None:
+    finishing = snap is not None and reason != "interrupted"
+    if snap is not None:  # the finishing phase is resumable: the checkpoint says it is due
+        if finishing:
+            snap[1]["counters"]["finished"] = False
         save_checkpoint(out_dir, max(snap[1]["counters"]["generation"], 0), *snap)
     log(f"stopped: {reason} at generation {c['generation']} after {c['evaluations']} "
         f"evaluations")
@@ -267,25 +278,47 @@ def _run(study: Any, config: Config, out_dir: Path | None, quiet: bool, resume: 
             "best.json holds null")
         code = EXIT_NO_FINITE
     if save:
-        _write_best(study, ctx, sense, rc.seed, log)
-        if c["generation"] >= 0:
-            from evomotion.run.plots import plot_fitness  # matplotlib: only when plotting
-
-            plot_fitness(out_dir / "stats.csv", out_dir / "plots" / "fitness", title=study.name)
-            if _write_archive(driver, state, out_dir):
-                from evomotion.run.plots import plot_archive, plot_qd
-
-                plot_qd(out_dir / "stats.csv", out_dir / "plots" / "qd", title=study.name)
-                plot_archive(out_dir / "archive.npz", out_dir / "plots" / "archive")
-        if code != EXIT_NO_FINITE:
-            _hook(study.on_checkpoint, ctx, log)
-        if code == 0:  # a second Ctrl-C should not wait for videos
-            code = _hook(study.finalize, ctx, log) or 0
-        loggers.finish(ctx)  # after the study's artifacts (best.motion)
+        try:
+            with sigterm_as_interrupt():
+                code = _finish(study, driver, state, ctx, code, loggers, log)
+        except KeyboardInterrupt:
+            log("stopped while writing the final artifacts; 'evomotion resume "
+                f"{out_dir}' writes them")
+            driver.close()
+            return RunResult(out_dir, "interrupted", c["generation"], c["evaluations"],
+                             ctx.best_fitness, ctx.best_genome, ctx.best_metrics,
+                             EXIT_INTERRUPTED, driver, state, [])
+        if finishing:
+            snap[1]["counters"]["finished"] = True
+            save_checkpoint(out_dir, max(snap[1]["counters"]["generation"], 0), *snap)
     driver.close()
     return RunResult(out_dir, reason, c["generation"], c["evaluations"], ctx.best_fitness,
                      ctx.best_genome, ctx.best_metrics, code, driver, state,
                      getattr(stats, "rows", []))
+
+
+def _finish(study: Any, driver: Driver, state: Any, ctx: RunContext, code: int, loggers,
+            log) -> int:
+    """The final artifacts (best.json, plots, the archive, the study's own); each is written
+    atomically and all of them again by a resume when a run stops before it is done. A file
+    that cannot be written (a full disk) ends the run with its one-line error, unfinished."""
+    out_dir = ctx.out_dir
+    _write_best(study, ctx, driver.sense, ctx.config.run.seed, log)
+    if ctx.generation >= 0:
+        from evomotion.run.plots import plot_fitness  # matplotlib: only when plotting
+
+        plot_fitness(out_dir / "stats.csv", out_dir / "plots" / "fitness", title=study.name)
+        if _write_archive(driver, state, out_dir):
+            from evomotion.run.plots import plot_archive, plot_qd
+
+            plot_qd(out_dir / "stats.csv", out_dir / "plots" / "qd", title=study.name)
+            plot_archive(out_dir / "archive.npz", out_dir / "plots" / "archive")
+    if code != EXIT_NO_FINITE:
+        _hook(study.on_checkpoint, ctx, log)
+    if code == 0:  # a second Ctrl-C should not wait for videos
+        code = _hook(study.finalize, ctx, log) or 0
+    loggers.finish(ctx)  # after the study's artifacts (best.motion)
+    return code
 
 
 def _write_archive(driver: Any, state: Any, out_dir: Path) -> bool:
@@ -315,6 +348,8 @@ def _hook(fn, ctx: RunContext, log) -> Any:
 
         with videos_off(off):
             return fn(ctx)
+    except WriteError:
+        raise  # a full or read-only disk: the run ends unfinished, a resume completes it
     except Exception as e:  # noqa: BLE001 - an artifact failure must not lose the run
         log(f"warning: {getattr(fn, '__name__', 'hook')} failed: {type(e).__name__}: {e}")
         return None

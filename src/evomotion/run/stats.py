@@ -8,6 +8,11 @@ from pathlib import Path
 
 import numpy as np
 
+from evomotion.errors import FileFormatError
+from evomotion.outfile import append_text, open_append, truncate_file
+from evomotion.textio import read_file_bytes
+
+MAX_STATS_BYTES = 64 * 1024 * 1024  # some 300,000 generations
 COLUMNS = ("generation", "evaluations", "best", "mean", "median", "min", "max", "std",
            "best_so_far", "wall_s", "evals_per_s", "diversity", "failed")
 
@@ -46,12 +51,12 @@ class StatsWriter:
     def __init__(self, path: Path, columns: tuple[str, ...] = COLUMNS) -> None:
         self.path = Path(path)
         self.columns = columns
-        if not self.path.exists() or self.path.stat().st_size == 0:
-            self.path.write_text(",".join(columns) + "\n")
+        open_append(self.path, "stats file").close()
+        if self.path.stat().st_size == 0:
+            append_text(self.path, ",".join(columns) + "\n", "stats file")
 
     def truncate(self, offset: int) -> None:
-        with open(self.path, "r+b") as fh:
-            fh.truncate(offset)
+        truncate_file(self.path, offset, "stats file")
 
     @property
     def offset(self) -> int:
@@ -60,8 +65,7 @@ class StatsWriter:
     def write(self, row: dict[str, float]) -> None:
         buf = io.StringIO()
         csv.writer(buf).writerow([_fmt(row.get(c, "")) for c in self.columns])
-        with open(self.path, "a") as fh:
-            fh.write(buf.getvalue())
+        append_text(self.path, buf.getvalue(), "stats file")
 
 
 class MemoryStats:
@@ -91,11 +95,22 @@ def _fmt(v: object) -> str:
 def read_stats(path: Path) -> dict[str, np.ndarray]:
     """``stats.csv`` as columns of floats; a cell that is not a number (a study's text column,
     such as arm-ik's ``phase``) reads as NaN."""
-    with open(path, encoding="utf-8", errors="replace") as fh:
-        rows = list(csv.DictReader(fh))
+    data = read_file_bytes(path, "stats file", MAX_STATS_BYTES)
+    try:
+        rows = list(csv.DictReader(io.StringIO(data.decode("utf-8", "replace"))))
+    except csv.Error as e:
+        raise FileFormatError(path, None, f"expected CSV ({e})") from None
     if not rows:
         return {}
-    return {k: np.array([_float(r.get(k)) for r in rows]) for k in rows[0] if k is not None}
+    keys = [k for k in rows[0] if isinstance(k, str) and k]
+    out = {}
+    for k in keys:
+        col = np.array([_float(r.get(k)) for r in rows])
+        if k in ("generation", "evaluations") and not np.all(np.diff(col) >= 0):
+            raise FileFormatError(path, None, f"column {k}: expected numbers that never "
+                                              "decrease (the file is damaged)")
+        out[k] = col
+    return out
 
 
 def step_values(grid: np.ndarray, x: np.ndarray, y: np.ndarray, hold: bool = True) -> np.ndarray:

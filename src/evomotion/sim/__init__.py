@@ -16,3 +16,18 @@ if "MUJOCO_GL" not in os.environ:
         os.environ["MUJOCO_GL"] = "egl"
     else:
         os.environ["MUJOCO_GL"] = "disable"
+
+import logging  # noqa: E402
+
+import mujoco  # noqa: E402
+
+_log = logging.getLogger("evomotion.mujoco")
+
+
+def _mujoco_warning(message: str) -> None:
+    """MuJoCo's warnings go to the ``evomotion.mujoco`` logger, not to ``MUJOCO_LOG.TXT`` in
+    the current folder (nothing is written outside the run folder or a path the user names)."""
+    _log.warning("MuJoCo: %s", " ".join(str(message).split()))
+
+
+mujoco.set_mju_user_warning(_mujoco_warning)

@@ -61,4 +61,5 @@ def lazy_hook(module: str, name: str) -> Callable[[RunContext], Any]:
         return getattr(importlib.import_module(module), name)(ctx)
 
     hook.__name__ = hook.__qualname__ = name
+    hook.module = module  # type: ignore[attr-defined] - what it imports, for preloading
     return hook

@@ -2,9 +2,16 @@
 
 A run started here is exactly ``evomotion run STUDY [--preset P] --set KEY=VALUE ... --out DIR``
 in its own process (so it is identical to the same command typed in a terminal, and survives
-the studio); stop sends the run SIGTERM, which the run loop treats as Ctrl-C (checkpoint, log
-``stopped: interrupted``); resume runs ``evomotion resume DIR``. The process's own stderr goes
-to ``studio-stderr.txt`` in the run folder (a failure before the run loop starts is seen there).
+the studio). The studio makes the folder, marks it as a run folder
+(:func:`evomotion.outfile.write_marker`, naming ``studio-stderr.txt``: the run loop refuses a
+folder holding files no run wrote) and sends the process's stderr to ``studio-stderr.txt``
+there (a failure before the run loop starts is seen there); a resume appends to it and
+records it as the run's (:func:`evomotion.outfile.claim`).
+
+Stop sends SIGTERM, which the run loop treats as Ctrl-C (checkpoint, log ``stopped:
+interrupted``), through :func:`evomotion.run.lock.signal_owner`: only to a live process that
+verifiably is that run (same host and boot, same start time, an ``evomotion`` command line),
+never to a pid <= 1, a stale lock's reused pid or another host's process.
 """
 
 from __future__ import annotations
@@ -22,19 +29,27 @@ from pathlib import Path
 from typing import Any
 
 from evomotion.errors import InputError
-from evomotion.studio.data import lock_owner, resolve_run, run_status
+from evomotion.studio.data import is_resumable, resolve_run, run_status
+from evomotion.studio.readers import head_tail, one_line
 
 STDERR_NAME = "studio-stderr.txt"
 
 
 def _spawn(args: list[str], run_dir: Path) -> subprocess.Popen:
-    run_dir.mkdir(parents=True, exist_ok=True)
-    err = open(run_dir / STDERR_NAME, "ab")  # noqa: SIM115 - handed to the child
+    """``evomotion ARGS`` in its own session, its stderr appended to the run folder's
+    :data:`STDERR_NAME` (a regular file only: never a FIFO or a device), which is recorded
+    in the folder's marker as the run's."""
+    from evomotion.outfile import claim, open_append
+
+    err = open_append(run_dir / STDERR_NAME, "studio stderr file", binary=True)
     try:
+        claim(run_dir / STDERR_NAME)  # a no-op where the marker names it already
         env = dict(os.environ)
         return subprocess.Popen([sys.executable, "-m", "evomotion.cli", *args],
                                 stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
                                 stderr=err, start_new_session=True, env=env)
+    except OSError as e:
+        raise InputError(f"cannot start evomotion ({one_line(e)})") from None
     finally:
         err.close()
 
@@ -66,10 +81,31 @@ def new_run_dir(root: Path, study: str) -> Path:
     return path
 
 
+def make_run_folder(root: Path, study: str) -> Path:
+    """A new folder ``ROOT/STUDY-STAMP[-N]`` marked as a run folder of ``study`` that names
+    :data:`STDERR_NAME` as the run's (made here, never one that exists)."""
+    from evomotion.outfile import WriteError, reason, write_marker
+
+    for _ in range(1000):
+        out = new_run_dir(root, study)
+        try:
+            out.mkdir()
+        except FileExistsError:
+            continue  # taken meanwhile (another studio, the same second)
+        except OSError as e:
+            raise WriteError(f"{out}: cannot create the run folder ({reason(e)})") from None
+        try:
+            write_marker(out, study, [STDERR_NAME])
+        except OSError as e:
+            raise WriteError(f"{out}: cannot mark the run folder ({reason(e)})") from None
+        return out
+    raise WriteError(f"{root}: no free name for a new run folder of {study}")
+
+
 def start_run(root: Path, study: str, preset: str | None, sets: list[str]) -> tuple[Path, Any]:
     """Check the settings (one-line error), then start the run; ``(run folder, process)``."""
     check_new_run(study, preset, sets)
-    out = new_run_dir(root, study)
+    out = make_run_folder(root, study)
     proc = _spawn(run_command(study, preset, sets, out), out)
     _await_start(proc, out)
     return out, proc
@@ -82,27 +118,38 @@ def _await_start(proc: subprocess.Popen, out: Path, timeout_s: float = 60.0) -> 
         if proc.poll() is not None:
             if (out / "config.toml").exists():
                 return
-            text = (out / STDERR_NAME).read_text(errors="replace").strip().splitlines()
-            raise InputError(text[-1] if text else f"the run exited with {proc.returncode}")
+            _, tail = head_tail(out / STDERR_NAME, 4096)
+            text = tail.strip().splitlines()
+            raise InputError(one_line(text[-1]) if text
+                             else f"the run exited with {proc.returncode}")
         time.sleep(0.05)
 
 
 def stop_run(root: Path, name: str) -> int:
-    """SIGTERM to the run's process (a Ctrl-C stop that checkpoints); its pid."""
+    """SIGTERM to the run's process (a Ctrl-C stop that checkpoints) if it verifiably is
+    that run (:func:`evomotion.run.lock.signal_owner`); its pid. Anything else (no lock, a
+    stale lock, another host, pid <= 1, a lock that is not one) is one :class:`InputError`
+    line and no signal is sent."""
+    from evomotion.run.lock import signal_owner
+
     run_dir = resolve_run(root, name)
-    pid, alive = lock_owner(run_dir)
-    if pid is None or not alive:
-        raise InputError(f"{name}: the run is not running")
-    os.kill(pid, signal.SIGTERM)
-    return pid
+    try:
+        return signal_owner(run_dir, signal.SIGTERM)
+    except InputError as e:
+        raise InputError(one_line(e)) from None
+    except (OSError, ValueError, OverflowError) as e:
+        raise InputError(f"{one_line(name, 120)}: no signal sent ({one_line(e)})") from None
 
 
 def resume_run(root: Path, name: str) -> Any:
+    """``evomotion resume RUN`` in its own process, for an interrupted run (or one whose lock
+    is stale: killed) with checkpoints; its stderr is appended to :data:`STDERR_NAME`, which
+    is recorded as the run's."""
     run_dir = resolve_run(root, name)
     status, _, _ = run_status(run_dir)
-    if status != "interrupted" or not (run_dir / "checkpoints").is_dir():
-        raise InputError(f"{name}: only an interrupted run with checkpoints can be resumed "
-                         f"(this one is {status})")
+    if not is_resumable(run_dir, status):
+        raise InputError(f"{one_line(name, 120)}: only an interrupted run with checkpoints can "
+                         f"be resumed (this one is {status})")
     return _spawn(["resume", str(run_dir), "--quiet"], run_dir)
 
 

@@ -1,19 +1,26 @@
 """The studio's data layer: run folders read without a server (and fast enough for hundreds).
 
-A run's **status** comes from its files only: ``run.lock`` names a live process on this host
--> *running*; it names a process that is gone -> *interrupted* (killed; resumable from its
-checkpoints); else the last of the log's ``stopped: REASON`` / ``run failed`` / ``resumed``
-lines decides: *finished* (with its stop reason), *interrupted* (``stopped: interrupted``, or a
-run that never logged its end) or *failed*. Every reader reads only the head and tail of a
-file, so listing 200 runs of 1,000 generations reads a few kilobytes per run.
+A run's **status** comes from its files only. ``run.lock`` names the process that writes the
+run (pid, start time, host; :mod:`evomotion.run.lock`): *running* when that process is alive
+and verifiably that run; *remote* when it is on another host (not checked, never signalled
+from here); *stale* when the pid is gone or now belongs to another process (a run killed
+with ``kill -9``; resumable from its checkpoints); *unverified* when an older lock (no start
+time) names a live ``evomotion`` process. Without a lock, the last of the log's ``stopped:
+REASON`` / ``run failed`` / ``resumed`` lines decides: *finished* (with its stop reason),
+*interrupted* (``stopped: interrupted``, or a run that never logged its end) or *failed*.
+
+Every read is bounded and never blocks (:mod:`.readers`: a FIFO or a device is read as
+missing, a file only in its head and tail), and :func:`list_runs` gives each folder
+:data:`SUMMARY_TIMEOUT_S` on a worker thread: a folder that does not answer is listed as
+*unreadable (timed out)*, so listing 200 runs of 1,000 generations reads a few kilobytes per
+run and one hostile folder cannot hold the list up.
 """
 
 from __future__ import annotations
 
 import csv
-import io
+import math
 import os
-import socket
 import tomllib
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -22,19 +29,30 @@ from typing import Any
 import numpy as np
 
 from evomotion.errors import InputError
+from evomotion.run.lock import LockOwner, owner_state
 from evomotion.run.lock import lock_owner as read_lock_owner
 from evomotion.run.stats import step_values
+from evomotion.studio import readers
+from evomotion.studio.readers import head_tail, one_line
 
 TAIL_BYTES = 16384
 #: how deep below RUNS_DIR run folders are looked for (experiments nest their runs)
 MAX_DEPTH = 3
+#: the time one run folder gets to be summarised in :func:`list_runs`
+SUMMARY_TIMEOUT_S = 2.0
+#: the largest config.toml shown
+MAX_CONFIG_BYTES = 1 << 20
+#: the statuses a run can be resumed from (with checkpoints)
+RESUMABLE = ("interrupted", "stale")
+STATUSES = ("running", "remote", "stale", "unverified", "finished", "interrupted", "failed",
+            "unreadable")
 
 
 @dataclass(frozen=True)
 class RunSummary:
     name: str  # the path below RUNS_DIR, with '/'
     study: str
-    status: str  # running | finished | interrupted | failed
+    status: str  # one of STATUSES
     stop_reason: str
     generation: int
     evaluations: int
@@ -45,8 +63,10 @@ class RunSummary:
     pid: int | None
 
     def row(self) -> dict[str, Any]:
+        """The summary as JSON-safe values (non-finite numbers are ``None``)."""
         d = asdict(self)
-        d["best"] = None if not np.isfinite(self.best) else float(self.best)
+        for k in ("best", "started", "duration_s"):
+            d[k] = float(d[k]) if math.isfinite(d[k]) else None
         return d
 
 
@@ -66,7 +86,11 @@ def find_runs(root: Path) -> list[Path]:
             return
         if depth < MAX_DEPTH:
             for e in entries:
-                if e.is_dir(follow_symlinks=False) and not e.name.startswith("."):
+                try:
+                    is_dir = e.is_dir(follow_symlinks=False)
+                except OSError:
+                    continue
+                if is_dir and not e.name.startswith("."):
                     walk(Path(e.path), depth + 1)
 
     walk(root, 0)
@@ -75,56 +99,53 @@ def find_runs(root: Path) -> list[Path]:
 
 def _started(d: Path) -> float:
     try:
-        return (d / "config.toml").stat().st_mtime
-    except OSError:
+        t = (d / "config.toml").stat().st_mtime
+    except (OSError, ValueError):
         return 0.0
+    return t if math.isfinite(t) else 0.0
 
 
-def head_tail(path: Path, n: int = TAIL_BYTES) -> tuple[str, str]:
-    """The first line and the last ``n`` bytes of a text file ('' where it is missing)."""
-    try:
-        with open(path, "rb") as fh:
-            first = fh.readline(4096).decode("utf-8", "replace")
-            size = fh.seek(0, io.SEEK_END)
-            fh.seek(max(0, size - n))
-            tail = fh.read().decode("utf-8", "replace")
-    except OSError:
-        return "", ""
-    return first.strip(), tail
-
-
-def lock_owner(run_dir: Path) -> tuple[int | None, bool]:
-    """``(pid, alive)`` of the process named in ``run.lock`` (``(None, False)`` if none)."""
+def lock_state(run_dir: Path) -> tuple[LockOwner | None, str]:
+    """The owner ``run.lock`` names (``None``: none, or nothing readable) and its state:
+    ``none | running | stale | remote | unknown`` (:func:`evomotion.run.lock.owner_state`)."""
     owner = read_lock_owner(run_dir)
-    if owner is None:
-        return None, False
-    pid, host = owner
-    if host != socket.gethostname():
-        return pid, True  # another machine's run: assume it is going on
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return pid, False
-    except PermissionError:
-        return pid, True
-    return pid, True
+    return owner, owner_state(owner)
+
+
+def _log_status(run_dir: Path) -> tuple[str, str]:
+    _, tail = head_tail(run_dir / "log.txt", TAIL_BYTES)
+    for line in reversed(tail.splitlines()):
+        if line.startswith("stopped: "):
+            reason = one_line(line[9:].split(" at generation")[0], 160)
+            return ("interrupted" if reason == "interrupted" else "finished"), reason
+        if line.startswith("run failed"):
+            return "failed", one_line(line, 160)
+        if line.startswith(("resumed at", "run ")):
+            break
+    return "interrupted", "no end logged"
 
 
 def run_status(run_dir: Path) -> tuple[str, str, int | None]:
-    """``(status, stop_reason, pid)`` of a run folder (see the module docstring)."""
-    pid, alive = lock_owner(run_dir)
-    if pid is not None:
-        return ("running", "", pid) if alive else ("interrupted", "killed", None)
-    _, tail = head_tail(run_dir / "log.txt")
-    for line in reversed(tail.splitlines()):
-        if line.startswith("stopped: "):
-            reason = line[9:].split(" at generation")[0]
-            return ("interrupted" if reason == "interrupted" else "finished"), reason, None
-        if line.startswith("run failed"):
-            return "failed", line[:160], None
-        if line.startswith(("resumed at", "run ")):
-            break
-    return "interrupted", "no end logged", None
+    """``(status, detail, pid)`` of a run folder (see the module docstring); ``pid`` only
+    for a run that is verifiably running here."""
+    owner, state = lock_state(run_dir)
+    if owner is not None:
+        who = f"pid {owner.pid} on {one_line(owner.host, 80)}"
+        if state == "running":
+            return "running", "", owner.pid
+        if state == "remote":
+            return "remote", f"lock held by {who}, another host: not checked or stopped " \
+                             "from here", None
+        if state == "stale":
+            return "stale", f"stale lock: {who} is gone or is another process", None
+        if state == "unknown":
+            return "unverified", f"lock names {who}: alive, but not verifiable as this " \
+                                 "run (a lock without a start time)", None
+    return (*_log_status(run_dir), None)
+
+
+def is_resumable(run_dir: Path, status: str) -> bool:
+    return status in RESUMABLE and (run_dir / "checkpoints").is_dir()
 
 
 def last_stats_row(path: Path) -> dict[str, str]:
@@ -137,22 +158,30 @@ def last_stats_row(path: Path) -> dict[str, str]:
     if not lines or lines[-1] == header:
         return {}
     cols = header.split(",")
-    cells = next(csv.reader([lines[-1]]))
+    try:
+        cells = next(csv.reader([lines[-1]]))
+    except (csv.Error, StopIteration):
+        return {}
     return dict(zip(cols, cells, strict=False))
 
 
 def _num(v: Any, default: float = float("nan")) -> float:
     try:
         return float(v)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         return default
+
+
+def _int(v: Any, default: int) -> int:
+    x = _num(v)
+    return int(x) if math.isfinite(x) and abs(x) < 2**53 else default
 
 
 def study_name(run_dir: Path) -> str:
     """The ``study = "..."`` line of ``config.toml`` (read without parsing the file)."""
     first, _ = head_tail(run_dir / "config.toml", 0)
     if first.startswith("study"):
-        return first.partition("=")[2].strip().strip('"')
+        return one_line(first.partition("=")[2].strip().strip('"'), 80)
     return "?"
 
 
@@ -161,80 +190,146 @@ def summarize(root: Path, run_dir: Path) -> RunSummary:
     row = last_stats_row(run_dir / "stats.csv")
     return RunSummary(
         name=run_dir.relative_to(root).as_posix(), study=study_name(run_dir), status=status,
-        stop_reason=reason, generation=int(_num(row.get("generation"), -1)),
-        evaluations=int(_num(row.get("evaluations"), 0)), best=_num(row.get("best_so_far")),
+        stop_reason=reason, generation=_int(row.get("generation"), -1),
+        evaluations=_int(row.get("evaluations"), 0), best=_num(row.get("best_so_far")),
         started=_started(run_dir), duration_s=_num(row.get("wall_s"), 0.0),
-        resumable=status == "interrupted" and (run_dir / "checkpoints").is_dir(), pid=pid)
+        resumable=is_resumable(run_dir, status), pid=pid)
 
 
-def list_runs(root: Path, study: str | None = None) -> list[RunSummary]:
+def unreadable(name: str, why: str) -> RunSummary:
+    """The row of a folder that could not be summarised."""
+    return RunSummary(name=name, study="?", status="unreadable", stop_reason=one_line(why, 160),
+                      generation=-1, evaluations=0, best=float("nan"), started=0.0,
+                      duration_s=0.0, resumable=False, pid=None)
+
+
+def list_runs(root: Path, study: str | None = None,
+              timeout_s: float | None = None) -> list[RunSummary]:
+    """A summary per run folder below ``root`` (newest first), each folder given
+    ``timeout_s`` (default :data:`SUMMARY_TIMEOUT_S`) on a worker thread."""
     root = Path(root)
-    runs = [summarize(root, d) for d in find_runs(root)]
+    dirs = find_runs(root)
+    calls, bad = [], {}
+    for d in dirs:
+        name = d.relative_to(root).as_posix()
+        try:
+            readers.check_name(name, "run folder")
+        except InputError:
+            bad[d] = one_line(os.fsencode(name).decode("utf-8", "replace"), 160)
+            continue
+        calls.append((str(d.absolute()), summarize, (root, d)))
+    done = readers.timed(calls, SUMMARY_TIMEOUT_S if timeout_s is None else timeout_s)
+    runs = []
+    for d in dirs:
+        if d in bad:
+            runs.append(unreadable(bad[d], "the folder's name is not valid text"))
+            continue
+        kind, value = done[str(d.absolute())]
+        if kind == "ok":
+            runs.append(value)
+        else:
+            why = "timed out" if kind == "timeout" else f"{type(value).__name__}: {value}"
+            runs.append(unreadable(d.relative_to(root).as_posix(), why))
     return [r for r in runs if study in (None, "", r.study)]
 
 
-def resolve_run(root: Path, name: str) -> Path:
-    """The run folder ``name`` below ``root``; an :class:`InputError` for anything outside it
-    or not a run folder (no path outside RUNS_DIR is ever read)."""
+def _resolved(root: Path, rel: object, what: str) -> Path:
+    rel = readers.check_name(rel, what)
     base = Path(root).resolve()
-    path = (base / name).resolve()
-    if not path.is_relative_to(base) or path == base or not (path / "config.toml").is_file():
-        raise InputError(f"{name}: not a run folder under {root}")
+    try:
+        path = (base / rel).resolve()
+    except (OSError, ValueError, RuntimeError):  # RuntimeError: a symbolic link loop
+        raise InputError(f"{one_line(rel, 120)}: no such {what} under {root}") from None
+    if not path.is_relative_to(base):
+        raise InputError(f"{one_line(rel, 120)}: no such {what} under {root}")
+    return path
+
+
+def resolve_run(root: Path, name: str) -> Path:
+    """The run folder ``name`` below ``root`` (one holding an entry ``config.toml``, as
+    :func:`find_runs` lists it, however unreadable); an :class:`InputError` for anything
+    outside it, not a run folder, or not a valid name (no path outside RUNS_DIR is read)."""
+    path = _resolved(root, name, "run")
+    if path == Path(root).resolve() or not os.path.lexists(path / "config.toml"):
+        raise InputError(f"{one_line(name, 120)}: not a run folder under {root}")
     return path
 
 
 def safe_file(root: Path, rel: str) -> Path:
-    """A file below ``root`` (symbolic links resolved; nothing outside ``root``)."""
-    base = Path(root).resolve()
-    path = (base / rel).resolve()
-    if not path.is_relative_to(base) or not path.is_file():
-        raise InputError(f"{rel}: no such file under {root}")
+    """A regular file below ``root`` (symbolic links resolved; nothing outside ``root``)."""
+    path = _resolved(root, rel, "file")
+    if not path.is_file():
+        raise InputError(f"{one_line(rel, 120)}: no such file under {root}")
     return path
 
 
 def read_config(run_dir: Path) -> tuple[str, dict[str, Any]]:
-    text = (run_dir / "config.toml").read_text(errors="replace")
+    """The text of ``config.toml`` and its table ({} when it does not parse); the text is
+    the error line when the file cannot be read."""
+    from evomotion.textio import read_file_bytes
+
+    try:
+        text = read_file_bytes(run_dir / "config.toml", "config file", MAX_CONFIG_BYTES
+                               ).decode("utf-8", "replace")
+    except InputError as e:
+        return f"error: {one_line(e)}", {}
     try:
         return text, tomllib.loads(text)
-    except tomllib.TOMLDecodeError:
+    except (tomllib.TOMLDecodeError, RecursionError, ValueError):
         return text, {}
 
 
 def log_tail(run_dir: Path, lines: int = 40) -> list[str]:
-    _, tail = head_tail(run_dir / "log.txt")
+    _, tail = head_tail(run_dir / "log.txt", TAIL_BYTES)
     return tail.splitlines()[-lines:]
 
 
 class StatsTail:
     """``stats.csv`` read incrementally: :meth:`update` parses only the bytes appended since the
-    last call (and starts again when the file was cut back by a resume)."""
+    last call (and starts again when the file was cut back by a resume). At most
+    :attr:`CHUNK` bytes are read per call and :attr:`MAX_BYTES` / :attr:`MAX_CELLS` in all
+    (then :attr:`full` is set and the rest is not read); a FIFO or device reads as empty."""
+
+    CHUNK = 4 << 20
+    MAX_BYTES = 32 << 20
+    MAX_CELLS = 4_000_000
 
     def __init__(self, path: Path) -> None:
         self.path = Path(path)
         self.offset = 0
+        self.cells = 0
+        self.full = False
         self.columns: list[str] = []
         self.rows: list[list[float]] = []
 
+    def _reset(self) -> None:
+        self.offset, self.cells, self.full, self.rows, self.columns = 0, 0, False, [], []
+
     def update(self) -> int:
         """Read what was appended; the number of new rows."""
-        try:
-            size = self.path.stat().st_size
-        except OSError:
-            return 0
+        chunk, size = readers.read_range(self.path, self.offset, 0 if self.full else self.CHUNK)
         if size < self.offset:
-            self.offset, self.rows, self.columns = 0, [], []
-        if size == self.offset:
+            self._reset()
+            chunk, size = readers.read_range(self.path, 0, self.CHUNK)
+        if not chunk:
             return 0
-        with open(self.path, "rb") as fh:
-            fh.seek(self.offset)
-            chunk = fh.read(size - self.offset)
         end = chunk.rfind(b"\n") + 1  # a half-written last row waits for the next call
+        if end == 0:
+            self.full = len(chunk) >= self.CHUNK  # a "row" longer than a chunk: give up
+            return 0
         text = chunk[:end].decode("utf-8", "replace")
         self.offset += end
         lines = text.splitlines()
         if not self.columns and lines:
-            self.columns = lines.pop(0).split(",")
-        new = [[_num(c) for c in cells] for cells in csv.reader(lines)]
+            self.columns = lines.pop(0).split(",")[:1000]
+        new = []
+        try:
+            for cells in csv.reader(lines):
+                new.append([_num(c) for c in cells[:len(self.columns)]])
+        except csv.Error:
+            pass
+        self.cells += sum(map(len, new))
+        self.full = self.offset >= self.MAX_BYTES or self.cells >= self.MAX_CELLS
         self.rows.extend(new)
         return len(new)
 

@@ -35,6 +35,7 @@ import mujoco
 import numpy as np
 
 from evomotion.core.checks import check_choice, check_number
+from evomotion.errors import InputError
 
 SCENES = ("nao", "kick")  # and "robot:<spec>"
 VISUAL_GROUPS = (0, 1, 2)  # the groups MuJoCo's viewer shows by default
@@ -47,6 +48,8 @@ _MODELS: dict[str, mujoco.MjModel] = {}
 NAO_TORSO_HEIGHT_M = 0.33  # the NAO's torso origin standing: the default camera's scale
 _CACHE: dict[tuple, dict[str, Any]] = {}
 _CACHE_SIZE = 8
+#: the longest motion the player replays (its physics is recorded in memory)
+MAX_PLAY_S = 120.0
 
 
 def load_scene_model(scene: str = "nao") -> mujoco.MjModel:
@@ -122,9 +125,12 @@ def _initial_state(model: mujoco.MjModel, scene: str, pose: np.ndarray) -> np.nd
 
 
 def _robot(scene: str) -> Any:
+    """The robot of scene ``"robot:<spec>"``, loaded only when the studio may load it
+    (:func:`~evomotion.studio.readers.check_robot`: a bundled name or a bounded spec file)."""
     from evomotion.sim.robot import load_robot
+    from evomotion.studio.readers import check_robot
 
-    return load_robot(scene.split(":", 1)[1])
+    return load_robot(check_robot(scene.split(":", 1)[1]))
 
 
 def _record(path: Path, scene: str, fps: float, hold_s: float) -> dict[str, Any]:
@@ -138,6 +144,9 @@ def _record(path: Path, scene: str, fps: float, hold_s: float) -> dict[str, Any]
     model = load_scene_model(scene)
     robot = _robot(scene) if scene.startswith("robot:") else None
     motion = read_motion(path, None if robot is None else robot.joints)
+    if not motion.duration_s <= MAX_PLAY_S:
+        raise InputError(f"{path}: the 3D player plays motions of at most {MAX_PLAY_S:g} s, "
+                         f"this one lasts {motion.duration_s:g} s")
     dt = float(model.opt.timestep)
     nstep = int(np.ceil((motion.duration_s + hold_s) / dt))
     if robot is None:

@@ -3,6 +3,7 @@ study's own view) and the comparison of runs; the new-run form is in :mod:`.form
 
 from __future__ import annotations
 
+import json
 import time
 from pathlib import Path
 from urllib.parse import quote
@@ -11,7 +12,8 @@ from evomotion.errors import InputError
 from evomotion.studio import actions, data
 
 STATUS_COLOURS = {"running": "blue", "finished": "green", "interrupted": "orange",
-                  "failed": "red"}
+                  "failed": "red", "stale": "deep-orange", "remote": "purple",
+                  "unverified": "grey", "unreadable": "red-10"}
 CURVES = (("best_so_far", "best so far"), ("best", "best of generation"), ("mean", "mean"),
           ("min", "min"))
 
@@ -25,7 +27,11 @@ def _fmt_row(r: data.RunSummary) -> dict:
     d["status_text"] = r.status + (f" ({r.stop_reason})" if r.stop_reason else "") \
         + (", resumable" if r.resumable else "")
     d["best_text"] = "" if d["best"] is None else f"{d['best']:.6g}"
-    d["started_text"] = time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(r.started))
+    try:
+        d["started_text"] = time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(r.started)) \
+            if r.started > 0 else ""
+    except (OverflowError, OSError, ValueError):  # a date no calendar holds
+        d["started_text"] = ""
     d["duration_text"] = f"{r.duration_s:.1f} s"
     return d
 
@@ -49,6 +55,8 @@ def build(root: Path) -> None:
     @ui.page("/")
     def runs_page(study: str = "") -> None:
         header(ui, "runs")
+        if study not in STUDIES:
+            study = ""
         cols = [{"name": k, "label": lab, "field": f, "sortable": True, "align": "left"}
                 for k, lab, f in (("name", "run", "name"), ("study", "study", "study"),
                                   ("status", "status", "status_text"),
@@ -65,9 +73,9 @@ def build(root: Path) -> None:
                          pagination={"rowsPerPage": 50, "sortBy": "started",
                                      "descending": True}).classes("w-full runs-table")
         table.add_slot("body-cell-status", """
-            <q-td :props="props"><q-badge :color="{running:'blue',finished:'green',
-            interrupted:'orange',failed:'red'}[props.row.status]">{{ props.value }}</q-badge>
-            </q-td>""")
+            <q-td :props="props"><q-badge :color="COLOURS[props.row.status]">
+            {{ props.value }}</q-badge></q-td>""".replace("COLOURS", json.dumps(STATUS_COLOURS)
+                                                          .replace('"', "'")))
         table.on("rowClick", lambda e: ui.navigate.to(_run_url(e.args[1]["name"])))
         last: list = []
 
@@ -89,6 +97,7 @@ def build(root: Path) -> None:
         try:
             run_dir = data.resolve_run(root, name)
         except InputError as e:
+            ui.context.client.status_code = 404
             ui.label(f"error: {e}").classes("text-red-700 run-error")
             return
         study = data.study_name(run_dir)
@@ -125,7 +134,7 @@ def build(root: Path) -> None:
             badge.set_text(s + (f": {reason}" if reason else ""))
             badge.props(f"color={STATUS_COLOURS.get(s, 'grey')}")
             stop_b.set_enabled(s == "running")
-            resume_b.set_enabled(s == "interrupted" and (run_dir / "checkpoints").is_dir())
+            resume_b.set_enabled(data.is_resumable(run_dir, s))
 
         def tick() -> None:
             if st.update():

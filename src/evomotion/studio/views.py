@@ -17,13 +17,21 @@ from __future__ import annotations
 
 import base64
 import io
-import json
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from evomotion.errors import InputError
+from evomotion.studio.readers import bounded_files, check_robot, one_line, regular_size
+
 NAO_STUDIES = ("humanoid-step", "humanoid-walk", "biped-kick", "humanoid-repertoire")
+#: the largest files a view reads (the studio stays well below 1 GB for any run folder)
+MAX_HISTORY_BYTES = 256 << 20
+MAX_ARCHIVE_BYTES = 128 << 20
+MAX_PLAN_BYTES = 32 << 20
+MAX_KICKS_BYTES = 4 << 20
+MAX_MAP_BINS = 4096  # bins per measure drawn in the repertoire's heat map
 
 
 def _png(fig) -> str:
@@ -46,7 +54,9 @@ def _problem(study: str, run_dir: Path) -> Any:
 
 def scene_of(run_dir: Path, default: str = "nao") -> str:
     """The 3D scene of a run's motions: ``"robot:<spec>"`` for a run of another robot than
-    the NAO (its config's ``problem.robot``), else ``default``."""
+    the NAO (its config's ``problem.robot``), else ``default``. A robot the studio must not
+    load (not a bundled name, nor a regular spec file of bounded size: ``/dev/zero``, a FIFO,
+    a huge file) is one :class:`InputError` line, and nothing is loaded."""
     from evomotion.run.config import config_from_run_dir
 
     try:
@@ -57,13 +67,13 @@ def scene_of(run_dir: Path, default: str = "nao") -> str:
     robot = problem.get("robot", "") if isinstance(problem, dict) else ""
     from evomotion.sim.robot import is_nao
 
-    return f"robot:{robot}" if isinstance(robot, str) and not is_nao(robot) else default
+    robot = check_robot(robot)
+    return f"robot:{robot}" if not is_nao(robot) else default
 
 
 def motions_of(run_dir: Path) -> list[str]:
     """The run's ``.motion`` files, relative to the run folder (best first)."""
-    found = sorted(p.relative_to(run_dir).as_posix() for p in run_dir.rglob("*.motion")
-                   if "checkpoints" not in p.parts)
+    found = sorted(p.relative_to(run_dir).as_posix() for p in bounded_files(run_dir, ".motion"))
     return sorted(found, key=lambda n: (n != "best.motion", n))
 
 
@@ -79,8 +89,11 @@ def render(study: str, root: Path, run_dir: Path) -> None:
             _nao(ui, run_dir, motions_of(run_dir))
         else:
             ui.label("this study has no view of its own: its curves are above")
+    except InputError as e:  # a file of the run the studio refuses to read or load
+        ui.label(f"error: {one_line(e)}").classes("text-red-700 view-error")
     except Exception as e:  # noqa: BLE001 - a view must not take the page down
-        ui.label(f"the study view failed: {type(e).__name__}: {e}").classes("text-red-700")
+        ui.label(f"the study view failed: {type(e).__name__}: {one_line(e)}") \
+            .classes("text-red-700 view-error")
 
 
 def _nao(ui, run_dir: Path, motions: list[str], scene: str | None = None,
@@ -106,10 +119,15 @@ def _nao(ui, run_dir: Path, motions: list[str], scene: str | None = None,
 
 
 def _kick(ui, study: str, run_dir: Path) -> None:
+    from evomotion.textio import read_json
+
     path = run_dir / "best_kicks.json"
     if path.exists():
-        rows = json.loads(path.read_text())
-        cols = [{"name": k, "label": k, "field": k} for k in rows[0]] if rows else []
+        rows = read_json(path, "kick plan", MAX_KICKS_BYTES)
+        if not (isinstance(rows, list) and all(isinstance(r, dict) for r in rows)):
+            raise InputError(f"{path}: expected a list of kicks (JSON objects)")
+        cols = [{"name": str(k), "label": str(k), "field": str(k)} for k in rows[0]] \
+            if rows else []
         for r in rows:
             for k, v in r.items():
                 if isinstance(v, float):
@@ -145,8 +163,10 @@ def _repertoire(ui, study: str, run_dir: Path) -> None:
     if not path.exists():
         _nao(ui, run_dir, motions)
         return
+    regular_size(path, "archive", MAX_ARCHIVE_BYTES)
     a = read_archive(path)
-    if a.kind != "grid" or len(a.bins) < 2:
+    if a.kind != "grid" or len(a.bins) < 2 or not all(0 < int(b) <= MAX_MAP_BINS
+                                                         for b in a.bins):
         ui.label(f"{a.kind} archive: no heat map; its elites' motions:")
         _nao(ui, run_dir, motions)
         return
@@ -204,6 +224,7 @@ def _history(ui, run_dir: Path) -> list | None:
         ui.label("no population.bin in this run (set run.history_every = 1 to record the "
                  "populations)")
         return None
+    regular_size(path, "population history", MAX_HISTORY_BYTES)
     hist = read_history(path)
     if not hist:
         ui.label("no generation recorded yet")
@@ -284,7 +305,11 @@ def _quadruped(ui, study: str, run_dir: Path) -> None:
     if path is None:
         ui.label("no plan.json or mission.json: the search found no plan (yet)")
         return
-    doc = json.loads(path.read_text())
+    from evomotion.textio import read_json
+
+    doc = read_json(path, "plan", MAX_PLAN_BYTES)
+    if not (isinstance(doc, dict) and isinstance(doc.get("states"), list) and doc["states"]):
+        raise InputError(f"{path}: expected a plan with a non-empty list of states")
     ui.label(f"{path.name}: {len(doc['states']) - 1} transitions").classes("font-bold")
     _stepper(ui, len(doc["states"]), lambda k: (_png(step_figure(doc, k)), f"state {k}"),
              "transition")

@@ -1,0 +1,118 @@
+"""A run folder is what a run marked as its own; --overwrite removes only what runs wrote
+(it deleted a whole project folder that merely held a config.toml)."""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from evomotion.outfile import RUN_MARKER, read_marker
+
+ARGS = ["--set", "run.generations=3", "--set", "problem.dim=3", "--set",
+        "algorithm.pop_size=8", "-q"]
+
+
+def _cli(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "evomotion.cli", *args], capture_output=True,
+                          text=True, timeout=120)
+
+
+def _tree(d: Path) -> dict[str, str]:
+    """Every entry under ``d`` with a digest of its contents (links as their target)."""
+    out = {}
+    for root, dirs, files in os.walk(d):
+        for name in dirs + files:
+            p = Path(root) / name
+            rel = str(p.relative_to(d))
+            if p.is_symlink():
+                out[rel] = "-> " + os.readlink(p)
+            elif p.is_file():
+                out[rel] = hashlib.sha256(p.read_bytes()).hexdigest()
+            else:
+                out[rel] = "dir"
+    return out
+
+
+def _project(d: Path) -> Path:
+    d.mkdir()
+    (d / "config.toml").write_text("[run]\nseed = 1\n")
+    (d / "thesis.tex").write_text("\\documentclass{article}\n")
+    (d / "src").mkdir()
+    (d / "src" / "main.py").write_text("print(1)\n")
+    (d / ".git").mkdir()
+    (d / ".git" / "HEAD").write_text("ref: refs/heads/main\n")
+    return d
+
+
+@pytest.mark.parametrize("overwrite", [True, False])
+def test_project_folder_with_a_config_is_never_emptied(tmp_path, overwrite):
+    d = _project(tmp_path / "project")
+    before = _tree(d)
+    r = _cli("run", "functions", "--out", str(d), *ARGS, *(["--overwrite"] if overwrite else []))
+    assert r.returncode == 2 and "Traceback" not in r.stderr
+    line = r.stderr.strip()
+    assert "\n" not in line and "files no run wrote" in line
+    assert ".git" in line and "thesis.tex" in line and "nothing was deleted" in line
+    assert _tree(d) == before  # not even a run.lock
+
+
+def test_overwrite_of_a_run_folder(tmp_path):
+    d = tmp_path / "run"
+    assert _cli("run", "functions", "--out", str(d), *ARGS).returncode == 0
+    doc = read_marker(d)
+    assert doc["study"] == "functions"
+    assert {"config.toml", "stats.csv", "plots", "best.json", "log.txt"} <= set(doc["files"])
+    r = _cli("run", "functions", "--out", str(d), *ARGS)
+    assert r.returncode == 2 and "already holds a run" in r.stderr
+    best = (d / "best.json").read_text()
+    assert _cli("run", "functions", "--out", str(d), *ARGS, "--overwrite").returncode == 0
+    assert (d / "best.json").read_text() == best
+
+
+def test_overwrite_refuses_a_run_folder_holding_a_users_file(tmp_path):
+    d = tmp_path / "run"
+    assert _cli("run", "functions", "--out", str(d), *ARGS).returncode == 0
+    (d / "notes.md").write_text("my notes\n")
+    (d / "plots" / "mine.png").write_bytes(b"x")  # inside a run's folder: the run's to remove
+    before = _tree(d)
+    r = _cli("run", "functions", "--out", str(d), *ARGS, "--overwrite")
+    assert r.returncode == 2 and "notes.md" in r.stderr and "nothing was deleted" in r.stderr
+    assert _tree(d) == before
+
+
+def test_overwrite_removes_a_link_not_what_it_points_at(tmp_path):
+    d = tmp_path / "run"
+    assert _cli("run", "functions", "--out", str(d), *ARGS).returncode == 0
+    outside = tmp_path / "precious"
+    outside.mkdir()
+    (outside / "data.txt").write_text("keep\n")
+    shutil.rmtree(d / "plots")
+    (d / "plots").symlink_to(outside, target_is_directory=True)
+    assert _cli("run", "functions", "--out", str(d), *ARGS, "--overwrite").returncode == 0
+    assert (outside / "data.txt").read_text() == "keep\n"
+    assert (d / "plots").is_dir() and not (d / "plots").is_symlink()
+
+
+def test_unmarked_old_run_folder_resumes_but_is_not_overwritten(tmp_path):
+    d = tmp_path / "run"
+    assert _cli("run", "functions", "--out", str(d), *ARGS).returncode == 0
+    (d / RUN_MARKER).unlink()  # a folder written before runs marked their folders
+    before = _tree(d)
+    r = _cli("run", "functions", "--out", str(d), *ARGS, "--overwrite")
+    assert r.returncode == 2 and "written before run folders were marked" in r.stderr
+    assert _tree(d) == before
+    r = _cli("resume", str(d), "--set", "run.generations=5", "-q")
+    assert r.returncode == 0, r.stderr
+
+
+def test_new_run_into_an_empty_existing_folder(tmp_path):
+    d = tmp_path / "empty"
+    d.mkdir()
+    assert _cli("run", "functions", "--out", str(d), *ARGS).returncode == 0
+    assert (d / RUN_MARKER).is_file()
