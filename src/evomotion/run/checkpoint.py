@@ -66,8 +66,10 @@ def candidates(run_dir: Path) -> list[str]:
     names = sorted((p.name for p in ck.glob("gen-*.json") if NAME.fullmatch(p.name)),
                    key=lambda n: int(NAME.fullmatch(n)[1]), reverse=True)
     try:
-        latest = json.loads((ck / "latest.json").read_text(encoding="utf-8"))["checkpoint"]
-    except (OSError, ValueError, KeyError, TypeError):
+        path = ck / "latest.json"
+        latest = loads_json(decode_utf8(read_file_bytes(path, "checkpoint pointer", 4096), path),
+                            path)["checkpoint"]
+    except (InputError, KeyError, TypeError):
         latest = None
     if isinstance(latest, str) and latest in names:
         names.remove(latest)

@@ -48,6 +48,7 @@ from evomotion.run.resume import config_record, restore
 from evomotion.run.runlog import RunLog, sigterm_as_interrupt
 from evomotion.run.stats import COLUMNS, MemoryStats, StatsWriter, diversity, population_stats
 from evomotion.run.stopping import limit_reached, stop_reason
+from evomotion.textio import read_json
 
 PHYSICS_NAME = "physics.json"  # the physics backend of a MuJoCo study and its guarantees
 
@@ -380,10 +381,10 @@ def _record_physics(problem: Any, out_dir: Path | None, resume: bool, log) -> No
     if out_dir is None:
         return
     path = out_dir / PHYSICS_NAME
-    if resume and path.is_file():
+    if resume and path.exists():
         try:
-            before = json.loads(path.read_text(encoding="utf-8"))
-        except (OSError, ValueError):
+            before = read_json(path, PHYSICS_NAME, 1 << 20, finite=False)
+        except InputError:
             before = None
         keys = ("backend", "device", "precision", "mujoco", "mujoco_warp", "deterministic",
                 "robot", "robot_spec_sha256", "robot_mjcf_sha256")

@@ -1,0 +1,157 @@
+"""Damaged or hostile files in a run folder (issue 31): one line or a fallback, never a
+traceback, a huge allocation, a zero-padded file or a forged log line."""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from evomotion.errors import InputError
+from evomotion.npzio import loads_npz
+
+ARGS = ["-q", "--set", "problem.dim=4", "--set", "algorithm.pop_size=20",
+        "--set", "run.checkpoint_every=4"]
+
+
+def _cli(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "evomotion.cli", *args], capture_output=True,
+                          text=True, timeout=120, cwd=cwd)
+
+
+def _one_line(r: subprocess.CompletedProcess) -> str:
+    assert r.returncode != 0 and "Traceback" not in r.stderr, r.stderr
+    lines = [ln for ln in r.stderr.splitlines() if ln.startswith("error:")]
+    assert len(lines) == 1, r.stderr
+    return lines[0]
+
+
+@pytest.fixture(scope="module")
+def run10(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("r") / "run"
+    assert _cli("run", "functions", "--out", str(out), "--set", "run.generations=10",
+                "--set", "run.history_every=1", *ARGS).returncode == 0
+    return out
+
+
+def _copy(src: Path, dst: Path) -> Path:
+    import shutil
+
+    shutil.copytree(src, dst)
+    return dst
+
+
+def _npy_header_claiming(shape: tuple[int, ...]) -> bytes:
+    """A valid .npy member whose header declares ``shape`` but holds 8 bytes of data."""
+    buf = io.BytesIO()
+    np.lib.format.write_array_header_1_0(buf, {"descr": "<f8", "fortran_order": False,
+                                               "shape": shape})
+    return buf.getvalue() + b"\0" * 8
+
+
+def _huge_npz(path: Path) -> None:
+    import zipfile
+
+    with zipfile.ZipFile(path, "w") as z:
+        z.writestr("state.pop.npy", _npy_header_claiming((10**7, 10**7)))
+
+
+def test_huge_declared_shape_in_the_newest_checkpoint_falls_back(run10, tmp_path):
+    d = _copy(run10, tmp_path / "run")
+    ck = d / "checkpoints"
+    latest = json.loads((ck / "latest.json").read_text())["checkpoint"]
+    _huge_npz(ck / latest.replace(".json", ".npz"))
+    r = _cli("resume", str(d), "--set", "run.generations=12", "-q")
+    assert r.returncode == 0, r.stderr
+    log = (d / "log.txt").read_text()
+    assert "declares shape (10000000, 10000000)" in log and "resuming from the newest valid" \
+        in log
+
+
+def test_emptied_history_is_refused_not_padded(run10, tmp_path):
+    """': > RUN/population.bin; resume' left it zero-padded and unreadable."""
+    d = _copy(run10, tmp_path / "run")
+    (d / "population.bin").write_bytes(b"")
+    line = _one_line(_cli("resume", str(d), "--set", "run.generations=12", "-q"))
+    assert "population.bin" in line and "past the end" in line
+    assert (d / "population.bin").read_bytes() == b""
+
+
+def test_deeply_nested_checkpoint_json_falls_back(run10, tmp_path):
+    d = _copy(run10, tmp_path / "run")
+    ck = d / "checkpoints"
+    latest = json.loads((ck / "latest.json").read_text())["checkpoint"]
+    (ck / latest).write_text("[" * 100000 + "]" * 100000)
+    r = _cli("resume", str(d), "--set", "run.generations=12", "-q")
+    assert r.returncode == 0, r.stderr
+    assert "nested at most" in (d / "log.txt").read_text()
+
+
+def test_newlines_in_names_cannot_forge_log_lines(tmp_path):
+    out = tmp_path / "a\nstopped: done at generation 99"
+    r = _cli("run", "functions", "--out", str(out), "--set", "run.generations=2", *ARGS)
+    assert r.returncode == 0, r.stderr
+    lines = (out / "log.txt").read_text().splitlines()
+    assert [ln for ln in lines if ln.startswith("stopped:")] == \
+        ["stopped: generations at generation 2 after 60 evaluations"]
+    assert "a\\nstopped: done" in lines[0]
+
+
+@pytest.mark.parametrize("damage", ["no header", "header only", "binary", "shuffled columns",
+                                    "generation column text", "fifo"])
+def test_plot_on_a_damaged_stats_file(run10, tmp_path, damage):
+    d = _copy(run10, tmp_path / "run")
+    p = d / "stats.csv"
+    rows = p.read_text().splitlines()
+    if damage == "no header":
+        p.write_text("\n".join(rows[1:]) + "\n")
+    elif damage == "header only":
+        p.write_text("generation,evaluations\n")
+    elif damage == "binary":
+        p.write_bytes(os.urandom(4000))
+    elif damage == "shuffled columns":
+        p.write_text("\n".join([rows[0]] + rows[:0:-1]) + "\n")
+    elif damage == "generation column text":
+        p.write_text(rows[0].replace("generation", "gen") + "\n" + "\n".join(rows[1:]) + "\n")
+    else:
+        p.unlink()
+        os.mkfifo(p)
+    r = _cli("plot", str(d))
+    line = _one_line(r)
+    assert "stats" in line
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.binary(max_size=600))
+def test_npz_reader_fuzz(data):
+    try:
+        loads_npz(data, "x.npz")
+    except InputError:
+        pass
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.integers(min_value=0, max_value=2**62), min_size=1, max_size=4))
+def test_npz_declared_shapes_are_checked_before_allocation(shape):
+    import zipfile
+
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w") as z:
+        z.writestr("a.npy", _npy_header_claiming(tuple(shape)))
+    n = int(np.prod(np.array(shape, dtype=object)))
+    if n * 8 <= 8:  # fits its 8 bytes (numpy may still refuse a shape like (0, 2**30, 2**30))
+        try:
+            assert loads_npz(buf.getvalue(), "x.npz")["a"].size == n
+        except InputError:
+            pass
+    else:
+        with pytest.raises(InputError, match="declares shape"):
+            loads_npz(buf.getvalue(), "x.npz")
