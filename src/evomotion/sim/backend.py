@@ -62,20 +62,21 @@ def physics_record(sim: Any) -> dict[str, Any]:
 
 
 def robot_identity(robot: Any) -> dict[str, str]:
-    """Name and SHA-256 digests of a robot's spec file and MJCF file."""
+    """Name and SHA-256 digests of a robot's spec file and MJCF file (the MJCF's bytes as
+    the robot was built from them; the spec read again, bounded: ``"?"`` when it cannot be)."""
     import hashlib
 
-    from evomotion.sim.robot.build import resolve_mjcf
+    from evomotion.sim.robot.spec import MAX_SPEC_BYTES
+    from evomotion.textio import read_file_bytes
 
-    def digest(path) -> str:
-        try:
-            return hashlib.sha256(path.read_bytes()).hexdigest()
-        except OSError:
-            return "?"
-
+    try:
+        spec_digest = hashlib.sha256(read_file_bytes(robot.spec.path, "robot spec",
+                                                     MAX_SPEC_BYTES)).hexdigest()
+    except InputError:
+        spec_digest = "?"
     return {"robot": robot.name, "robot_spec": str(robot.spec.path.resolve()),
-            "robot_spec_sha256": digest(robot.spec.path),
-            "robot_mjcf_sha256": digest(resolve_mjcf(robot.spec))}
+            "robot_spec_sha256": spec_digest,
+            "robot_mjcf_sha256": getattr(robot, "mjcf_sha256", "") or "?"}
 
 
 def device_memory(sim: Any, batch: int, nstep: int) -> tuple[int, int | None, str] | None:

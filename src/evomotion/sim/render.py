@@ -15,6 +15,7 @@ from __future__ import annotations
 import contextlib
 import contextvars
 import io
+import json
 import subprocess
 import sys
 from collections.abc import Iterator
@@ -25,6 +26,7 @@ import numpy as np
 from evomotion.sim.nao import MODEL_PATH
 
 UNAVAILABLE = "RENDER-UNAVAILABLE: "
+RENDER_TIMEOUT_S = 600
 
 
 class RenderUnavailableError(RuntimeError):
@@ -60,33 +62,59 @@ def check_videos_on() -> None:
 
 def render_video(qpos: np.ndarray, dt: float, out_path: str | Path, fps: int = 25,
                  width: int = 480, height: int = 352, model_path: Path = MODEL_PATH,
-                 model_xml: str | None = None, camera: str = "follow") -> Path:
+                 model_xml: str | None = None, camera: str = "follow",
+                 assets: dict[str, bytes] | None = None) -> Path:
     """Render ``qpos[T, nq]`` (one row per physics step of ``dt`` s) at ``fps`` to an MP4.
 
     ``model_xml`` (MJCF text) replaces the model file (a scene built in memory, such as the
-    kick's NAO + ball). ``camera``: ``"follow"`` (the torso, from the robot's right) or
-    ``"kick"`` (robot and ball both in view: the camera looks at their midpoint and backs off
-    as the ball rolls away; needs a body named ``ball``) or ``"overview"`` (the torso from
-    higher up and farther away, for a small robot walking in the plane, such as the
-    quadruped of :mod:`evomotion.sim.quadruped`, about 0.6 m across) or
-    ``"follow=BODY,DISTANCE_M,HEIGHT_M"`` (like ``"follow"`` for another robot: the camera
-    follows ``BODY`` from ``DISTANCE_M`` away, looking at ``HEIGHT_M`` above the floor)."""
+    kick's NAO + ball, or a robot's ``Robot.xml``); ``assets``: the files it names (meshes,
+    textures; by default those of the robot built from that text). ``camera``: ``"follow"``
+    (the torso, from the robot's right) or ``"kick"`` (robot and ball both in view: the camera
+    looks at their midpoint and backs off as the ball rolls away; needs a body named ``ball``)
+    or ``"overview"`` (the torso from higher up and farther away, for a small robot walking in
+    the plane, such as the quadruped of :mod:`evomotion.sim.quadruped`, about 0.6 m across)
+    or ``"follow=BODY,DISTANCE_M,HEIGHT_M"`` (like ``"follow"`` for another robot: the camera
+    follows ``BODY`` from ``DISTANCE_M`` away, looking at ``HEIGHT_M`` above the floor).
+
+    ``out_path`` is checked before any work (:func:`evomotion.outfile.check_target`: an
+    existing folder, not a device or FIFO); the encoder writes a temporary file next to it,
+    renamed over ``out_path`` only when the whole video is written, so a failed or killed
+    render leaves no partial MP4 there."""
+    from evomotion.outfile import atomic_output, check_target
+
     check_videos_on()
-    out_path = Path(out_path)
+    out_path = check_target(out_path, "video")
     if camera not in CAMERAS and not camera.startswith("follow="):
         raise ValueError(f"unknown camera {camera!r}; available: {', '.join(CAMERAS)}")
+    if assets is None and model_xml:
+        from evomotion.sim.robot.mjcf import assets_for
+
+        assets = assets_for(model_xml)
+    assets = assets or {}
     buf = io.BytesIO()
     stride = max(1, int(round(1.0 / (fps * dt))))
     xml = np.frombuffer((model_xml or "").encode(), dtype=np.uint8)
-    np.savez(buf, qpos=np.ascontiguousarray(qpos[::stride], dtype=np.float64), xml=xml)
-    cmd = [sys.executable, "-m", "evomotion.sim.render", str(model_path), str(out_path),
-           str(fps), str(width), str(height), camera]
-    proc = subprocess.run(cmd, input=buf.getvalue(), capture_output=True, timeout=600)
-    err = proc.stderr.decode(errors="replace")
-    if proc.returncode != 0:
-        if UNAVAILABLE in err:
-            raise RenderUnavailableError(err.split(UNAVAILABLE, 1)[1].strip().splitlines()[0])
-        raise RuntimeError(f"rendering failed: {err.strip().splitlines()[-1] if err else '?'}")
+    names = np.frombuffer(json.dumps(list(assets)).encode(), dtype=np.uint8)
+    files = {f"asset_{i}": np.frombuffer(data, dtype=np.uint8)
+             for i, data in enumerate(assets.values())}
+    np.savez(buf, qpos=np.ascontiguousarray(qpos[::stride], dtype=np.float64), xml=xml,
+             asset_names=names, **files)
+    with atomic_output(out_path, "video", suffix=".tmp.mp4") as tmp:
+        cmd = [sys.executable, "-m", "evomotion.sim.render", str(model_path), str(tmp),
+               str(fps), str(width), str(height), camera]
+        try:
+            proc = subprocess.run(cmd, input=buf.getvalue(), capture_output=True,
+                                  timeout=RENDER_TIMEOUT_S)
+        except subprocess.TimeoutExpired:
+            raise RuntimeError(f"rendering {out_path} took more than {RENDER_TIMEOUT_S} s"
+                               ) from None
+        err = proc.stderr.decode(errors="replace")
+        if proc.returncode != 0:
+            if UNAVAILABLE in err:
+                raise RenderUnavailableError(
+                    err.split(UNAVAILABLE, 1)[1].strip().splitlines()[0])
+            last = err.strip().splitlines()[-1] if err.strip() else f"exit {proc.returncode}"
+            raise RuntimeError(f"rendering failed: {last}")
     return out_path
 
 
@@ -94,13 +122,14 @@ MARK_SPACING_M = 0.5  # floor marks across the +x direction: every 0.5 m, a post
 MARK_RANGE_M = (-2.0, 8.0)
 
 
-def _with_distance_marks(model_path: str, xml: str = ""):
+def _with_distance_marks(model_path: str, xml: str = "", assets: dict | None = None):
     """The model with visual-only floor marks (no collisions, no mass): a line across the
     floor every 0.5 m along x, darker and with a post every metre, so a video shows progress
     while the camera follows the robot."""
     import mujoco
 
-    spec = mujoco.MjSpec.from_string(xml) if xml else mujoco.MjSpec.from_file(model_path)
+    spec = (mujoco.MjSpec.from_string(xml, assets=assets or None) if xml
+            else mujoco.MjSpec.from_file(model_path))
     world = spec.worldbody
     lo, hi = MARK_RANGE_M
     for i, x in enumerate(np.arange(lo, hi + 1e-9, MARK_SPACING_M)):
@@ -118,10 +147,11 @@ def _with_distance_marks(model_path: str, xml: str = ""):
 
 
 def _render_frames(model_path: str, frames_q: np.ndarray, width: int, height: int,
-                   camera: str = "follow", xml: str = ""):
+                   camera: str = "follow", xml: str = "", assets: dict | None = None):
+    """The frames of ``frames_q``, one at a time (a long video is never held in memory)."""
     import mujoco
 
-    model = _with_distance_marks(model_path, xml)
+    model = _with_distance_marks(model_path, xml, assets)
     data = mujoco.MjData(model)
     try:
         renderer = mujoco.Renderer(model, height=height, width=width)
@@ -129,9 +159,14 @@ def _render_frames(model_path: str, frames_q: np.ndarray, width: int, height: in
         raise RenderUnavailableError(
             f"offscreen rendering unavailable ({exc}); install libosmesa6 "
             "(MUJOCO_GL=osmesa) or use EGL (MUJOCO_GL=egl)") from None
+    return _frames(model, data, renderer, frames_q, camera)
+
+
+def _frames(model, data, renderer, frames_q: np.ndarray, camera: str):
+    import mujoco
+
     cam = mujoco.MjvCamera()
     cam.distance, cam.azimuth, cam.elevation = 1.1, -70.0, -12.0
-    frames = []
     try:
         for q in frames_q:
             data.qpos[:] = q
@@ -156,26 +191,32 @@ def _render_frames(model_path: str, frames_q: np.ndarray, width: int, height: in
                 cam.lookat[2] = 0.2
             renderer.update_scene(data, camera=cam)
             renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = False
-            frames.append(renderer.render().copy())
+            yield renderer.render()
     finally:
         renderer.close()
-    return np.stack(frames)
 
 
 def main(argv: list[str]) -> int:
+    """The child process: the trajectory (and model text, assets) on stdin, the MP4 written
+    to the path given (the parent's temporary file), frame by frame."""
     import evomotion.sim  # noqa: F401  (chooses MUJOCO_GL before mujoco is imported)
 
     model_path, out_path, fps, width, height, camera = argv
-    data = np.load(io.BytesIO(sys.stdin.buffer.read()))
+    data = np.load(io.BytesIO(sys.stdin.buffer.read()), allow_pickle=False)
     frames_q, xml = data["qpos"], data["xml"].tobytes().decode()
+    names = json.loads(data["asset_names"].tobytes().decode()) if "asset_names" in data else []
+    assets = {name: data[f"asset_{i}"].tobytes() for i, name in enumerate(names)}
     try:
-        frames = _render_frames(model_path, frames_q, int(width), int(height), camera, xml)
+        frames = _render_frames(model_path, frames_q, int(width), int(height), camera, xml,
+                                assets)
     except RenderUnavailableError as exc:
         print(f"{UNAVAILABLE}{exc}", file=sys.stderr)
         return 3
-    import imageio.v3 as iio
+    import imageio.v2 as iio
 
-    iio.imwrite(out_path, frames, fps=int(fps), codec="libx264")
+    with iio.get_writer(out_path, format="FFMPEG", fps=int(fps), codec="libx264") as writer:
+        for frame in frames:
+            writer.append_data(frame)
     return 0
 
 

@@ -117,7 +117,7 @@ LKneePitch = [0.0, 1.5]
     (('left = "LFoot"', 'left = "LHip"'), 7, "has no collision geoms (no sole geoms)"),
     (('left = "LFoot"', 'left = "LToe"'), 7, "no body 'LToe'"),
     (('torso = "torso"', 'torso = "LFoot"'), 4, "must carry the model's first joint"),
-    (('height_m = 0.2', 'height_m = -1'), 11, "expected a number > 0.0"),
+    (('height_m = 0.2', 'height_m = -1'), 11, "expected a number in (0, 10] m, got -1"),
     ((f'mjcf = "{NAO_MJCF}"', 'mjcf = "missing.xml"'), 3, "no such MJCF file"),
 ])
 def test_spec_mistakes_name_file_line_and_expectation(tmp_path, change, line, message):

@@ -24,18 +24,21 @@ from __future__ import annotations
 
 import json
 import math
+import os
+import stat
 from pathlib import Path
 
 import numpy as np
 
 from evomotion.errors import FileFormatError, InputError
-from evomotion.run.folder import atomic_write_text
+from evomotion.outfile import WriteError, atomic_write_text, check_target, reason
 from evomotion.sim.nao.joint_limits import check_motion
 from evomotion.sim.nao.motion import MAX_MOTION_MS, NAO_JOINT_NAMES, Motion, read_motion
-from evomotion.textio import decode_utf8, read_file_bytes
+from evomotion.textio import decode_utf8, loads_json, read_file_bytes
 
 FORMAT = "evomotion-keyframes/1"
-MAX_KEYFRAMES_BYTES = 64 * 1024 * 1024
+MAX_KEYFRAMES_BYTES = 16 * 1024 * 1024
+MAX_KEYFRAMES_DEPTH = 4  # {"angles_rad": {joint: [..]}}
 _KEYS = ("format", "joints", "times_s", "angles_rad", "source")
 
 
@@ -141,10 +144,6 @@ def keyframes_json(motion: Motion, source: str = "motion") -> str:
             f'  "source": {json.dumps(str(source))}\n}}\n')
 
 
-def _reject_constant(name: str) -> float:
-    raise ValueError(f"{name} is not a JSON number")
-
-
 def _number(v: object) -> bool:
     return isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
 
@@ -155,12 +154,7 @@ def parse_keyframes(text: str, path: str | Path = "<keyframes>") -> tuple[Motion
     def bad(what: str, line: int | None = None) -> FileFormatError:
         return FileFormatError(path, line, what)
 
-    try:
-        data = json.loads(text, parse_constant=_reject_constant)
-    except json.JSONDecodeError as e:
-        raise bad(f"expected JSON ({e.msg} at column {e.colno})", e.lineno) from None
-    except (ValueError, RecursionError) as e:
-        raise bad(f"expected JSON ({str(e) or type(e).__name__})".replace("\n", " ")) from None
+    data = loads_json(text, path, max_depth=MAX_KEYFRAMES_DEPTH)
     if not isinstance(data, dict):
         raise bad("expected a JSON object")
     extra = sorted(set(data) - set(_KEYS))
@@ -181,6 +175,8 @@ def parse_keyframes(text: str, path: str | Path = "<keyframes>") -> tuple[Motion
         raise bad("expected each joint name once")
     if not isinstance(times, list) or not times or not all(_number(t) for t in times):
         raise bad("expected \"times_s\": a non-empty list of finite numbers")
+    if any(not 0 <= t <= MAX_MOTION_MS / 1000 for t in times):
+        raise bad(f"expected times in whole milliseconds from 0 to {MAX_MOTION_MS // 1000} s")
     ms = [round(t * 1000) for t in times]
     if any(abs(t * 1000 - m) > 1e-6 or m < 0 or m > MAX_MOTION_MS for t, m in zip(times, ms)):
         raise bad(f"expected times in whole milliseconds from 0 to {MAX_MOTION_MS // 1000} s")
@@ -205,27 +201,22 @@ def read_keyframes(path: str | Path) -> tuple[Motion, str]:
     return parse_keyframes(decode_utf8(data, path), path)
 
 
-def _out_path(path: str | Path) -> Path:
-    path = Path(path)
-    if path.is_dir():
-        raise InputError(f"export: {path} is a directory; expected a file name")
-    if not path.parent.is_dir():
-        raise InputError(f"export: {path.parent} is not a directory; expected an existing one")
-    return path
+def _out_path(path: str | Path, what: str) -> Path:
+    """``path`` checked as an output (:func:`evomotion.outfile.check_target`: a new name or a
+    regular file in an existing folder, never a device, FIFO or folder)."""
+    return check_target(path, what)
 
 
 def write_naoqi(path: str | Path, motion: Motion, source: str = "motion") -> Path:
-    """Write the NAOqi script (no checks: see :func:`export_motion`)."""
-    path = _out_path(path)
-    atomic_write_text(path, naoqi_script(motion, source))
-    return path
+    """Write the NAOqi script atomically (no checks: see :func:`export_motion`)."""
+    return atomic_write_text(_out_path(path, "NAOqi script"), naoqi_script(motion, source),
+                             "NAOqi script")
 
 
 def write_keyframes(path: str | Path, motion: Motion, source: str = "motion") -> Path:
-    """Write the JSON keyframe file (no checks: see :func:`export_motion`)."""
-    path = _out_path(path)
-    atomic_write_text(path, keyframes_json(motion, source))
-    return path
+    """Write the JSON keyframe file atomically (no checks: see :func:`export_motion`)."""
+    return atomic_write_text(_out_path(path, "keyframe file"), keyframes_json(motion, source),
+                             "keyframe file")
 
 
 def export_motion(motion: Motion, *, naoqi: str | Path | None = None,
@@ -238,8 +229,10 @@ def export_motion(motion: Motion, *, naoqi: str | Path | None = None,
     outs = [Path(p) for p in (naoqi, json_path) if p is not None]
     if len(outs) == 2 and outs[0].resolve() == outs[1].resolve():
         raise InputError(f"export: --naoqi and --json name the same file {outs[0]}")
-    for p in outs:
-        _out_path(p)
+    if naoqi is not None:  # before any work: a device or a missing folder is one line
+        _out_path(naoqi, "NAOqi script (--naoqi)")
+    if json_path is not None:
+        _out_path(json_path, "keyframe file (--json)")
     motion, clipped = check_motion(motion, clip=clip, speed_margin=speed_margin)
     done = [f"clipped {clipped} angle{'s' if clipped != 1 else ''} to the NAO H25 V5 joint "
             "ranges"] if clip else []
@@ -260,14 +253,27 @@ def write_run_exports(motion: Motion, out_dir: Path, log, source: str = "best.mo
     try:
         export_motion(motion, naoqi=out_dir / names[0], json_path=out_dir / names[1],
                       source=source)
+    except WriteError:
+        raise  # a full disk, say: the run ends unfinished (resumable), not silently
     except InputError as exc:
         for name in names:
-            (out_dir / name).unlink(missing_ok=True)
+            _remove_regular(out_dir / name)
         log(f"best_naoqi.py and best_keyframes.json not written: {exc}")
         return False
     log("best_naoqi.py and best_keyframes.json written (checked against a real NAO's "
         "joint ranges and motor speeds)")
     return True
+
+
+def _remove_regular(path: Path) -> None:
+    """Remove ``path`` when it is a regular file (a device or FIFO there is left alone)."""
+    try:
+        if stat.S_ISREG(os.lstat(path).st_mode):
+            path.unlink()
+    except FileNotFoundError:
+        pass
+    except OSError as e:
+        raise WriteError(f"{path}: cannot remove the stale export ({reason(e)})") from None
 
 
 def export_command(motion_path: Path, naoqi: Path | None, json_path: Path | None,

@@ -23,12 +23,15 @@ from evomotion.sim.nao.constants import (
 )
 
 MODEL_PATH = Path(__file__).resolve().parents[1] / "models" / "nao_h25.xml"
+MAX_CLEARANCE_M = 0.1  # the highest start above the floor (m), as a robot spec's clearance_m
 
 
 @lru_cache(maxsize=1)
 def model_xml() -> str:
-    """The MJCF text of the NAO on a flat floor."""
-    return MODEL_PATH.read_text()
+    """The MJCF text of the NAO on a flat floor (the package's file, read bounded)."""
+    from evomotion.textio import decode_utf8, read_file_bytes
+
+    return decode_utf8(read_file_bytes(MODEL_PATH, "NAO model", 4 * 2**20), MODEL_PATH)
 
 
 def load_model() -> mujoco.MjModel:
@@ -85,7 +88,11 @@ def state_qpos_all(model: mujoco.MjModel, states: np.ndarray) -> np.ndarray:
 def initial_data(model: mujoco.MjModel, pose: np.ndarray | None = None,
                  clearance_m: float = 0.0005) -> mujoco.MjData:
     """MjData with the joints at ``pose`` (22 values) and the lower sole ``clearance_m`` above
-    the floor, torso upright facing +x, at rest, with the actuators holding the pose."""
+    the floor, torso upright facing +x, at rest, with the actuators holding the pose.
+    ``clearance_m`` must be finite, 0 to 0.1 m (one :class:`InputError` line otherwise)."""
+    from evomotion.core.checks import check_number
+
+    check_number("clearance_m", clearance_m, lo=0.0, hi=MAX_CLEARANCE_M)
     q = pose_vector() if pose is None else np.asarray(pose, dtype=float)
     data = mujoco.MjData(model)
     for name, value in zip(JOINTS, q, strict=True):

@@ -44,10 +44,14 @@ NAO_JOINT_NAMES: frozenset[str] = frozenset((
 MAGIC, VERSION = "#WEBOTS_MOTION", "V1.0"
 MAX_LINE = 4095  # motion.c reads lines with fgets(buffer, 4096)
 MAX_MOTION_MS = 10 * 60 * 1000  # the longest motion read: 10 minutes
-MAX_MOTION_BYTES = 64 * 1024 * 1024
+MAX_MOTION_BYTES = 8 * 1024 * 1024  # a minute of 26 joints every 40 ms: about 1 MiB
 _TIME = re.compile(r"^[0-9:]+$")
 #: What ``sscanf("%lf")`` reads as a whole token, restricted to finite decimal numbers.
 _NUMBER = re.compile(r"^[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?$")
+_NUM = r"(?:\*|[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?)"
+#: a row's values joined by commas, each ``*`` or a decimal number (checked in one match)
+_ROW = re.compile(rf"{_NUM}(?:,{_NUM})*")
+_SEP = re.compile("[,\r]")
 
 
 @dataclass
@@ -93,7 +97,7 @@ def format_time_ms(ms: int) -> str:
 
 def _tokens(line: str) -> list[str]:
     """``strtok(line, ",\\n\\r")``: empty fields collapse (blanks around a token are dropped)."""
-    return [t.strip() for t in re.split("[,\r]", line) if t.strip() != ""]
+    return [t for t in map(str.strip, _SEP.split(line)) if t]
 
 
 def _value(token: str) -> float | None:
@@ -178,19 +182,22 @@ def parse_motion(text: str, path: str | Path = "<motion>",
         if len(tok) - 2 != len(joints):
             raise FileFormatError(path, lineno,
                                   f"expected {len(joints)} values, got {max(len(tok) - 2, 0)}")
-        row = []
-        for value in tok[2:]:
-            v = _value(value)
-            if v is None:
-                raise FileFormatError(path, lineno, f"bad value {value!r}; expected a finite "
-                                                    "number or '*'")
-            row.append(v)
+        values = tok[2:]
+        row = None
+        if _ROW.fullmatch(",".join(values)):  # the fast path: one match, floats in C
+            row = np.fromiter(map(float, ("nan" if v == "*" else v for v in values)), float,
+                              len(values))  # 8 bytes a value (a list of floats: 32)
+        if row is None or np.isinf(row).any():
+            for value in values:
+                if _value(value) is None:
+                    raise FileFormatError(path, lineno, f"bad value {value[:40]!r}; expected "
+                                                        "a finite number or '*'")
         times.append(t)
         names.append(tok[1])
         rows.append(row)
     if not rows:
         raise FileFormatError(path, first + 1, "expected at least one pose")
-    return Motion(tuple(joints), np.array(times), np.array(rows), names)
+    return Motion(tuple(joints), np.array(times), np.stack(rows), names)
 
 
 def format_motion(motion: Motion, header_on_first_line: bool = True) -> str:
@@ -209,6 +216,12 @@ def format_motion(motion: Motion, header_on_first_line: bool = True) -> str:
     return "\n".join(out) + "\n"
 
 
-def write_motion(path: str | Path, motion: Motion, header_on_first_line: bool = True) -> None:
-    """Write ``motion`` to ``path`` (``\\n`` line endings, no blank lines)."""
-    Path(path).write_text(format_motion(motion, header_on_first_line), encoding="ascii")
+def write_motion(path: str | Path, motion: Motion, header_on_first_line: bool = True,
+                 what: str = "motion file", mkdir: bool = False) -> Path:
+    """Write ``motion`` to ``path`` (``\\n`` line endings, no blank lines) atomically through
+    :mod:`evomotion.outfile` (a device, FIFO or folder at ``path`` is refused, a missing folder
+    too unless ``mkdir``; a failed write leaves no partial file)."""
+    from evomotion.outfile import atomic_write_text
+
+    text = format_motion(motion, header_on_first_line)
+    return atomic_write_text(path, text, what, mkdir)

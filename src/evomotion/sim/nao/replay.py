@@ -32,6 +32,7 @@ import mujoco
 import numpy as np
 
 from evomotion.core.checks import check_choice, check_number
+from evomotion.outfile import check_target
 from evomotion.sim import nao
 from evomotion.sim.nao.motion import Motion, read_motion
 from evomotion.sim.nao.worlds import Perturbation, draw_worlds, make_world, simulate_worlds
@@ -126,6 +127,7 @@ def start_state(model: mujoco.MjModel, pose: np.ndarray, start: str = "standing"
     (torso rotated +90 degrees about y: its front, +x, points down) or face up (-90 degrees),
     at rest, joints at ``pose``, the lowest collision geom ``clearance_m`` above the floor."""
     check_choice("start", start, STARTS)
+    check_number("clearance_m", clearance_m, lo=0.0, hi=nao.model.MAX_CLEARANCE_M)
     if start == "standing":
         return nao.initial_state(model, pose)
     data = mujoco.MjData(model)
@@ -219,10 +221,13 @@ def replay_motion(motion: Motion, video: str | Path | None = None, hold_s: float
     """Replay ``motion`` once (with active ``stress`` options, :func:`stress_motion`, else
     :func:`simulate_motion`) and render that replay to ``video`` when one is named. Returns
     the summary and, when no GL backend can render, the reason the video was skipped (the
-    replay is not run again for it)."""
+    replay is not run again for it). ``video`` is checked before the simulation runs (an
+    existing folder, not a device: :func:`evomotion.outfile.check_target`)."""
     from evomotion.sim.render import RenderUnavailableError, render_video
 
     check_number("--hold", hold_s, lo=0.0, hi=MAX_HOLD_S)
+    if video is not None:
+        video = check_target(video, "video")
     if stress is not None and stress.active:
         result = stress_motion(motion, stress, hold_s=hold_s)
     else:
@@ -256,6 +261,8 @@ def replay_command(path: Path, json_out: bool = False, video: Path | None = None
     backend the video is skipped with a note on stderr."""
     if stress is not None:
         stress.validate()
+    if video is not None:
+        video = check_target(video, "video")
     summary, skipped = replay_motion(read_motion(path), video, hold_s, stress)
     if skipped is not None:
         print(f"video skipped: {skipped}", file=sys.stderr)

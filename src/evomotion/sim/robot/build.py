@@ -1,6 +1,9 @@
 """Build a simulated robot from its :class:`~.spec.RobotSpec` with :class:`mujoco.MjSpec`.
 
-The MJCF is loaded as it is; then, with ``MjSpec`` (never by editing text):
+The MJCF and every file it names are read by :mod:`.mjcf` (bounded, inside the spec's
+folder, includes expanded there) and compiled from memory; every compiled model is checked by
+:func:`~.limits.check_model` (sizes, finite values, physical ranges) before an ``MjData`` is
+made. Then, with ``MjSpec`` (never by editing text):
 
 - with ``[servo]``, the integrator becomes ``implicitfast`` when the MJCF used Euler (stiff
   servos on light links need implicit damping), and every motor (``gaintype`` fixed, no
@@ -19,12 +22,16 @@ and no motor is left without a ``[servo]``.
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import mujoco
 import numpy as np
 
+from evomotion.errors import InputError
+from evomotion.sim.robot.limits import check_model
+from evomotion.sim.robot.mjcf import MjcfBundle, confined, read_mjcf, remember_assets
 from evomotion.sim.robot.spec import RobotSpec
 
 STATE_SPEC = mujoco.mjtState.mjSTATE_FULLPHYSICS
@@ -49,6 +56,9 @@ class Robot:
     xml: str = ""  # the edited model as MJCF text (for videos)
     #: the walk study's gait roles: role -> ((actuator column, sign) per leg)
     gait: dict[str, tuple[tuple[int, float], ...]] = field(default_factory=dict)
+    #: the files the MJCF names (meshes, textures), by their names in ``xml``
+    assets: dict[str, bytes] = field(default_factory=dict, repr=False, compare=False)
+    mjcf_sha256: str = ""  # of the MJCF file as read
 
     @property
     def gait_kind(self) -> str | None:
@@ -90,12 +100,13 @@ class Robot:
         return slice(adr, adr + dim)
 
 
-def resolve_mjcf(spec: RobotSpec) -> Path:
-    """The MJCF file a spec names: relative to the spec, ``evomotion:`` (in this package) or
+def mjcf_root(spec: RobotSpec) -> tuple[Path, Path]:
+    """(the real path of the MJCF a spec names, the folder every file it names must lie in):
+    relative to the spec (inside the spec's folder), ``evomotion:`` (in this package) or
     ``dm_control:`` (in the installed dm_control, found without importing it)."""
     ref = spec.mjcf
     if ref.startswith("evomotion:"):
-        path = Path(__file__).resolve().parents[2] / ref.split(":", 1)[1]
+        root, ref = Path(__file__).resolve().parents[2], ref.split(":", 1)[1]
     elif ref.startswith("dm_control:"):
         import importlib.util
 
@@ -103,12 +114,43 @@ def resolve_mjcf(spec: RobotSpec) -> Path:
         if found is None or not found.submodule_search_locations:
             raise spec.error("robot", "mjcf", f"{ref!r} needs dm_control: pip install "
                              "'evomotion[robots]'")
-        path = Path(list(found.submodule_search_locations)[0]) / ref.split(":", 1)[1]
+        root, ref = Path(list(found.submodule_search_locations)[0]), ref.split(":", 1)[1]
     else:
-        path = (spec.path.parent / ref).resolve()
-    if not path.is_file():
+        root = spec.path.parent
+    root = Path(os.path.realpath(root))
+    try:
+        path = confined(ref, root, root)
+    except ValueError as e:
+        raise spec.error("robot", "mjcf", f"{ref[:80]!r}: {e}") from None
+    if not path.exists():
         raise spec.error("robot", "mjcf", f"no such MJCF file {path}")
-    return path
+    return path, root
+
+
+def resolve_mjcf(spec: RobotSpec) -> Path:
+    """The real path of the MJCF file a spec names (:func:`mjcf_root`)."""
+    return mjcf_root(spec)[0]
+
+
+def read_model(spec: RobotSpec) -> MjcfBundle:
+    """The spec's MJCF and every file it names, read with bounds (:mod:`.mjcf`); one line
+    naming the spec (and the MJCF file and line) for anything refused."""
+    path, root = mjcf_root(spec)
+    try:
+        return read_mjcf(path, root)
+    except InputError as e:
+        raise spec.error("robot", "mjcf", _one_line(e)) from None
+
+
+def _compile(spec: RobotSpec, mj: mujoco.MjSpec, bundle: MjcfBundle, key: str,
+             what: str) -> mujoco.MjModel:
+    """``mj`` compiled and checked (:func:`~.limits.check_model`), or one line."""
+    try:
+        model = mj.compile()
+    except (ValueError, RuntimeError, TypeError) as e:
+        raise spec.error("robot", key, f"{what}: {bundle.locate(_one_line(e))}") from None
+    check_model(model, lambda m: spec.error("robot", "mjcf", f"{bundle.path}: {m}"))
+    return model
 
 
 def _servos(spec: RobotSpec, mj: mujoco.MjSpec, model: mujoco.MjModel) -> None:
@@ -175,22 +217,21 @@ def _feet(spec: RobotSpec, mj: mujoco.MjSpec, model: mujoco.MjModel) -> None:
 
 def build_robot(spec: RobotSpec) -> Robot:
     """Load, edit, compile and check the robot of ``spec`` (see the module doc)."""
-    path = resolve_mjcf(spec)
+    bundle = read_model(spec)
     try:
-        mj = mujoco.MjSpec.from_file(str(path))
-        mj.compile()
-    except (ValueError, RuntimeError) as e:
-        raise spec.error("robot", "mjcf", f"{path} does not compile: {_one_line(e)}") from None
-    for body in spec.remove:
-        try:
-            mj.delete(mj.body(body))
-        except (TypeError, ValueError, KeyError):
-            raise spec.error("robot", "remove", f"no body {body!r} to remove") from None
-    try:
-        base = mj.compile()
-    except (ValueError, RuntimeError) as e:
-        raise spec.error("robot", "remove", f"the model does not compile without "
-                         f"{', '.join(spec.remove)}: {_one_line(e)}") from None
+        mj = mujoco.MjSpec.from_string(bundle.xml, assets=bundle.assets)
+    except (ValueError, RuntimeError, TypeError) as e:
+        raise spec.error("robot", "mjcf", f"{bundle.path} does not load: "
+                         f"{bundle.locate(_one_line(e))}") from None
+    base = _compile(spec, mj, bundle, "mjcf", f"{bundle.path} does not compile")
+    if spec.remove:
+        for body in spec.remove:
+            try:
+                mj.delete(mj.body(body))
+            except (TypeError, ValueError, KeyError):
+                raise spec.error("robot", "remove", f"no body {body!r} to remove") from None
+        base = _compile(spec, mj, bundle, "remove", "the model does not compile without "
+                        f"{', '.join(spec.remove)}")
     try:
         base.geom(spec.floor)
     except KeyError:
@@ -211,11 +252,7 @@ def build_robot(spec: RobotSpec) -> Robot:
                              f"{len(key.qpos)} qpos values, the model {base.nq}")
     _servos(spec, mj, base)
     _feet(spec, mj, base)
-    try:
-        model = mj.compile()
-    except (ValueError, RuntimeError) as e:
-        raise spec.error("robot", "mjcf", "the edited model does not compile: "
-                         f"{_one_line(e)}") from None
+    model = _compile(spec, mj, bundle, "mjcf", "the edited model does not compile")
     joints = channels(model)
     for section, values in (("pose", spec.pose), ("evolve", spec.evolve)):
         for name, value in values.items():
@@ -235,8 +272,10 @@ def build_robot(spec: RobotSpec) -> Robot:
         xml = mj.to_xml()
     except (ValueError, RuntimeError):  # e.g. meshes that cannot be written back
         xml = ""
+    if xml:
+        remember_assets(xml, bundle.assets)
     return Robot(spec, model, joints, evolved, columns, lower, upper, pose, state0,
-                 tuple(spec.feet), xml, gait)
+                 tuple(spec.feet), xml, gait, bundle.assets, bundle.sha256)
 
 
 def channels(model: mujoco.MjModel) -> tuple[str, ...]:

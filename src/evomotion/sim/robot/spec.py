@@ -3,8 +3,8 @@
 ```toml
 [robot]
 name = "dm-humanoid"
-mjcf = "dm_control:suite/humanoid.xml"  # a path relative to this file, "evomotion:<path in the
-                                         # package>" or "dm_control:<path in dm_control>"
+mjcf = "dm_control:suite/humanoid.xml"  # a path inside this file's folder, "evomotion:<path in
+                                         # the package>" or "dm_control:<path in dm_control>"
 torso = "torso"          # the body with the free joint (falls, heading, displacement)
 floor = "floor"          # the floor geom
 clearance_m = 0.0005     # lowest foot geom this far above the floor at the start
@@ -44,7 +44,10 @@ A *channel* is an actuated joint (named by the joint) or, for an actuator on a t
 actuator's name; ``[pose]``, ``[evolve]`` and ``[gait]`` name channels.
 
 :func:`read_spec` returns a :class:`RobotSpec`; every mistake is a one-line
-:class:`~evomotion.errors.InputError` ``FILE:LINE: what was expected``. The checks against the
+:class:`~evomotion.errors.InputError` ``FILE:LINE: what was expected``. The file is read with
+a size limit (:data:`MAX_SPEC_BYTES`; a FIFO or a device is refused without blocking); every
+number must be finite and within its physical range (:data:`RANGES`: ``clearance_m = 1e300``
+is refused, not simulated), every name a printable one-line string. The checks against the
 model (unknown joint, range outside the model's limits, no sole geoms, motors without a
 ``[servo]``) are in :mod:`.build`.
 """
@@ -52,6 +55,7 @@ model (unknown joint, range outside the model's limits, no sole geoms, motors wi
 from __future__ import annotations
 
 import math
+import os
 import re
 import tomllib
 from dataclasses import dataclass, field
@@ -59,6 +63,7 @@ from pathlib import Path
 from typing import Any
 
 from evomotion.errors import InputError
+from evomotion.textio import decode_utf8, read_file_bytes
 
 SECTIONS = {
     "robot": {"name", "mjcf", "torso", "floor", "clearance_m", "keyframe", "remove"},
@@ -130,31 +135,75 @@ def key_lines(text: str) -> dict[tuple[str, str], int]:
     return out
 
 
-def _number(spec_path: Path, lines, section: str, key: str, value: Any, lo: float | None = None,
-            lo_open: bool = False) -> float:
+#: the largest spec file read (bytes)
+MAX_SPEC_BYTES = 1 * 2**20
+#: the most entries of a free section ([feet], [soles], [pose], [evolve], [gait]) or list
+MAX_ENTRIES = {"feet": 16, "soles": 16, "pose": 1000, "evolve": 1000, "gait": 16,
+               "remove": 1000}
+MAX_NAME = 200  # characters of a name (a body, joint, site, ...)
+MAX_ROBOT_NAME = 64
+ANGLE_LIMIT = 2 * math.pi
+#: the physical range of each number of a spec: (lowest, highest, unit, lowest excluded);
+#: [pose] values and [evolve] bounds are joint angles within +-2 pi rad (m for a slide joint
+#: or a tendon)
+RANGES: dict[tuple[str, str], tuple[float, float, str, bool]] = {
+    ("robot", "clearance_m"): (0.0, 0.1, "m", False),
+    ("fall", "height_m"): (0.0, 10.0, "m", True),
+    ("fall", "tilt_rad"): (0.0, math.pi, "rad", True),
+    ("servo", "kp"): (0.0, 1e5, "N m/rad", True),
+    ("servo", "kv"): (0.0, 1e4, "N m s/rad", False),
+    ("servo", "force"): (0.0, 1e4, "N m", True),
+    ("pose", ""): (-ANGLE_LIMIT, ANGLE_LIMIT, "rad", False),
+    ("evolve", ""): (-ANGLE_LIMIT, ANGLE_LIMIT, "rad", False),
+}
+
+
+def _short(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _number(spec_path: Path, lines, section: str, key: str, value: Any) -> float:
+    """``value`` as a float when it is a finite number within the physical range of
+    ``[section] key`` (:data:`RANGES`), else one line naming the file, line and key."""
     where = f"{spec_path}:{lines.get((section, key), lines.get((section, ''), 0))}"
-    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        raise InputError(f"{where}: [{section}] {key}: expected a finite number, got {value!r}")
-    if lo is not None and (value < lo or (lo_open and value == lo)):
-        raise InputError(f"{where}: [{section}] {key}: expected a number "
-                         f"{'>' if lo_open else '>='} {lo}, got {value!r}")
+    lo, hi, unit, lo_open = RANGES.get((section, key)) or RANGES[(section, "")]
+    if isinstance(value, bool) or not isinstance(value, int | float) or (
+            isinstance(value, float) and not math.isfinite(value)):
+        raise InputError(f"{where}: [{section}] {key}: expected a finite number ({unit}), got "
+                         f"{_short(value)}")
+    if value < lo or value > hi or (lo_open and value == lo):
+        shown = f"{value:.6g}" if isinstance(value, float) or abs(value) < 10**12 else \
+            f"an integer of {len(str(abs(value)))} digits"
+        raise InputError(f"{where}: [{section}] {key}: expected a number in "
+                         f"{'(' if lo_open else '['}{lo:g}, {hi:g}] {unit}, got {shown}")
     return float(value)
+
+
+def _check_name(where: str, label: str, value: Any, limit: int = MAX_NAME) -> None:
+    """A name of the spec: a non-empty string of printable characters (no line breaks or
+    control characters, which would forge lines in logs and messages), at most ``limit``."""
+    if not isinstance(value, str) or not value:
+        raise InputError(f"{where}: {label}: expected a non-empty string, got {_short(value)}")
+    if len(value) > limit or not value.isprintable():
+        raise InputError(f"{where}: {label}: expected at most {limit} printable characters "
+                         f"(no line breaks or control characters), got {_short(value)}")
 
 
 def read_spec(path: str | Path) -> RobotSpec:
     """Parse and check the robot spec at ``path`` (structure and values; the model is checked
     when it is built)."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise InputError(f"{path}: no such robot spec") from None
-    except (OSError, UnicodeDecodeError) as e:
-        raise InputError(f"{path}: cannot read the robot spec ({e})") from None
+    if not os.path.lexists(path):
+        raise InputError(f"{path}: no such robot spec")
+    text = decode_utf8(read_file_bytes(path, "robot spec", MAX_SPEC_BYTES), path)
     try:
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
-        raise InputError(f"{path}: not valid TOML ({e})") from None
+        raise InputError(f"{path}: not valid TOML ({_one_line(e)})") from None
+    except (RecursionError, ValueError, MemoryError) as e:  # nested too deep, huge integer
+        raise InputError(f"{path}: not valid TOML ({type(e).__name__}: "
+                         f"{_one_line(e)[:80]})") from None
     lines = key_lines(text)
 
     def where(section: str, key: str = "") -> str:
@@ -162,36 +211,40 @@ def read_spec(path: str | Path) -> RobotSpec:
 
     for section, value in raw.items():
         if section not in SECTIONS:
-            raise InputError(f"{where(section)}: unknown section [{section}]; valid: "
-                             f"{', '.join(SECTIONS)}")
+            raise InputError(f"{where(section)}: unknown section [{_short(section)[1:-1]}]; "
+                             f"valid: {', '.join(SECTIONS)}")
         if not isinstance(value, dict):
             raise InputError(f"{where(section)}: [{section}] must be a table")
         allowed = SECTIONS[section]
+        limit = MAX_ENTRIES.get(section)
+        if limit is not None and len(value) > limit:
+            raise InputError(f"{where(section)}: [{section}]: expected at most {limit} "
+                             f"entries, got {len(value)}")
         for key in value:
             if allowed is not None and key not in allowed:
-                raise InputError(f"{where(section, key)}: [{section}] unknown key {key!r}; "
-                                 f"valid: {', '.join(sorted(allowed))}")
+                raise InputError(f"{where(section, key)}: [{section}] unknown key "
+                                 f"{_short(key)}; valid: {', '.join(sorted(allowed))}")
+            _check_name(where(section, key), f"[{section}] key", key)
     robot = raw.get("robot")
     if robot is None:
         raise InputError(f"{path}: missing section [robot] (name, mjcf, torso)")
     for key in ("name", "mjcf", "torso"):
-        if not isinstance(robot.get(key), str) or not robot.get(key):
-            raise InputError(f"{where('robot', key) if key in robot else where('robot')}: "
-                             f"[robot] {key}: expected a non-empty string")
+        if key not in robot:
+            raise InputError(f"{where('robot')}: [robot] {key}: expected a non-empty string")
+        _check_name(where("robot", key), f"[robot] {key}", robot[key],
+                    MAX_ROBOT_NAME if key == "name" else MAX_NAME)
     feet = raw.get("feet", {})
     if not feet:
         raise InputError(f"{where('feet') if 'feet' in raw else path}: [feet]: expected the "
                          "foot bodies, e.g. left = \"l_foot\" and right = \"r_foot\"")
     for key, body in feet.items():
-        if not isinstance(body, str) or not body:
-            raise InputError(f"{where('feet', key)}: [feet] {key}: expected a body name")
+        _check_name(where("feet", key), f"[feet] {key}", body)
     soles = raw.get("soles", {})
     for key, site in soles.items():
         if key not in feet:
             raise InputError(f"{where('soles', key)}: [soles] {key}: not a foot of [feet] "
                              f"({', '.join(feet)})")
-        if not isinstance(site, str) or not site:
-            raise InputError(f"{where('soles', key)}: [soles] {key}: expected a site name")
+        _check_name(where("soles", key), f"[soles] {key}", site)
     if soles and set(soles) != set(feet):
         missing = sorted(set(feet) - set(soles))[0]
         raise InputError(f"{where('soles')}: [soles]: expected a site for every foot, "
@@ -200,23 +253,19 @@ def read_spec(path: str | Path) -> RobotSpec:
     if "height_m" not in fall:
         raise InputError(f"{where('fall') if 'fall' in raw else path}: [fall] height_m: "
                          "expected the torso height (m) below which the robot has fallen")
-    height = _number(path, lines, "fall", "height_m", fall["height_m"], 0.0, lo_open=True)
-    tilt = _number(path, lines, "fall", "tilt_rad", fall.get("tilt_rad", math.pi / 4), 0.0,
-                   lo_open=True)
-    if tilt > math.pi:
-        raise InputError(f"{where('fall', 'tilt_rad')}: [fall] tilt_rad: expected at most pi "
-                         f"(3.1416), got {tilt}")
+    height = _number(path, lines, "fall", "height_m", fall["height_m"])
+    tilt = _number(path, lines, "fall", "tilt_rad", fall.get("tilt_rad", math.pi / 4))
     servo = raw.get("servo")
     if servo is not None:
         if "kp" not in servo:
             raise InputError(f"{where('servo')}: [servo] kp: expected the servos' stiffness "
                              "(N m/rad)")
         servo = dict(servo)
-        servo["kp"] = _number(path, lines, "servo", "kp", servo["kp"], 0.0, lo_open=True)
-        servo["kv"] = _number(path, lines, "servo", "kv", servo.get("kv", 0.0), 0.0)
+        servo["kp"] = _number(path, lines, "servo", "kp", servo["kp"])
+        servo["kv"] = _number(path, lines, "servo", "kv", servo.get("kv", 0.0))
         force = servo.get("force", "gear")
         if force != "gear":
-            force = _number(path, lines, "servo", "force", force, 0.0, lo_open=True)
+            force = _number(path, lines, "servo", "force", force)
         servo["force"] = force
     pose = {k: _number(path, lines, "pose", k, v) for k, v in raw.get("pose", {}).items()}
     evolve = {}
@@ -228,21 +277,26 @@ def read_spec(path: str | Path) -> RobotSpec:
             raise InputError(f"{where('evolve', key)}: [evolve] {key}: expected lo < hi, got "
                              f"{value}")
         evolve[key] = (lo, hi)
-    clearance = _number(path, lines, "robot", "clearance_m", robot.get("clearance_m", 0.0005),
-                        0.0)
+    clearance = _number(path, lines, "robot", "clearance_m", robot.get("clearance_m", 0.0005))
     floor = robot.get("floor", "floor")
     keyframe = robot.get("keyframe")
     for key, value in (("floor", floor), ("keyframe", keyframe)):
-        if value is not None and not isinstance(value, str):
-            raise InputError(f"{where('robot', key)}: [robot] {key}: expected a name")
+        if value is not None:
+            _check_name(where("robot", key), f"[robot] {key}", value)
     remove = robot.get("remove", [])
-    if not (isinstance(remove, list) and all(isinstance(b, str) for b in remove)):
-        raise InputError(f"{where('robot', 'remove')}: [robot] remove: expected a list of body "
-                         "names")
+    if not isinstance(remove, list) or len(remove) > MAX_ENTRIES["remove"]:
+        raise InputError(f"{where('robot', 'remove')}: [robot] remove: expected a list of at "
+                         f"most {MAX_ENTRIES['remove']} body names")
+    for body in remove:
+        _check_name(where("robot", "remove"), "[robot] remove", body)
     kind, roles = _gait(raw.get("gait"), where)
     return RobotSpec(path, robot["name"], robot["mjcf"], robot["torso"], floor, clearance,
                      keyframe, dict(feet), dict(soles), height, tilt, servo, pose, evolve,
                      tuple(remove), kind, roles, lines)
+
+
+def _one_line(e: BaseException) -> str:
+    return " ".join(str(e).split())
 
 
 def _gait(gait: dict | None, where) -> tuple[str | None, dict[str, tuple[str, ...]]]:
@@ -250,9 +304,9 @@ def _gait(gait: dict | None, where) -> tuple[str | None, dict[str, tuple[str, ..
     if gait is None:
         return None, {}
     kind = gait.get("kind")
-    if kind not in GAIT_ROLES:
+    if not isinstance(kind, str) or kind not in GAIT_ROLES:
         raise InputError(f"{where('gait', 'kind')}: [gait] kind: expected one of "
-                         f"{', '.join(GAIT_ROLES)}, got {kind!r}")
+                         f"{', '.join(GAIT_ROLES)}, got {_short(kind)}")
     required, optional = GAIT_ROLES[kind]
     roles = {}
     for key, value in gait.items():
@@ -265,6 +319,8 @@ def _gait(gait: dict | None, where) -> tuple[str | None, dict[str, tuple[str, ..
                 and all(isinstance(v, str) and v.lstrip("-") for v in value)):
             raise InputError(f"{where('gait', key)}: [gait] {key}: expected {LEGS[kind]} "
                              "channel names (one per leg, '-' in front to flip the sign)")
+        for v in value:
+            _check_name(where("gait", key), f"[gait] {key}", v)
         roles[key] = tuple(value)
     missing = [r for r in required if r not in roles]
     if missing:

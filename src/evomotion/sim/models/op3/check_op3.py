@@ -169,6 +169,14 @@ def main() -> int:
 
 
 def _save_png(path: str, pixels: np.ndarray) -> None:
+    """``pixels`` as a PNG at ``path``, written atomically (:mod:`evomotion.outfile`)."""
+    from evomotion.outfile import atomic_output
+
+    with atomic_output(path, "image", suffix=".tmp.png") as tmp:
+        _write_png(tmp, pixels)
+
+
+def _write_png(path: Path, pixels: np.ndarray) -> None:
     try:
         from PIL import Image
 
@@ -185,9 +193,8 @@ def _save_png(path: str, pixels: np.ndarray) -> None:
                     + struct.pack(">I", zlib.crc32(tag + body) & 0xFFFFFFFF))
 
         header = struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0)
-        with open(path, "wb") as f:
-            f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header)
-                    + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+        path.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header)
+                         + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
 
 
 if __name__ == "__main__":
