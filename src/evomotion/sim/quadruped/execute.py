@@ -7,7 +7,8 @@ torso height and tilt, torso-floor contact, the support margin of :mod:`.support
 pressure of the feet's normal forces against the hull of the feet in contact; a foot counts
 as in contact above ``CONTACT_FRACTION`` of the robot's weight), and the final torso pose
 against the plan's last body pose. Units: m, rad, s, N. Non-finite input or an unstable
-simulation is reported (``diverged``), never raised.
+simulation is reported (``diverged``), never raised; an execution longer than
+``MAX_SECONDS`` (computed from the plan before anything is built) is a ValueError.
 """
 
 from __future__ import annotations
@@ -22,11 +23,19 @@ from mujoco import rollout as mj_rollout
 
 from evomotion.sim.quadruped.model import FOOT_SENSOR_DIM, QuadrupedSpec, build_model
 from evomotion.sim.quadruped.support import support_margins
-from evomotion.sim.quadruped.trajectory import build_timeline, initial_qpos, plan_arrays, wrap
+from evomotion.sim.quadruped.trajectory import (
+    build_timeline,
+    initial_qpos,
+    plan_arrays,
+    plan_seconds,
+    wrap,
+)
 
 BODY_UP_FRACTION = 0.75  # body_up needs the torso centre above this part of body_height_m
 CONTACT_FRACTION = 0.01  # a foot carrying less than 1 % of the weight is not in contact
 CHUNK_STEPS = 20_000
+#: the longest execution simulated [s]: 600,000 steps of 2 ms, ~0.4 GB of recorded states
+MAX_SECONDS = 1200.0
 # defaults of execute_plan (see the package docstring for why)
 LEG_SECONDS = 0.6
 METRES_PER_SECOND = 0.05
@@ -166,6 +175,13 @@ def simulate_plan(states: list[dict], spec: QuadrupedSpec = QuadrupedSpec(), *,
     body, feet = plan_arrays(states)
     if not (np.isfinite(body).all() and np.isfinite(feet).all()):
         return _failed("non-finite plan state", wall=time.perf_counter() - t0), None
+    secs = plan_seconds(spec, states, leg_seconds=leg_seconds,
+                        metres_per_second=metres_per_second,
+                        radians_per_second=radians_per_second, settle_seconds=settle_seconds,
+                        final_seconds=final_seconds)
+    if secs > MAX_SECONDS:
+        raise ValueError(f"the plan's execution would last {secs:.4g} simulated seconds "
+                         f"(at most {MAX_SECONDS:g})")
     tl = build_timeline(spec, states, leg_seconds=leg_seconds,
                         metres_per_second=metres_per_second,
                         radians_per_second=radians_per_second, lift_m=lift_m,

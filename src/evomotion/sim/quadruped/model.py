@@ -18,7 +18,7 @@ torso or each other); the torso box collides with the floor, and a contact senso
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import mujoco
 import numpy as np
@@ -31,6 +31,7 @@ NOMINAL_ANGLES = (math.pi, math.pi, 0.0, 0.0)  # [rad] sector centres against bo
 FOOT_SENSOR_DIM = 7  # contact sensor: found, force[3] (floor on foot, world), pos[3]
 REACH_SLACK = 0.1  # keep the hip-foot distance within 10 % of the links' reach limits
 YAW_LIMIT_SLACK = 0.35  # [rad] hip yaw range beyond the sector's half width
+MAX_BODY_M = 5.0  # [m] the longest torso side (the legs reach 0.3 m)
 
 
 @dataclass(frozen=True)
@@ -96,8 +97,17 @@ class QuadrupedSpec:
         return abs(self.thigh_m - self.shank_m) + REACH_SLACK * span, (1 - REACH_SLACK) * span
 
     def check(self) -> None:
-        """ValueError unless every sector position is reachable for feet between the floor
-        and ``max_lift_m`` above it, and the body clears the floor."""
+        """ValueError unless every field is a finite number, the torso's sides are at most
+        ``MAX_BODY_M``, every sector position is reachable for feet between the floor and
+        ``max_lift_m`` above it, and the body clears the floor."""
+        bad = [f.name for f in fields(self) if isinstance(getattr(self, f.name), bool) or
+               not isinstance(getattr(self, f.name), int | float) or
+               not math.isfinite(getattr(self, f.name))]
+        if bad:
+            raise ValueError(f"{bad[0]}: expected a finite number, got {getattr(self, bad[0])!r}")
+        if max(self.a, self.b) * self.unit_m > MAX_BODY_M:
+            raise ValueError(f"the torso ({self.a:.6g} x {self.b:.6g} units of {self.unit_m:g} "
+                             f"m) is larger than {MAX_BODY_M:g} m a side")
         if not (0 < self.l_min < self.l_max and 0 < self.sector_half_width < math.pi / 2):
             raise ValueError("need 0 < l_min < l_max and 0 < sector_half_width < pi/2")
         if min(self.a, self.b, self.unit_m, self.timestep, self.torso_mass_kg) <= 0:

@@ -154,6 +154,27 @@ def build_timeline(spec: QuadrupedSpec, states: list[dict], *, leg_seconds: floa
                     np.concatenate(swing), segs)
 
 
+def plan_seconds(spec: QuadrupedSpec, states: list[dict], *, leg_seconds: float,
+                 metres_per_second: float, radians_per_second: float, settle_seconds: float,
+                 final_seconds: float) -> float:
+    """Simulated seconds :func:`build_timeline` would take for ``states`` (computed from the
+    plan's numbers alone, before anything of that length is allocated); inf if a state is
+    not finite."""
+    body, feet = plan_arrays(states)
+    if not (np.isfinite(body).all() and np.isfinite(feet).all()):
+        return math.inf
+    dt = spec.timestep
+    legs = int(np.count_nonzero(np.abs(np.diff(feet, axis=0)).max(axis=-1) > POSE_TOL))
+    d = np.diff(body, axis=0)
+    turn = np.abs(wrap(d[:, 2]))
+    dist = np.hypot(d[:, 0], d[:, 1]) * spec.unit_m
+    moved = np.maximum(np.abs(d[:, :2]).max(axis=1), turn) > POSE_TOL
+    secs = np.maximum(np.maximum(dist / metres_per_second, turn / radians_per_second),
+                      MIN_BODY_SECONDS)
+    steps = legs * _steps(leg_seconds, dt) + float(np.sum(np.ceil(secs[moved] / dt)))
+    return (steps + _steps(settle_seconds, dt) + _steps(final_seconds, dt)) * dt
+
+
 def initial_qpos(spec: QuadrupedSpec, states: list[dict], nq: int) -> np.ndarray:
     """``qpos`` of the first state: torso at the planned pose and ``body_height_m``, joints
     from IK (feet on the floor)."""

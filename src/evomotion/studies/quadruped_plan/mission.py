@@ -21,8 +21,12 @@ deviates while it walks (all draws from the run's generator, so a seed fixes eve
 
 A planned rule that is no longer applicable from the real state (a foot that may not be
 lifted, a move into an obstacle) ends the execution early; anything that changes the world
-model (a revealed obstacle, the goal moving) does too. The mission state is plain data
-(:class:`MissionState`), replaced step by step; the run loop checkpoints it as JSON.
+model (a revealed obstacle, the goal moving) does too. A walk that keeps moving without
+getting closer to the goal (:meth:`Mission.progress`: ``progress_transitions`` transitions
+without getting ``PROGRESS_STEP`` closer along the route) replans with ``escalation`` times
+the expansions, and fails with the reason when that does not help either. The mission state
+is plain data (:class:`MissionState`), replaced step by step; the run loop checkpoints it as
+JSON.
 """
 
 from __future__ import annotations
@@ -44,10 +48,11 @@ from evomotion.studies.quadruped_plan.model import QuadrupedModel
 from evomotion.studies.quadruped_plan.recovery import STEP_BACK, step_back
 from evomotion.studies.quadruped_plan.route import Route
 from evomotion.studies.quadruped_plan.rules import WalkProblem, is_leg_rule
-from evomotion.studies.quadruped_plan.terrain import Terrain
+from evomotion.studies.quadruped_plan.terrain import Terrain, check_world_task
 from evomotion.studies.quadruped_plan.world import Polygon, World
 
 STUCK_REPLANS = 8  # replans in a row without a planned transition end the mission
+PROGRESS_STEP = 0.5  # [units] progress: this much closer to the goal along the route
 PLANNERS = ("anytime", "best-first")
 
 
@@ -69,6 +74,8 @@ class ReplanSettings:
     waypoint_tolerance: float = 1.0  # [units] goal tolerance of an intermediate sub-goal
     max_transitions: int = 2_000
     max_replans: int = 400
+    progress_transitions: int = 100  # no progress over this many transitions: recover/fail
+    escalation: int = 10  # expansion budget factor of the replans after a stall
 
 
 @dataclass(frozen=True)
@@ -89,6 +96,9 @@ class MissionState:
     route_length: float = 0.0
     done: str = ""  # "reached" or "failed: ..."
     time_bound: int = 0  # replans cut by replan_ms (then not reproducible)
+    progress_best: float = math.inf  # least route distance to the goal since the world changed
+    stalled: int = 0  # transitions since it last fell by PROGRESS_STEP
+    escalated: bool = False  # replanning with ``escalation`` times the expansions
 
 
 @dataclass
@@ -152,21 +162,20 @@ class Mission:
         x, y, phi = self.world.start
         s0 = self.model.nominal_state(x, y, phi)
         base = MissionState(real=tuple(s0[:11]), goal=self.world.goal)
+        check_world_task(self.world, self.model, self.body_clearance, self.foot_clearance)
         why = self.terrain(base, truth=True).stance_problem(s0)
         if why is not None:
             raise FileFormatError(self.world.source, self.world.start_line,
                                   f"start: the robot cannot stand there in its nominal stance "
                                   f"({why})")
-        if self.terrain(base, truth=True).body_distance(*self.world.goal) < 0:
-            raise FileFormatError(self.world.source, self.world.goal_line,
-                                  "goal: expected a point outside every obstacle")
         route = self.route(base)
         pts = route.path(x, y)
         length = sum(math.hypot(b[0] - a[0], b[1] - a[1]) for a, b in zip(pts, pts[1:])) \
             if pts else 0.0
         first = {"values": list(s0[:11]), "rule": 0, "event": "start",
                  "target": list(self.world.goal)}
-        return replace(base, path=(first,), route_length=length)
+        return replace(base, path=(first,), route_length=length,
+                       progress_best=route.to_go(x, y))
 
     # -- one replan and its execution ---------------------------------------------------------
     def is_done(self, real: tuple, goal: tuple[float, float]) -> bool:
@@ -184,13 +193,15 @@ class Mission:
         """Plan from the real state, execute up to ``horizon`` transitions."""
         cfg = self.settings
         t0 = time.perf_counter()
+        before = state
         target, tol = self.target(state)
         known = self.terrain(state)
         problem = self.problem(state.real, target, tol, known)
         h = plan_length_heuristic(self.model, target, tol, self.sense, self.heuristic_gain,
                                   self.shifts)
         first = seed_evaluation(3, SEED_CONSTANTS[(3, self.rule_set)], target, self.sense)
-        plan = ara_star(problem, h, cfg.replan_expansions, cfg.replan_ms / 1000.0, first=first,
+        budget = cfg.replan_expansions * (cfg.escalation if state.escalated else 1)
+        plan = ara_star(problem, h, budget, cfg.replan_ms / 1000.0, first=first,
                         weights=() if self.planner == "best-first" else WEIGHTS)
         ms = 1000.0 * (time.perf_counter() - t0)
         state = replace(state, replans=state.replans + 1, plan_ms=(*state.plan_ms, ms),
@@ -203,6 +214,8 @@ class Mission:
         rules = [] if not plan.complete and plan.stop == OPEN_EMPTY else \
             plan.rules[1:1 + cfg.horizon]
         for rule in rules:
+            if len(state.path) - 1 >= cfg.max_transitions:  # mission.json stays bounded
+                break
             state, ok, changed = self.execute(state, rule, target, tol, rng)
             if not ok:
                 break
@@ -213,6 +226,8 @@ class Mission:
             state = self.recover(state, target, tol, rng)
         state = replace(state, idle=0 if executed else state.idle + 1)
         if not state.done:
+            state = self.progress(before, state)
+        if not state.done:
             if len(state.path) - 1 >= cfg.max_transitions:
                 state = replace(state, done=f"failed: {cfg.max_transitions} transitions")
             elif state.replans >= cfg.max_replans:
@@ -221,6 +236,47 @@ class Mission:
                 state = replace(state, done=f"failed: stuck ({STUCK_REPLANS} replans "
                                             "without an applicable planned transition)")
         return state
+
+    # -- the progress test ----------------------------------------------------------------
+    def progress(self, before: MissionState, state: MissionState) -> MissionState:
+        """Count the transitions since the robot last got ``PROGRESS_STEP`` closer to the
+        goal along the route (:meth:`.route.Route.to_go`; the count restarts when the world
+        model changes). After ``progress_transitions`` without progress the walker replans
+        with ``escalation`` times the expansions until it progresses again; a second stall
+        ends the walk with the reason (a livelock: a leg flipping between two rules, a step
+        back and a step forward, round and round)."""
+        cfg = self.settings
+        if cfg.progress_transitions <= 0:
+            return state
+        now = self.route(state).to_go(state.real[0], state.real[1])
+        if _world_key(before) != _world_key(state) or not math.isfinite(state.progress_best):
+            return replace(state, progress_best=now, stalled=0, escalated=False)
+        if now <= state.progress_best - PROGRESS_STEP:
+            return replace(state, progress_best=now, stalled=0, escalated=False)
+        moved = sum(1 for p in state.path[len(before.path):] if p["rule"] > 0)
+        stalled = state.stalled + moved
+        if stalled < cfg.progress_transitions:
+            return replace(state, stalled=stalled)
+        if not state.escalated and cfg.escalation > 1:
+            return replace(state, stalled=0, escalated=True)
+        return replace(state, stalled=stalled, done=self._no_progress(state))
+
+    def _no_progress(self, state: MissionState) -> str:
+        """The outcome of a walk that stopped progressing, with what it was doing."""
+        cfg = self.settings
+        recent = [p["rule"] for p in state.path[-2 * cfg.progress_transitions:]
+                  if p["rule"] > 0][-cfg.progress_transitions:]
+        counts: dict[int, int] = {}
+        for r in recent:
+            counts[r] = counts.get(r, 0) + 1
+        top = sorted(counts.items(), key=lambda kv: (-kv[1], kv[0]))[:3]
+        also = f", also with {cfg.replan_expansions * cfg.escalation:,} expansions per " \
+            "replan" if cfg.escalation > 1 else ""
+        far = math.hypot(state.real[0] - state.goal[0], state.real[1] - state.goal[1])
+        return (f"failed: no progress ({cfg.progress_transitions} transitions without getting "
+                f"{PROGRESS_STEP:g} units closer to the goal along the route{also}; "
+                f"{far:.1f} units from the goal; most used rules: "
+                + ", ".join(f"{r} x{n}" for r, n in top) + ")")
 
     def step_back_state(self, state: MissionState, target: tuple[float, float], tol: float
                         ) -> tuple | None:
@@ -307,6 +363,12 @@ class Mission:
         out = list(real)
         out[j], out[j + 1] = fx, fy
         return tuple(out)
+
+
+def _world_key(state: MissionState) -> tuple:
+    """What the route depends on: obstacles in view, posts that appeared, the goal."""
+    return state.revealed, len(state.spawned), state.goal
+
 
 def run_mission(mission: Mission, rng: np.random.Generator) -> MissionState:
     """A whole mission (the run loop steps :meth:`Mission.step` instead)."""

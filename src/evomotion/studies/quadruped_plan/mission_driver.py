@@ -27,8 +27,10 @@ from evomotion.studies.quadruped_plan.mission import (
     MissionState,
     ReplanSettings,
 )
+from evomotion.studies.quadruped_plan.plan import MAX_STATES
 
 EXTRA_COLUMNS = ("transitions", "replans", "plan_ms", "events")
+MAX_TRANSITIONS = MAX_STATES - 4  # the last rule adds a landing error and a slip
 
 
 @dataclass(frozen=True)
@@ -44,6 +46,8 @@ class RecedingConfig:
     waypoint_tolerance: float = 1.0
     max_transitions: int = 2_000
     max_replans: int = 400
+    progress_transitions: int = 100
+    escalation: int = 10
     foot_noise: float = 0.05
     slip_probability: float = 0.03
     slip_max: float = 0.3
@@ -55,9 +59,16 @@ class RecedingConfig:
         if self.planner not in PLANNERS:
             raise InputError(f"algorithm.planner: expected one of {', '.join(PLANNERS)}, "
                              f"got {self.planner!r}")
-        for key in ("horizon", "replan_expansions", "max_transitions", "max_replans"):
+        for key in ("horizon", "replan_expansions", "max_replans"):
             check_number(f"algorithm.{key}", getattr(self, key), lo=1, hi=10_000_000,
                          integer=True)
+        # a walk stops at max_transitions states (+ the last rule's landing error and slip):
+        # mission.json stays within what plan.json readers accept
+        check_number("algorithm.max_transitions", self.max_transitions, lo=1,
+                     hi=MAX_TRANSITIONS, integer=True)
+        check_number("algorithm.progress_transitions", self.progress_transitions, lo=0,
+                     hi=1_000_000, integer=True)
+        check_number("algorithm.escalation", self.escalation, lo=1, hi=100, integer=True)
         check_number("algorithm.replan_ms", self.replan_ms, lo=1e-3, hi=1e7)
         for key in ("lookahead", "waypoint_tolerance"):
             check_number(f"algorithm.{key}", getattr(self, key), lo=1e-3, hi=1e4)
@@ -76,6 +87,7 @@ class RecedingConfig:
 def _to_json(state: MissionState) -> dict[str, Any]:
     d = asdict(state)
     d["bounds"] = [None if math.isinf(b) else b for b in state.bounds]
+    d["progress_best"] = state.progress_best if math.isfinite(state.progress_best) else None
     return d
 
 
@@ -88,7 +100,10 @@ def _from_json(meta: dict[str, Any]) -> MissionState:
         bounds=tuple(math.inf if b is None else b for b in meta["bounds"]),
         goal_moved_at=int(meta["goal_moved_at"]), idle=int(meta["idle"]),
         route_length=float(meta["route_length"]), done=meta["done"],
-        time_bound=int(meta["time_bound"]))
+        time_bound=int(meta["time_bound"]),
+        progress_best=math.inf if meta.get("progress_best") is None
+        else float(meta["progress_best"]), stalled=int(meta.get("stalled", 0)),
+        escalated=bool(meta.get("escalated", False)))
 
 
 class RecedingDriver(Driver):

@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from evomotion.errors import FileFormatError
+from evomotion.outfile import atomic_write_text
 from evomotion.studies.quadruped_plan.model import (
     QuadrupedModel,
     lift_margin,
@@ -31,7 +32,7 @@ from evomotion.studies.quadruped_plan.model import (
     world_feet,
 )
 from evomotion.studies.quadruped_plan.rules import ExclusionZone, is_leg_rule, rule_leg
-from evomotion.textio import decode_utf8, read_file_bytes
+from evomotion.textio import decode_utf8, json_depth, loads_json, read_file_bytes
 
 FORMAT = "evomotion.quadruped-plan/1"
 LEG_NAMES = ("front-left", "rear-left", "rear-right", "front-right")
@@ -96,16 +97,19 @@ def world_section(world: Any, body_clearance: float, foot_clearance: float,
             "polygons": polys}
 
 
-def write_plan(path: str | Path, doc: dict[str, Any]) -> None:
-    path = Path(path)
-    tmp = path.with_suffix(path.suffix + ".tmp")
-    tmp.write_text(json.dumps(doc, indent=1) + "\n")
-    tmp.replace(path)
+def write_plan(path: str | Path, doc: dict[str, Any], what: str = "plan") -> None:
+    """``doc`` as indented JSON, written atomically (:mod:`evomotion.outfile`)."""
+    atomic_write_text(path, json.dumps(doc, indent=1, allow_nan=False) + "\n", what)
 
 
-MAX_PLAN_BYTES = 64 * 1024 * 1024
+MAX_PLAN_BYTES = 16 * 1024 * 1024  # a 10,000-state walk is ~5 MB
 MAX_ABS = 1e6  # [units]: the largest coordinate or model length read
-MAX_STATES = 1_000_000
+MAX_STATES = 10_000  # 3,333 transitions with a landing error and a slip each; ~15 s to check
+MAX_POLYGONS = 1_000  # a world's 500 and the posts that appeared
+MAX_POLYGON_VERTICES = 1_000
+MAX_TOTAL_VERTICES = 25_000
+MAX_DEPTH = 32  # JSON nesting (a plan has 5 levels)
+MAX_INT = 2 ** 53  # integers anywhere in a plan (larger ones are not exact as floats)
 
 
 def _got(x: Any) -> str:
@@ -195,6 +199,8 @@ def _check_document(path: Path, doc: Any) -> None:
         c.obj(doc["search"], "search")
     if doc.get("world") is not None:
         _check_world(c, c.obj(doc["world"], "world"))
+    if "goal_history" in doc:
+        _check_history(c, doc)
     for key in ("executed", "shifts"):
         if key in doc and not isinstance(doc[key], bool):
             raise c.fail(key, "true or false", doc[key])
@@ -220,6 +226,7 @@ def _check_document(path: Path, doc: Any) -> None:
             raise c.fail(f"{where}.event", "a short string", st["event"])
         if "target" in st:
             c.point(st["target"], f"{where}.target", 2, "[x, y]")
+    _check_numbers(c, doc, "")
 
 
 def _check_world(c: _Checker, w: dict) -> None:
@@ -228,21 +235,77 @@ def _check_world(c: _Checker, w: dict) -> None:
         if key in w:
             c.number(w[key], f"world.{key}", 0.0)
     polys = c.get(w, "polygons", "world")
-    if not (isinstance(polys, list) and len(polys) <= 10_000):
-        raise c.fail("world.polygons", "a list of at most 10,000 polygons", polys)
+    if not (isinstance(polys, list) and len(polys) <= MAX_POLYGONS):
+        raise c.fail("world.polygons", f"a list of at most {MAX_POLYGONS:,} polygons", polys)
+    total = 0
     for k, p in enumerate(polys):
         where = f"world.polygons[{k}]"
         c.obj(p, where)
         if c.get(p, "kind", where) not in ("nostep", "obstacle"):
             raise c.fail(f"{where}.kind", "'nostep' or 'obstacle'", p["kind"])
         pts = c.get(p, "points", where)
-        if not (isinstance(pts, list) and 3 <= len(pts) <= 10_000):
-            raise c.fail(f"{where}.points", "a list of 3 or more [x, y]", pts)
+        if not (isinstance(pts, list) and 3 <= len(pts) <= MAX_POLYGON_VERTICES):
+            raise c.fail(f"{where}.points", f"a list of 3 to {MAX_POLYGON_VERTICES:,} [x, y]",
+                         pts)
+        total += len(pts)
+        if total > MAX_TOTAL_VERTICES:
+            raise c.fail(f"{where}.points", f"at most {MAX_TOTAL_VERTICES:,} vertices in all "
+                         "the world's polygons")
         for j, q in enumerate(pts):
             c.point(q, f"{where}.points[{j}]", 2, "[x, y]")
         frm = p.get("from", 0)
-        if isinstance(frm, bool) or not isinstance(frm, int) or frm < 0:
+        if isinstance(frm, bool) or not isinstance(frm, int) or not 0 <= frm <= MAX_STATES:
             raise c.fail(f"{where}.from", "a state index >= 0", frm)
+        if "hidden" in p and not isinstance(p["hidden"], bool):
+            raise c.fail(f"{where}.hidden", "true or false", p["hidden"])
+    if "name" in w and not (isinstance(w["name"], str) and len(w["name"]) <= 200):
+        raise c.fail("world.name", "a short string", w["name"])
+
+
+def _check_history(c: _Checker, doc: dict) -> None:
+    """``goal_history`` of an executed walk: ``[{"goal": [x, y], "from": index}, ...]``."""
+    hist = doc["goal_history"]
+    if not (isinstance(hist, list) and 1 <= len(hist) <= 100):
+        raise c.fail("goal_history", "a list of 1 to 100 goals", hist)
+    for k, h in enumerate(hist):
+        c.obj(h, f"goal_history[{k}]")
+        c.point(c.get(h, "goal", f"goal_history[{k}]"), f"goal_history[{k}].goal", 2, "[x, y]")
+        frm = c.get(h, "from", f"goal_history[{k}]")
+        if isinstance(frm, bool) or not isinstance(frm, int) or not 0 <= frm <= MAX_STATES:
+            raise c.fail(f"goal_history[{k}].from", "a state index >= 0", frm)
+
+
+def _check_numbers(c: _Checker, x: Any, where: str) -> None:
+    """Every number anywhere in the document finite and every integer below 2**53 (the
+    fields above are checked with their ranges; this covers ``search`` and the rest)."""
+    if isinstance(x, dict):
+        for k, v in x.items():
+            _check_numbers(c, v, f"{where}.{k}" if where else str(k)[:40])
+    elif isinstance(x, list):
+        for k, v in enumerate(x):
+            _check_numbers(c, v, f"{where}[{k}]")
+    elif isinstance(x, float) and not math.isfinite(x):
+        raise c.fail(where, "a finite number", x)
+    elif isinstance(x, int) and not isinstance(x, bool) and abs(x) > MAX_INT:
+        raise c.fail(where, "an integer of magnitude <= 2**53", x)
+
+
+def _loads(text: str, path: Path) -> Any:
+    """The JSON document (nesting at most ``MAX_DEPTH``: no RecursionError; ``NaN`` and
+    ``Infinity`` are parsed and then refused with the key that holds them)."""
+    if json_depth(text, MAX_DEPTH) > MAX_DEPTH:
+        raise FileFormatError(path, None, f"expected JSON nested less deeply (at most "
+                              f"{MAX_DEPTH} levels)")
+    try:
+        return loads_json(text, path, MAX_DEPTH, finite=False)
+    except FileFormatError as e:
+        if e.expected.startswith("invalid JSON (ValueError"):  # > 4,300 digits
+            raise FileFormatError(path, None, "expected JSON numbers (an integer of more "
+                                  "than 4,300 digits)") from None
+        if "invalid JSON" in e.expected:
+            raise FileFormatError(path, e.line, e.expected.replace("invalid JSON",
+                                                                   "expected JSON")) from None
+        raise
 
 
 def read_plan(path: str | Path) -> dict[str, Any]:
@@ -252,14 +315,7 @@ def read_plan(path: str | Path) -> dict[str, Any]:
     path = Path(path)
     text = decode_utf8(read_file_bytes(path, "plan.json file", MAX_PLAN_BYTES), path,
                        bom=False)
-    try:
-        doc = json.loads(text)
-    except json.JSONDecodeError as e:
-        raise FileFormatError(path, e.lineno, f"expected JSON ({e.msg})") from None
-    except RecursionError:
-        raise FileFormatError(path, None, "expected JSON nested less deeply") from None
-    except ValueError as e:  # e.g. an integer of more than 4,300 digits
-        raise FileFormatError(path, None, f"expected JSON numbers ({str(e)[:60]})") from None
+    doc = _loads(text, path)
     _check_document(path, doc)
     return doc
 

@@ -26,16 +26,18 @@ from evomotion.studies.quadruped_plan.rules import (
     ExclusionZone,
     WalkProblem,
 )
-from evomotion.studies.quadruped_plan.terrain import Terrain
+from evomotion.studies.quadruped_plan.terrain import Terrain, check_world_task
 from evomotion.studies.quadruped_plan.walk_search import walk_astar, walk_best_first
 from evomotion.studies.quadruped_plan.world import World, load_world
 
 METHODS = ("best-first", "astar", "weighted-astar")
 
 
-#: the largest magnitude of a coordinate, length or constant; ``gif_max_frames`` at most
+#: the largest magnitude of a coordinate or constant; the longest body side or leg; the most
+#: GIF frames (each ~1 MB while the GIF is made)
 MAX_COORD = 1e6
-MAX_GIF_FRAMES = 10_000
+MAX_BODY = 100.0  # [units]
+MAX_GIF_FRAMES = 400
 
 
 @dataclass(frozen=True)
@@ -98,6 +100,10 @@ def validate(cfg: QuadrupedPlanConfig) -> None:
         check_number(f"problem.{key}", getattr(cfg, key), lo=-MAX_COORD, hi=MAX_COORD)
     for key in ("k1", "k2", "k3"):  # < 0: the seed's constant
         check_number(f"problem.{key}", getattr(cfg, key), hi=MAX_COORD)
+    for key in ("a", "b", "l_min", "l_max"):
+        check_number(f"problem.{key}", getattr(cfg, key), lo=-MAX_COORD, hi=MAX_BODY)
+    check_number("problem.pos_grid", cfg.pos_grid, lo=1e-4, hi=MAX_BODY)
+    check_number("problem.angle_grid", cfg.angle_grid, lo=1e-6, hi=math.pi)
     check_number("problem.weight", cfg.weight, lo=1.0, hi=MAX_COORD)
     check_number("problem.zone_radius", cfg.zone_radius, lo=0.0)
     check_number("problem.min_margin", cfg.min_margin, lo=0.0)
@@ -193,6 +199,7 @@ def make_problem(cfg: QuadrupedPlanConfig) -> WalkProblem:
     start = model.nominal_state(cfg.start_x, cfg.start_y, cfg.start_phi)
     terrain = None
     if world is not None:
+        check_world_task(world, model, cfg.body_clearance, cfg.foot_clearance)
         terrain = Terrain(world, model, None, cfg.body_clearance, cfg.foot_clearance)
         why = terrain.stance_problem(start)
         if why is not None:

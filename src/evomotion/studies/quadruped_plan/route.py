@@ -102,6 +102,15 @@ class Route:
         pts.append(self.goal)
         return pts
 
+    def to_go(self, x: float, y: float) -> float:
+        """How far (x, y) is from the goal along the route: the cost-to-go of the nearest
+        reachable cell plus the distance to it; the straight distance without a route."""
+        c = self._start_cell(x, y)
+        if c is None:
+            return math.hypot(self.goal[0] - x, self.goal[1] - y)
+        px, py = self._point(c)
+        return float(self.cost[c]) + math.hypot(px - x, py - y)
+
     def line_clear(self, x: float, y: float, px: float, py: float) -> bool:
         """Does the straight walk from (x, y) to (px, py) keep ``line_clearance``?"""
         d = math.hypot(px - x, py - y)

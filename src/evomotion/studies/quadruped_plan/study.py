@@ -18,6 +18,7 @@ from typing import Annotated, Any
 import typer
 
 from evomotion.errors import InputError
+from evomotion.outfile import atomic_write_text, check_target
 from evomotion.studies.base import Study
 from evomotion.studies.quadruped_plan.checker import PlanViolationError, check_plan
 from evomotion.studies.quadruped_plan.experiment import format_table, seed_table
@@ -187,6 +188,8 @@ def missions_cmd(
 
     if not 1 <= seeds <= 10_000:
         raise InputError(f"--seeds: expected 1 to 10000, got {seeds}")
+    if json_out is not None:
+        check_target(json_out, "figures file")
     names = [w.strip() for w in worlds.split(",") if w.strip()]
     for name in names:
         load_world(name)
@@ -204,7 +207,8 @@ def missions_cmd(
                 typer.echo(format_rows(rows[-1:]).splitlines()[-1])
     typer.echo(format_rows(rows))
     if json_out is not None:
-        json_out.write_text(json.dumps([r.figures() for r in rows], indent=1) + "\n")
+        atomic_write_text(json_out, json.dumps(_finite([r.figures() for r in rows]), indent=1,
+                                               allow_nan=False) + "\n", "figures file")
     if any(r.check_failures for r in rows):
         for r in rows:
             for line in r.check_failures:
@@ -227,9 +231,12 @@ def simulate_cmd(
 
     if not 0.1 <= speed <= 1000:
         raise InputError(f"--speed: expected 0.1 to 1000, got {speed}")
-    doc = read_plan(plan_path(plan))
+    if video is not None:
+        check_target(video, "video")  # before a minute of simulation, not after
+    path = plan_path(plan)
+    doc = read_plan(path)
     try:
-        out = simulate_document(doc, video, speed)
+        out = simulate_document(doc, video, speed, source=path)
     except RenderUnavailableError as e:
         raise InputError(f"--video: {e}") from None
     if json_out:
@@ -244,23 +251,45 @@ def simulate_cmd(
         raise typer.Exit(1)
 
 
+def _finite(x: Any) -> Any:
+    """``x`` with NaN and infinities as ``null`` (JSON has neither)."""
+    if isinstance(x, dict):
+        return {k: _finite(v) for k, v in x.items()}
+    if isinstance(x, list):
+        return [_finite(v) for v in x]
+    return None if isinstance(x, float) and not math.isfinite(x) else x
+
+
 def _mm(v: float | None) -> str:
     return "n/a" if v is None else f"{1000 * v:.1f} mm"
 
 
 @cli.command("check")
-def check_cmd(plan: Annotated[Path, typer.Argument(
-        help="plan.json / mission.json, or a run folder holding one")]) -> None:
-    """Re-verify every state and transition of a plan; exit 1 on the first violation."""
+def check_cmd(
+    plan: Annotated[Path, typer.Argument(
+        help="plan.json / mission.json, or a run folder holding one")],
+    world: Annotated[str | None, typer.Option(
+        help="The world file (or bundled name) the plan must solve; default: the run "
+             "folder's problem.world, else the plan's bundled world")] = None,
+) -> None:
+    """Re-verify every state and transition of a plan, and that it goes from the world's
+    start to the world's goal; exit 1 on the first violation."""
+    from evomotion.studies.quadruped_plan.task_check import apply_task, find_task
+
     plan = plan_path(plan)
     doc = read_plan(plan)
+    task = find_task(plan, doc, world)
     try:
+        if task is not None:
+            doc = apply_task(doc, task)
         summary = check_plan(doc)
     except PlanViolationError as e:
         typer.echo(f"{plan}: {e}")
         raise typer.Exit(1) from None
+    against = f"against the {task.source}" if task is not None else \
+        "(start and goal as written: no world and no run configuration to check them against)"
     typer.echo(f"{plan}: ok, {summary['states']} states, {summary['leg_moves']} leg moves, "
-               f"{summary['travel']:.2f} units travelled")
+               f"{summary['travel']:.2f} units travelled, {against}")
 
 
 def plan_path(path: Path) -> Path:

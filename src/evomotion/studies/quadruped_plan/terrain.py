@@ -29,12 +29,19 @@ from collections.abc import Iterable
 
 import numpy as np
 
-from evomotion.studies.quadruped_plan.geometry import signed_distance
+from evomotion.errors import FileFormatError, InputError
+from evomotion.studies.quadruped_plan.geometry import signed_distance, signed_distance_edgewise
 from evomotion.studies.quadruped_plan.model import QuadrupedModel
-from evomotion.studies.quadruped_plan.world import Polygon, World
+from evomotion.studies.quadruped_plan.world import (
+    GRID_REACH,
+    MAX_GRID_NODES,
+    Polygon,
+    World,
+    grid_nodes,
+)
 
 SPACING = 0.1  # [units] outline and pose sampling of the detailed checks
-CAP = 7.0  # [units] distances are exact up to CAP (enough for the quick tests)
+CAP = GRID_REACH  # [units] distances are exact up to CAP (enough for the quick tests)
 QUICK_STEP = 0.5  # [units] disc spacing of the quick translation test
 
 
@@ -49,8 +56,11 @@ class Terrain:
         self.obstacles = list(world.of_kind("obstacle") if known is None else known)
         x0, y0, x1, y1 = world.bounds
         self.x0, self.y0, self.inv = x0, y0, 1.0 / grid
-        self.nx = int(math.ceil((x1 - x0) / grid)) + 1
-        self.ny = int(math.ceil((y1 - y0) / grid)) + 1
+        self.nx, self.ny = grid_nodes(world.bounds, grid)
+        if not grid > 0 or self.nx * self.ny > MAX_GRID_NODES:  # before any allocation
+            raise InputError(f"{world.source or world.name}: expected a world of at most "
+                             f"{MAX_GRID_NODES:,} grid nodes of {grid:g} units, got "
+                             f"{x1 - x0:.6g} x {y1 - y0:.6g} units")
         gx = x0 + grid * np.arange(self.nx)
         gy = y0 + grid * np.arange(self.ny)
         self._nodes = np.stack(np.meshgrid(gx, gy, indexing="ij"), axis=-1)
@@ -78,7 +88,7 @@ class Terrain:
         if i0 >= i1 or j0 >= j1:
             return
         window = self._nodes[i0:i1, j0:j1]
-        sdf[i0:i1, j0:j1] = np.minimum(sdf[i0:i1, j0:j1], signed_distance(window, poly))
+        sdf[i0:i1, j0:j1] = np.minimum(sdf[i0:i1, j0:j1], signed_distance_edgewise(window, poly))
 
     def _refresh(self) -> None:
         self._body_flat = self.body_sdf.ravel()
@@ -201,6 +211,49 @@ class Terrain:
         if not self._sweep_clear(np.array([s[:3]], dtype=float)):
             return "the body is in or near an obstacle"
         return None
+
+
+def stand_problem(world: World, model: QuadrupedModel, point: tuple[float, float],
+                  tol: float = 0.0, body_clearance: float = 0.05,
+                  foot_clearance: float = 0.05) -> str | None:
+    """Why the robot cannot stand anywhere within ``tol`` of ``point`` (a start or a goal),
+    or None. Exact polygon distances, every obstacle (hidden ones too): the body rectangle
+    holds the disc of radius ``min(a, b) / 2`` about its centre, so the centre needs that
+    much room (plus ``body_clearance`` from obstacles), and every foot lies within
+    hip radius + ``l_max`` of the centre, so a point that deep in no-step zones or obstacles
+    leaves no foothold. Distances change by at most the distance moved, so no point of the
+    tolerance disc can do better than the point itself plus ``tol``: a refusal is certain."""
+    p = np.array(point, dtype=float)
+    x0, y0, x1, y1 = world.bounds
+    edge = min(p[0] - x0, x1 - p[0], p[1] - y0, y1 - p[1])
+    half = min(model.a, model.b) / 2
+    obstacles = [float(signed_distance(p, q.points)) for q in world.of_kind("obstacle", "hidden")]
+    nearest = min(obstacles, default=math.inf)
+    if edge + tol < half:
+        return f"the body ({model.a:g} x {model.b:g}) does not fit inside the bounds there"
+    if nearest + tol < half + body_clearance:
+        where = "inside an obstacle" if nearest < 0 else f"{nearest:.3g} units from an obstacle"
+        return (f"the body ({model.a:g} x {model.b:g}) cannot stand within {tol:g} of it: "
+                f"the point is {where}, the body needs {half + body_clearance:g}")
+    hips = np.array(model.hips)
+    reach = float(np.max(np.hypot(hips[:, 0], hips[:, 1]))) + model.l_max
+    feet = [float(signed_distance(p, q.points)) for q in world.of_kind("nostep")]
+    if min(feet, default=math.inf) + reach + tol < foot_clearance:
+        return f"every foothold within reach ({reach:.3g} units) is in a no-step zone"
+    return None
+
+
+def check_world_task(world: World, model: QuadrupedModel, body_clearance: float,
+                     foot_clearance: float) -> None:
+    """A start or a goal where the robot cannot stand is an error on its line of the world
+    file, before any grid is built or any search runs (a goal inside an obstacle would
+    otherwise search to the end of the budget)."""
+    for key, point, tol, line in (("start", world.start[:2], 0.0, world.start_line),
+                                  ("goal", world.goal, world.goal_tolerance, world.goal_line)):
+        why = stand_problem(world, model, point, tol, body_clearance, foot_clearance)
+        if why is not None:
+            raise FileFormatError(world.source, line, f"{key}: the robot cannot stand "
+                                  f"there ({why})")
 
 
 def _cos_sin(phis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

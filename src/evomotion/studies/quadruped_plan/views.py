@@ -21,6 +21,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.patches import Patch, Polygon  # noqa: E402
 
+from evomotion.outfile import atomic_output, save_figure  # noqa: E402
 from evomotion.studies.quadruped_plan.rules import is_leg_rule  # noqa: E402
 
 LEG_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red")
@@ -193,8 +194,10 @@ def plot_plan(doc: dict[str, Any], out_png: str | Path, every: int = 0) -> None:
                  f"{doc['rule_set']})" + (f" in {doc['world']['name']}" if doc.get("world")
                                           else ""))
     ax.legend(handles=handles, loc="upper left", fontsize=7, framealpha=0.85)
-    fig.savefig(out_png, dpi=110, bbox_inches="tight")
-    plt.close(fig)
+    try:
+        save_figure(fig, out_png, "plan picture", dpi=110, bbox_inches="tight")
+    finally:
+        plt.close(fig)
 
 
 def step_figure(doc: dict[str, Any], k: int):
@@ -240,4 +243,5 @@ def animate_plan(doc: dict[str, Any], out_gif: str | Path, max_frames: int = 150
         fig.canvas.draw()
         frames.append(np.asarray(fig.canvas.buffer_rgba())[..., :3].copy())
     plt.close(fig)
-    imageio.mimsave(out_gif, frames, duration=1.0 / fps, loop=0)
+    with atomic_output(out_gif, "plan animation", suffix=".tmp.gif") as tmp:
+        imageio.mimsave(tmp, frames, duration=1.0 / fps, loop=0)

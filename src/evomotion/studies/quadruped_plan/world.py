@@ -14,7 +14,19 @@ degrees; ``#`` starts a comment::
 
 Polygons are simple (edges do not cross), in either orientation. Every error names the file,
 the line and what was expected (:class:`evomotion.errors.FileFormatError`). Bundled worlds
-(``corridor``, ``gaps``, ``field``) are found by name (:func:`load_world`).
+(``corridor``, ``gaps``, ``field``) are found by name (:func:`load_world`); every world,
+bundled or named by a path (in a configuration, a plan's check, the missions table), is read
+by :func:`read_world`, which refuses a FIFO, a device or a folder without blocking.
+
+Physical range, checked before anything is allocated: coordinates finite and at most
+``MAX_ABS`` (10,000 units = 1 km at 0.1 m per unit) in magnitude; the bounds (given, or the
+points named plus 6 units) span at most ``MAX_GRID_NODES`` nodes of the planner's
+``PLAN_GRID`` (0.1-unit) distance grids, e.g. 140 x 140 units; at most ``MAX_POLYGONS``
+polygons of 3 to ``MAX_VERTICES`` vertices, ``MAX_TOTAL_VERTICES`` in all, and the
+polygon-distance work of building the grids (grid nodes near a polygon times its vertices,
+summed) at most ``MAX_CARVE_WORK``. The start and the goal lie outside every obstacle and
+no-step zone (whether the robot can stand there is the planner's test, see
+:func:`evomotion.studies.quadruped_plan.terrain.stand_problem`).
 """
 
 from __future__ import annotations
@@ -26,7 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from evomotion.errors import FileFormatError, InputError
-from evomotion.studies.quadruped_plan.geometry import simple_polygon_problem
+from evomotion.studies.quadruped_plan.geometry import inside, simple_polygon_problem
 from evomotion.textio import read_text_lines
 
 WORLD_DIR = Path(__file__).with_name("worlds")
@@ -34,6 +46,11 @@ MAX_WORLD_BYTES = 1 << 20
 MAX_ABS = 1e4  # [units]
 MAX_VERTICES = 1000
 MAX_POLYGONS = 500
+MAX_TOTAL_VERTICES = 20_000
+PLAN_GRID = 0.1  # [units] node spacing of the planner's distance grids (terrain.py)
+GRID_REACH = 7.0  # [units] distances are carved this far round a polygon (terrain.CAP)
+MAX_GRID_NODES = 2_000_000  # per grid: two grids of floats and their row lists < 400 MB
+MAX_CARVE_WORK = 40_000_000  # node x vertex distance evaluations to build the grids (~2 s)
 KEYWORDS = ("name", "bounds", "start", "goal", "view", "nostep", "obstacle", "hidden")
 
 
@@ -69,6 +86,25 @@ class World:
         return {"name": self.name, "bounds": list(self.bounds), "start": list(self.start),
                 "goal": list(self.goal), "goal_tolerance": self.goal_tolerance,
                 "view": self.view, "polygons": [p.to_json() for p in self.polygons]}
+
+
+def grid_nodes(bounds: tuple[float, float, float, float], grid: float = PLAN_GRID
+               ) -> tuple[int, int]:
+    """Nodes ``(nx, ny)`` of a distance grid of spacing ``grid`` over ``bounds``."""
+    x0, y0, x1, y1 = bounds
+    return int(math.ceil((x1 - x0) / grid)) + 1, int(math.ceil((y1 - y0) / grid)) + 1
+
+
+def carve_nodes(points: np.ndarray, bounds: tuple[float, float, float, float],
+                grid: float = PLAN_GRID) -> int:
+    """Grid nodes whose distance to the polygon ``points`` is computed (its bounding box
+    widened by ``GRID_REACH``, clipped to the grid)."""
+    nx, ny = grid_nodes(bounds, grid)
+    lo = np.floor((points.min(axis=0) - GRID_REACH - bounds[:2]) / grid)
+    hi = np.ceil((points.max(axis=0) + GRID_REACH - bounds[:2]) / grid) + 1
+    w = min(hi[0], nx) - max(lo[0], 0)
+    h = min(hi[1], ny) - max(lo[1], 0)
+    return int(max(w, 0) * max(h, 0))
 
 
 def bundled_worlds() -> list[str]:
@@ -110,6 +146,7 @@ def read_world(path: str | Path) -> World:
     vals: dict[str, list[float]] = {}
     name = path.stem
     polygons: list[Polygon] = []
+    vertices = 0
     for no, raw in enumerate(lines, start=1):
         toks = raw.split("#", 1)[0].split()
         if not toks:
@@ -124,6 +161,10 @@ def read_world(path: str | Path) -> World:
             if len(rest) < 6 or len(rest) % 2 or len(rest) > 2 * MAX_VERTICES:
                 raise FileFormatError(path, no, f"{key}: expected x y pairs of 3 to "
                                       f"{MAX_VERTICES} vertices, got {len(rest)} numbers")
+            vertices += len(rest) // 2
+            if vertices > MAX_TOTAL_VERTICES:
+                raise FileFormatError(path, no, f"{key}: expected at most "
+                                      f"{MAX_TOTAL_VERTICES:,} polygon vertices in all")
             pts = np.array(_numbers(path, no, key, rest, "x y pairs")).reshape(-1, 2)
             why = simple_polygon_problem(pts)
             if why:
@@ -168,9 +209,38 @@ def _assemble(path: Path, name: str, vals: dict, seen: dict, polygons: list) -> 
         pts = np.vstack([[sx, sy], g[:2], *[p.points for p in polygons]])
         (x0, y0), (x1, y1) = pts.min(axis=0) - 6.0, pts.max(axis=0) + 6.0
     bounds = (float(x0), float(y0), float(x1), float(y1))
+    _check_size(path, seen.get("bounds"), bounds, polygons)
     for key, (px, py) in (("start", (sx, sy)), ("goal", g[:2])):
         if not (x0 < px < x1 and y0 < py < y1):
             raise FileFormatError(path, seen[key], f"{key}: expected a point inside the "
                                   f"bounds {bounds}, got ({px:g}, {py:g})")
+        for p in polygons:
+            if inside(np.array([px, py]), p.points):
+                what = {"nostep": "a no-step zone", "hidden": "a hidden obstacle"}.get(
+                    p.kind, "an obstacle")
+                raise FileFormatError(path, seen[key], f"{key}: expected a point outside "
+                                      f"every obstacle and no-step zone, got ({px:g}, {py:g})"
+                                      f" inside {what} (line {p.line})")
     return World(name, bounds, (sx, sy, math.radians(sphi)), (g[0], g[1]), tol, view,
                  tuple(polygons), str(path), seen["start"], seen["goal"])
+
+
+def _check_size(path: Path, line: int | None, bounds: tuple[float, float, float, float],
+                polygons: list[Polygon]) -> None:
+    """The planner's grids for ``bounds`` and the work of carving ``polygons`` into them
+    within the documented limits (checked before any grid exists)."""
+    nx, ny = grid_nodes(bounds)
+    if nx * ny > MAX_GRID_NODES:
+        given = "bounds" if line is not None else "the bounds (from the points named)"
+        raise FileFormatError(path, line, f"{given}: expected a world of at most "
+                              f"{MAX_GRID_NODES:,} nodes of {PLAN_GRID:g} units (e.g. 140 x 140"
+                              f" units), got {bounds[2] - bounds[0]:.6g} x "
+                              f"{bounds[3] - bounds[1]:.6g} units ({nx * ny:,.0f} nodes)")
+    work = 0
+    for p in polygons:
+        work += carve_nodes(p.points, bounds) * len(p.points)
+        if work > MAX_CARVE_WORK:
+            raise FileFormatError(path, p.line, f"{p.kind}: the polygons up to here need "
+                                  f"{work:,} node-edge distances to build the planner's grids,"
+                                  f" at most {MAX_CARVE_WORK:,} (fewer vertices or smaller "
+                                  "polygons)")

@@ -37,6 +37,10 @@ class WorldGeometry:
                       for p in world["polygons"]]
         self.paths = [MplPath(np.vstack([pts, pts[:1]]), closed=True) for _, pts, _ in self.polys]
         self.half = np.array([a / 2, b / 2])
+        # bounding boxes: a polygon far from every foot is skipped (one test for all)
+        self.lo = np.array([pts.min(axis=0) for _, pts, _ in self.polys]).reshape(-1, 2)
+        self.hi = np.array([pts.max(axis=0) for _, pts, _ in self.polys]).reshape(-1, 2)
+        self.since = np.array([since for _, _, since in self.polys], dtype=float)
 
     def _rect(self, pose: np.ndarray) -> np.ndarray:
         (a2, b2), (c, s) = self.half, (math.cos(pose[2]), math.sin(pose[2]))
@@ -48,9 +52,12 @@ class WorldGeometry:
         for k, f in enumerate(feet):
             if not (x0 <= f[0] <= x1 and y0 <= f[1] <= y1):
                 raise error(f"{where}: foot {k} is outside the world's bounds")
-        for (kind, pts, since), path in zip(self.polys, self.paths, strict=True):
-            if since > index:
-                continue
+        reach = self.foot_clearance + 1e-3
+        near = np.flatnonzero((self.since <= index) &
+                              np.all(self.lo <= feet.max(axis=0) + reach, axis=1) &
+                              np.all(self.hi >= feet.min(axis=0) - reach, axis=1))
+        for i in near:
+            (kind, pts, _), path = self.polys[i], self.paths[i]
             inside = path.contains_points(feet)
             d = _point_segment(feet, pts, np.roll(pts, -1, axis=0)).min(axis=1)
             bad = inside | (d < self.foot_clearance - TOL)
