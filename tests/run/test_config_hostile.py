@@ -274,13 +274,13 @@ def test_every_inf_field_documents_its_meaning():
     ("grid-path", "algorithm.rows=7", "not a multiple of rows 7"),
     ("humanoid-step", "problem.intervals=1000000000", "problem.intervals"),
     ("humanoid-step", "problem.motion_s=nan", "problem.motion_s"),
-    ("humanoid-step", "problem.motion_s=1e9", "problem.motion_s=1000000000.0, problem.hold_s="
-                                              "2.0, problem.worlds=1, problem.batch_rollouts="
-                                              "2048: the simulated trajectories need about"),
+    ("humanoid-step", "problem.motion_s=1e9", "problem.motion_s: expected a value in (0.0, "
+                                              "60.0], got 1000000000.0"),
     ("humanoid-step", "problem.threads=100000", "problem.threads"),
     ("humanoid-step", "problem.encoding=wavelet", "problem.encoding"),
-    ("biped-kick", "problem.roll_after_s=1e12", "problem.roll_after_s=1000000000000.0: the "
-                                                "simulated trajectories need about"),
+    ("biped-kick", "problem.roll_after_s=1e12", "problem.roll_after_s: expected a value in "
+                                                "[0.0, 60.0], got 1000000000000.0"),
+    ("biped-kick", "algorithm.pop_size=100000000", "the simulated trajectories need about"),
     ("biped-kick", "problem.rolling_m=-1", "problem.rolling_m"),
     ("biped-kick", "problem.nthread=-1", "problem.nthread"),
     ("biped-kick", "problem.fall_tilt_rad=inf", "problem.fall_tilt_rad"),

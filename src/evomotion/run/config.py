@@ -345,3 +345,20 @@ def config_from_run_dir(run_dir: Path) -> tuple[str, dict[str, Any]]:
     if not isinstance(raw.get("study"), str):
         raise FileFormatError(path, None, "expected a top-level 'study' key naming the study")
     return raw["study"], raw
+
+
+def run_of_study(path: str | Path, study: str, option: str = "RUN",
+                 subfolder: str | None = None) -> Path:
+    """The run folder ``path`` if its ``config.toml`` names ``study`` (``path`` may also be
+    its ``subfolder``); another study's run, or no run, is one :class:`InputError` line."""
+    p = Path(path)
+    if subfolder and p.name == subfolder and not (p / "config.toml").exists() \
+            and (p.parent / "config.toml").exists():
+        p = p.parent
+    if not p.is_dir():
+        raise InputError(f"{option} {path}: expected a {study} run folder, found no folder")
+    name, _ = config_from_run_dir(p)
+    if name != study:
+        raise InputError(f"{option} {path}: a {name} run, expected a {study} run folder")
+    return p
+

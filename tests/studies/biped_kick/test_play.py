@@ -22,6 +22,7 @@ def test_read_kick_default_run_folder_and_errors(tmp_path):
     g, src = read_kick(None)
     assert g.shape == (len(GENES),) and src == str(DEFAULT_KICK)
     (tmp_path / "best.json").write_text(json.dumps({"study": "biped-kick", "genome": X0}))
+    (tmp_path / "config.toml").write_text('study = "biped-kick"\n')
     assert np.allclose(read_kick(tmp_path)[0], X0)
     for text, what in (("{", "JSON"), (json.dumps({"genome": [1, 2]}), "finite numbers"),
                        (json.dumps({"study": "arm-ik", "genome": X0}), "biped-kick"),
@@ -86,9 +87,9 @@ def _cli(*args, cwd):
     (["--ball", "1", "0", "--target", "1", "0"], "--target: expected at least 0.1 m"),
     (["--kick", "missing"], "no such file"),
     (["--video", "out.gif"], "expected a .mp4 path"),
-    (["--walk", "missing"], "index.json"),
+    (["--walk", "missing"], "--walk missing"),
     (["--robot", "1.4", "0.45", "0"], "at least 0.3 m from the ball"),
-    (["--video", "nofolder/out.mp4"], "its folder does not exist"),
+    (["--video", "nofolder/out.mp4"], "does not exist"),
 ])
 def test_play_bad_input_is_one_line(tmp_path, args, msg):
     r = _cli(*args, cwd=tmp_path)
@@ -142,10 +143,11 @@ def test_a_broken_repertoire_is_refused_before_walking(tmp_path):
 
     rep = tmp_path / "repertoire"
     rep.mkdir()
+    (tmp_path / "config.toml").write_text('study = "humanoid-repertoire"\n')
     entry = {"file": "cell-0001.motion", "cell": 1, "objective": -1.0,
              "measured": {"dx_m": "0.1", "dy_m": 0.0, "dtheta_deg": 0.0}}
     (rep / "index.json").write_text(json.dumps({"entries": [entry]}))
-    with pytest.raises(InputError, match="finite numbers"):
+    with pytest.raises(InputError, match="dx_m"):
         read_index(tmp_path)
     entry["measured"]["dx_m"] = 0.1
     (rep / "index.json").write_text(json.dumps({"entries": [entry]}))

@@ -96,7 +96,7 @@ def test_cli_make_map_and_study(tmp_path):
     (["run", "grid-path", "--set", "algorithm.neighbourhood=hex"], "unknown neighbourhood"),
     (["grid-path", "study", "--map", "x"], "unknown 'x'"),
     (["grid-path", "study", "--experiment", "beyond", "--update", "zig"], "--update: expected"),
-    (["grid-path", "study", "--experiment", "other"], "expected 'seed' or 'beyond'"),
+    (["grid-path", "study", "--experiment", "other"], "--experiment: expected one of seed, beyond"),
     (["run", "grid-path", "--preset", "paper"], "unknown preset 'paper'"),
     (["run", "grid-path", "--set", "algorithm.name='cmaes'"], "available: cga, ga"),
 ])

@@ -105,13 +105,14 @@ def test_short_run_writes_a_repertoire_that_pick_and_walk_to_use(tmp_path):
     assert r["cell"] in [e["cell"] for e in index["entries"]]
     w = walk_to(tmp_path, 0.05, 0.0, 0.0, out=tmp_path / "chain.motion", hold_s=0.2)
     assert w["steps"] >= 1 and (tmp_path / "chain.motion").exists()
-    with pytest.raises(InputError, match="index.json"):
+    with pytest.raises(InputError, match="run folder"):
         pick(tmp_path / "nothing", 0, 0, 0)
     with pytest.raises(InputError, match="finite"):
         pick(tmp_path, float("nan"), 0, 0)
     bad = tmp_path / "bad"
     (bad / "repertoire").mkdir(parents=True)
+    (bad / "config.toml").write_text('study = "humanoid-repertoire"\n')
     (bad / "repertoire" / "index.json").write_text(
         '{"entries": [{"objective": 0, "file": "a.motion", "measured": {"dx_m": 0}}]}')
-    with pytest.raises(InputError, match="not a repertoire index"):
+    with pytest.raises(InputError, match="index.json: entry 0"):
         pick(bad, 0, 0, 0)

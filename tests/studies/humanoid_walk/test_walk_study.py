@@ -60,6 +60,7 @@ def test_compare_puts_the_walk_beside_webots(walk_run):
 
 
 def test_compare_refuses_a_folder_without_a_walk(tmp_path):
+    (tmp_path / "config.toml").write_text('study = "humanoid-walk"\n')
     with pytest.raises(InputError, match="best.motion"):
         compare.walk_motion_path(tmp_path)
     res = cli("humanoid-walk", "compare", str(tmp_path))

@@ -23,7 +23,7 @@ from evomotion.studies.arm_ik.objective import (
     optimal_match,
     straight_distances,
 )
-from evomotion.studies.arm_ik.scenario import Scenario, load_scenario
+from evomotion.studies.arm_ik.scenario import MAX_ABS, Scenario, load_scenario
 from evomotion.studies.arm_ik.visibility import VisibilityGraph
 
 #: ``problem.gif_frames`` at most; heuristic-map cells along the board's diagonal at most
@@ -42,7 +42,7 @@ class ArmIKConfig:
     matching: str = "optimal"  # greedy | optimal | chromosome
     distance: str = "straight"  # straight | obstacle (way around the obstacles)
     board_walls: bool = True  # a joint outside the board counts as one intersection
-    cell_size: float = 0.0  # heuristic cell side (board units); 0 = diagonal / 150
+    cell_size: float = 0.0  # heuristic cell side (board units, at most 1e6); 0 = diagonal / 150
     tolerance: float = 1e-3  # solved: every tip within tolerance * diagonal of its target
     pictures: bool = True  # board.png and best.gif in the run folder
     gif_frames: int = 30
@@ -50,7 +50,7 @@ class ArmIKConfig:
     def validate(self) -> None:
         check_fields(self, "problem")
         check_text("problem.scenario", self.scenario, empty=False)
-        check_number("problem.cell_size", self.cell_size, lo=0.0)
+        check_number("problem.cell_size", self.cell_size, lo=0.0, hi=MAX_ABS)
         check_number("problem.tolerance", self.tolerance, lo=0.0, hi=1.0, lo_open=True)
         check_number("problem.gif_frames", self.gif_frames, lo=1, hi=MAX_GIF_FRAMES, integer=True)
         if self.matching not in MATCHINGS:

@@ -11,7 +11,6 @@ from typing import Annotated
 
 import typer
 
-from evomotion.errors import InputError
 from evomotion.studies.arm_ik.outcome import best_record, finalize
 from evomotion.studies.arm_ik.problem import ArmIKConfig, make_problem
 from evomotion.studies.arm_ik.scenario import bundled_names, load_scenario
@@ -28,19 +27,31 @@ def check(file: Annotated[str, typer.Argument(help="Scenario file or bundled nam
     typer.echo(load_scenario(file).summary())
 
 
+#: ``study``: seeds per scenario and seconds per run at most
+MAX_SEEDS = 1000
+MAX_WALL_SECONDS = 3600.0
+
+
 @cli.command("study")
 def study(
-    seeds: Annotated[int, typer.Option(help="Seeds per scenario")] = 20,
+    seeds: Annotated[int, typer.Option(help="Seeds per scenario (1 to 1000)")] = 20,
     scenario: Annotated[list[str] | None, typer.Option(help="Scenario (repeatable)")] = None,
     matching: Annotated[list[str] | None, typer.Option(help="greedy/optimal/chromosome")] = None,
-    wall_seconds: Annotated[float, typer.Option(help="Budget per run")] = 20.0,
+    wall_seconds: Annotated[float, typer.Option(
+        help="Budget per run (s, 0 to 3600; 0: until solved or the schedule ends)")] = 20.0,
 ) -> None:
     """Success rate and median time to the first solution per scenario (markdown table)."""
+    from evomotion.core.checks import check_choice, check_number
+    from evomotion.studies.arm_ik.objective import MATCHINGS
     from evomotion.studies.arm_ik.success import HEADER, success_table
 
     names = scenario or [n for n in bundled_names() if n != "unreachable"]
-    if seeds < 1:
-        raise InputError("--seeds: expected >= 1")
+    check_number("--seeds", seeds, lo=1, hi=MAX_SEEDS, integer=True)
+    check_number("--wall-seconds", wall_seconds, lo=0.0, hi=MAX_WALL_SECONDS)
+    for m in matching or []:
+        check_choice("--matching", m, MATCHINGS)
+    for n in names:  # every scenario file read (and checked) before the first run
+        load_scenario(n)
     typer.echo(HEADER)
     for m in matching or ["optimal"]:
         for n in names:

@@ -14,6 +14,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.colors import ListedColormap  # noqa: E402
 
+from evomotion.outfile import atomic_output, save_figure  # noqa: E402
 from evomotion.studies.arm_ik.kinematics import forward  # noqa: E402
 from evomotion.studies.arm_ik.problem import ArmIKProblem  # noqa: E402
 
@@ -45,7 +46,9 @@ def _draw_limb(ax, prob: ArmIKProblem, genome: np.ndarray, color: str, label: st
 def _figure(prob: ArmIKProblem):
     scn = prob.scn
     w = 7.0
-    return plt.subplots(figsize=(w, max(2.5, w * scn.height / scn.width + 0.6)), dpi=100)
+    # a board of any shape fits a figure of at most 7 x 20 inches (the axes keep its aspect)
+    return plt.subplots(figsize=(w, min(20.0, max(2.5, w * scn.height / scn.width + 0.6))),
+                        dpi=100)
 
 
 def save_board(prob: ArmIKProblem, best: np.ndarray, best_feasible: np.ndarray | None,
@@ -59,8 +62,10 @@ def save_board(prob: ArmIKProblem, best: np.ndarray, best_feasible: np.ndarray |
     ax.legend(loc="upper right", fontsize=7)
     ax.set_title(title or prob.scn.name, fontsize=9)
     fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
+    try:
+        save_figure(fig, path, "board picture")
+    finally:
+        plt.close(fig)
 
 
 def population_figure(prob: ArmIKProblem, pop: np.ndarray, best: np.ndarray, title: str = ""):
@@ -93,4 +98,5 @@ def save_gif(prob: ArmIKProblem, history: np.ndarray, path: Path, frames: int = 
         fig.canvas.draw()
         images.append(np.asarray(fig.canvas.buffer_rgba())[..., :3].copy())
     plt.close(fig)
-    imageio.mimsave(path, images, duration=1.0 / fps, loop=0)
+    with atomic_output(path, "animation", suffix=".tmp.gif") as tmp:
+        imageio.mimsave(tmp, images, duration=1.0 / fps, loop=0)

@@ -16,13 +16,12 @@
 
 from __future__ import annotations
 
-import json
 from typing import Any
 
 import numpy as np
 
 from evomotion.run.context import RunContext
-from evomotion.run.folder import atomic_write_text
+from evomotion.run.folder import atomic_write_text, write_json
 from evomotion.sim.nao.motion import format_motion
 from evomotion.studies.biped_kick.motion import ball_offset, kick_motion, named
 
@@ -44,10 +43,10 @@ def write_motions(ctx: RunContext) -> None:
     if not _ok(ctx.best_genome):
         return
     atomic_write_text(ctx.out_dir / "best.motion", format_motion(kick_motion(ctx.best_genome)))
-    (ctx.out_dir / "kicks").mkdir(exist_ok=True)
-    for a in AIMS_DEG:
+    for a in AIMS_DEG:  # kicks/ is the run's own folder
         motion = kick_motion(ctx.best_genome, np.radians(a))
-        atomic_write_text(ctx.out_dir / "kicks" / f"aim_{a:+d}.motion", format_motion(motion))
+        atomic_write_text(ctx.out_dir / "kicks" / f"aim_{a:+d}.motion", format_motion(motion),
+                          "aimed kick", mkdir=True)
 
 
 def on_checkpoint(ctx: RunContext) -> None:
@@ -86,7 +85,7 @@ def finalize(ctx: RunContext) -> None:
     write_run_exports(kick_motion(g), ctx.out_dir, ctx.log)
     p = ctx.problem
     rows = aim_table(p, g)
-    atomic_write_text(ctx.out_dir / "best_kicks.json", json.dumps(rows, indent=2) + "\n")
+    write_json(ctx.out_dir / "best_kicks.json", rows)
     k = p.kicks(g[None], np.zeros(1), p.ball_xy(g[None], np.zeros(1)), keep=True)
     end = int(k["end"][0])
     times = k["times"][:end]

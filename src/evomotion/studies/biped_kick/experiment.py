@@ -17,7 +17,6 @@
 from __future__ import annotations
 
 import dataclasses
-import json
 from pathlib import Path
 
 import numpy as np
@@ -102,10 +101,43 @@ def accuracy(m: dict[str, np.ndarray]) -> dict[str, float]:
             "mean_distance_m": float(np.mean(m["distance_m"])), "n": int(len(err))}
 
 
+#: what :func:`run_experiment` writes in its folder
+OUTPUTS = ("curves.npz", "convergence.png", "results.json", "table.md")
+
+
+def study_folder(out: Path | None) -> Path:
+    """The study's output folder: ``out`` (made if missing; its parent must exist: a typo in
+    a path does not make folders), else a new ``runs/biped-kick-study-<time>``."""
+    from evomotion.outfile import WriteError
+    from evomotion.run.folder import make_run_dir
+
+    if out is None:
+        return make_run_dir("biped-kick-study")
+    out = Path(out)
+    if not out.is_dir() and not out.absolute().parent.is_dir():
+        raise WriteError(f"--out {out}: the folder {out.absolute().parent} does not exist "
+                         "(make it first)")
+    return make_run_dir("biped-kick-study", out)
+
+
+def check_outputs(out_dir: Path) -> None:
+    """Every file of :data:`OUTPUTS` can be written in ``out_dir`` (before any run)."""
+    from evomotion.outfile import check_target
+
+    for name in OUTPUTS:
+        check_target(out_dir / name, f"study output {name}")
+
+
 def run_experiment(out_dir: Path, seeds: int = 1, budget: int = 1500, kicks: int = 100,
                    perturb_m: float = 0.02, variants: list[str] | None = None,
                    cfg: KickConfig = KickConfig(), log=print) -> dict:
-    out_dir.mkdir(parents=True, exist_ok=True)
+    """The experiment (see the module); its files go to the existing folder ``out_dir``."""
+    import io
+
+    from evomotion.outfile import atomic_write_bytes, atomic_write_text, write_json
+
+    out_dir = Path(out_dir)
+    check_outputs(out_dir)
     problem = KickProblem(cfg)
     names = list(variants or DEFAULT_VARIANTS)
     grid = np.arange(1, budget + 1)
@@ -125,7 +157,9 @@ def run_experiment(out_dir: Path, seeds: int = 1, budget: int = 1500, kicks: int
                       "aimed": {f"{a:+.0f}": accuracy(perturbed_kicks(problem, best_x, offsets,
                                                                        a))
                                 for a in (ACCURACY_AIMS_DEG if len(cfg.aims_deg) > 1 else ())}}
-    np.savez(out_dir / "curves.npz", grid=grid, **curves)
+    buf = io.BytesIO()
+    np.savez(buf, grid=grid, **curves)
+    atomic_write_bytes(out_dir / "curves.npz", buf.getvalue(), "study curves")
     plot_convergence(grid, curves, out_dir / "convergence.png")
     res = {"config": dataclasses.asdict(cfg), "seeds": seeds, "budget": budget,
            "kicks": kicks, "perturb_m": perturb_m, "optimisers": rows,
@@ -135,9 +169,20 @@ def run_experiment(out_dir: Path, seeds: int = 1, budget: int = 1500, kicks: int
                               "q25": float(np.percentile(v[:, -1], 25)),
                               "q75": float(np.percentile(v[:, -1], 75))}
                           for k, v in curves.items()}}
-    (out_dir / "results.json").write_text(json.dumps(res, indent=2))
-    (out_dir / "table.md").write_text(table_md(res))
+    write_json(out_dir / "results.json", _finite(res), "study results")
+    atomic_write_text(out_dir / "table.md", table_md(res), "study table")
     return res
+
+
+def _finite(obj):
+    """``obj`` with every non-finite float as ``None`` (JSON has no NaN)."""
+    if isinstance(obj, dict):
+        return {k: _finite(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_finite(v) for v in obj]
+    if isinstance(obj, float) and not np.isfinite(obj):
+        return None
+    return obj
 
 
 def table_md(res: dict) -> str:
@@ -185,5 +230,9 @@ def plot_convergence(grid: np.ndarray, curves: dict[str, np.ndarray], out_png: P
     if ax.get_legend_handles_labels()[0]:
         ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(out_png)
-    plt.close(fig)
+    from evomotion.outfile import save_figure
+
+    try:
+        save_figure(fig, out_png, "convergence plot")
+    finally:
+        plt.close(fig)

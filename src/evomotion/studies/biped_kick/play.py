@@ -20,7 +20,6 @@ Reported: where the ball rests, its distance to the target and to the ball->targ
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
@@ -29,7 +28,7 @@ import numpy as np
 from evomotion.errors import FileFormatError, InputError
 from evomotion.studies.biped_kick.motion import GENES, MAX_AIM_DEG
 from evomotion.studies.biped_kick.planning import WalkModel, bezier_time, plan_aimed_kick, wrap
-from evomotion.textio import decode_utf8, read_file_bytes
+from evomotion.textio import decode_utf8, loads_json, read_file_bytes
 
 #: the kick shipped with evomotion (evolved by ``evomotion run biped-kick``, see its docs)
 DEFAULT_KICK = Path(__file__).with_name("default_kick.json")
@@ -38,20 +37,19 @@ MAX_KICK_BYTES = 1 << 20
 
 
 def read_kick(path: Path | None) -> tuple[np.ndarray, str]:
-    """The genome of a kick: a biped-kick run folder (its ``best.json``), a ``best.json``, or
-    the shipped default. One-line errors name the file and what was expected."""
+    """The genome of a kick: a biped-kick run folder (its ``best.json``; the folder's
+    ``config.toml`` must name the study), a ``best.json``, or the shipped default. One-line
+    errors name the file and what was expected."""
     if path is None:
         path = DEFAULT_KICK
     path = Path(path)
+    if path.is_dir():
+        check_kick_run(path)
     f = path / "best.json" if path.is_dir() else path
     if not f.exists():
         raise InputError(f"{f}: no such file (expected a biped-kick run folder or its "
                          "best.json)")
-    text = decode_utf8(read_file_bytes(f, "kick (best.json)", MAX_KICK_BYTES), f)
-    try:
-        rec = json.loads(text)
-    except (json.JSONDecodeError, RecursionError) as exc:
-        raise FileFormatError(f, getattr(exc, "lineno", None), "a JSON object") from None
+    rec = loads_json(decode_utf8(read_file_bytes(f, "kick (best.json)", MAX_KICK_BYTES), f), f)
     if not isinstance(rec, dict) or rec.get("study", "biped-kick") != "biped-kick":
         raise FileFormatError(f, None, "the best.json of a biped-kick run")
     g = rec.get("genome")
@@ -64,6 +62,16 @@ def read_kick(path: Path | None) -> tuple[np.ndarray, str]:
         if not lo <= v <= hi:
             raise FileFormatError(f, None, f"gene {name} in [{lo}, {hi}], got {v}")
     return np.asarray(g, dtype=float), str(f)
+
+
+def check_kick_run(run: Path, option: str = "--kick") -> None:
+    """One-line error unless the folder ``run`` is a biped-kick run (its ``config.toml``)."""
+    from evomotion.run.config import config_from_run_dir
+
+    name, _ = config_from_run_dir(run)
+    if name != "biped-kick":
+        raise InputError(f"{option} {run}: a {name} run, expected a biped-kick run folder "
+                         "(or its best.json)")
 
 
 def field_state(problem: Any, pose: np.ndarray, ball: np.ndarray) -> np.ndarray:

@@ -67,6 +67,13 @@ MAX_THREADS = 1024
 MAX_ROLLING_M = 0.1
 MAX_BALL_OFFSET_M = 1.0
 MAX_AIMS = 16
+#: the documented ranges of the other ``[problem]`` floats: weights (m per rad, m per s),
+#: the roll after the kick (s), the ZMP margin (m; a NAO sole is 0.16 x 0.09 m), fall
+#: height (m)
+MAX_WEIGHT = 1000.0
+MAX_ROLL_AFTER_S = 60.0
+MAX_ZMP_MARGIN_M = 0.1
+MAX_FALL_HEIGHT_M = 5.0
 KICK_TIMESTEP_S = 0.004  # the kick scene's physics step, for estimates before it is loaded
 #: doubles per rollout and physics step: state (84), sensors (26), controls (22), support
 #: polygon temporaries, rounded up
@@ -107,10 +114,12 @@ class KickConfig:
         lim = MAX_AIM_DEG
         for i, a in enumerate(self.aims_deg):
             check_number(f"problem.aims_deg[{i}]", a, lo=-lim, hi=lim)
-        for key in ("w_angle_m_per_rad", "w_time_m_per_s", "roll_after_s", "zmp_margin_m"):
-            check_number(f"problem.{key}", getattr(self, key), lo=0.0)
+        for key, hi in (("w_angle_m_per_rad", MAX_WEIGHT), ("w_time_m_per_s", MAX_WEIGHT),
+                        ("roll_after_s", MAX_ROLL_AFTER_S), ("zmp_margin_m", MAX_ZMP_MARGIN_M)):
+            check_number(f"problem.{key}", getattr(self, key), lo=0.0, hi=hi)
         check_number("problem.speed_margin", self.speed_margin, lo=0.0, hi=1.0, lo_open=True)
-        check_number("problem.fall_height_m", self.fall_height_m, lo=0.0, lo_open=True)
+        check_number("problem.fall_height_m", self.fall_height_m, lo=0.0,
+                     hi=MAX_FALL_HEIGHT_M, lo_open=True)
         check_number("problem.fall_tilt_rad", self.fall_tilt_rad, lo=0.0, hi=math.pi,
                      lo_open=True)
         check_number("problem.nthread", self.nthread, lo=0, hi=MAX_THREADS, integer=True)

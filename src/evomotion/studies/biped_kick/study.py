@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Annotated
 
 import numpy as np
 import typer
 
+from evomotion.core.checks import check_number
 from evomotion.errors import InputError
 from evomotion.studies.base import Study, lazy_hook
 from evomotion.studies.biped_kick.problem import KickConfig, make_problem
@@ -16,31 +18,67 @@ cli = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="NAO kick optimised with an improved CMA-ES (seed 002).")
 
 
+#: field coordinates (m) within +-this; headings (rad) within +-2 pi; the inflation radius
+#: (m) in (0, MAX_RADIUS_M]
+MAX_FIELD_M = 100.0
+MAX_HEADING_RAD = 2 * math.pi
+MAX_RADIUS_M = 5.0
+#: ``study``: runs per optimiser, evaluations per run and perturbed kicks at most
+MAX_SEEDS = 1000
+MAX_BUDGET = 1_000_000
+MAX_KICKS = 1000
+PLOT_SUFFIXES = (".png", ".svg", ".pdf")
+
+
+def check_pose(option: str, values: tuple[float, ...]) -> None:
+    """One line unless ``values`` are field coordinates (m) and, as a third value, a heading
+    (rad) within the documented ranges (:data:`MAX_FIELD_M`, :data:`MAX_HEADING_RAD`)."""
+    for i, v in enumerate(values):
+        heading = i == 2
+        lim = MAX_HEADING_RAD if heading else MAX_FIELD_M
+        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v) \
+                or abs(v) > lim:
+            raise InputError(f"{option}: expected finite values within +-{MAX_FIELD_M:g} m"
+                             + (f" and a heading within +-{lim:.4g} rad" if len(values) == 3
+                                else "") + f", got {' '.join(f'{x:g}' for x in values)}")
+
+
 @cli.command("plan")
 def plan(
-    robot: Annotated[tuple[float, float, float], typer.Option(help="x y theta (m, m, rad)")] = (
-        0.0, -1.0, 1.5708),
-    ball: Annotated[tuple[float, float], typer.Option(help="ball x y (m)")] = (1.5, 0.5),
-    goal: Annotated[tuple[float, float], typer.Option(help="goal centre x y (m)")] = (4.5, 0.0),
-    radius: Annotated[float, typer.Option(help="inflation radius R (m)")] = 0.2,
-    out: Annotated[Path, typer.Option(help="output PNG")] = Path("kick-plan.png"),
+    robot: Annotated[tuple[float, float, float], typer.Option(
+        help="x y theta (m, m, rad; within +-100 m, +-2 pi rad)")] = (0.0, -1.0, 1.5708),
+    ball: Annotated[tuple[float, float], typer.Option(help="ball x y (m, within +-100)")] = (
+        1.5, 0.5),
+    goal: Annotated[tuple[float, float], typer.Option(
+        help="goal centre x y (m, within +-100)")] = (4.5, 0.0),
+    radius: Annotated[float, typer.Option(help="inflation radius R (m, in (0, 5])")] = 0.2,
+    out: Annotated[Path, typer.Option(help="output plot (.png, .svg or .pdf; its folder "
+                                           "must exist)")] = Path("kick-plan.png"),
 ) -> None:
     """Kick point and Bézier approach vs turn-walk-align; writes kick-plan.png."""
+    from evomotion.outfile import check_target
     from evomotion.studies.biped_kick.views import plot_kick_plan
 
-    if radius <= 0:
-        raise InputError("--radius: expected > 0")
+    for name, vals in (("--robot", robot), ("--ball", ball), ("--goal", goal)):
+        check_pose(name, vals)
+    check_number("--radius", radius, lo=0.0, hi=MAX_RADIUS_M, lo_open=True)
+    if math.dist(ball, goal) < 0.1:
+        raise InputError("--goal: expected at least 0.1 m from the ball")
+    if out.suffix.lower() not in PLOT_SUFFIXES:
+        raise InputError(f"--out {out}: expected a {', '.join(PLOT_SUFFIXES)} path")
+    check_target(out, "kick plan (--out)")
     res = plot_kick_plan(np.array(robot), np.array(ball), np.array(goal), out, radius)
     typer.echo(" ".join(f"{k}={v:.3f}" for k, v in res.items()))
 
 
 @cli.command("play")
 def play_cmd(
-    ball: Annotated[tuple[float, float], typer.Option(help="ball x y (m, field)")] = (1.5, 0.5),
-    target: Annotated[tuple[float, float], typer.Option(help="target x y (m, field)")] = (
-        4.5, 0.0),
+    ball: Annotated[tuple[float, float], typer.Option(
+        help="ball x y (m, field, within +-100)")] = (1.5, 0.5),
+    target: Annotated[tuple[float, float], typer.Option(
+        help="target x y (m, field, within +-100)")] = (4.5, 0.0),
     robot: Annotated[tuple[float, float, float], typer.Option(
-        help="robot x y theta (m, m, rad)")] = (0.0, 0.0, 0.0),
+        help="robot x y theta (m, m, rad; within +-100 m, +-2 pi rad)")] = (0.0, 0.0, 0.0),
     kick: Annotated[Path | None, typer.Option(
         help="a biped-kick run folder (or its best.json); default: the shipped kick")] = None,
     walk: Annotated[Path | None, typer.Option(
@@ -51,21 +89,24 @@ def play_cmd(
 ) -> None:
     """Plan the kick point and approach, walk, kick, and report where the ball rests."""
     import json
-    import math
 
+    from evomotion.outfile import check_target
     from evomotion.studies.biped_kick.play import play, read_kick
 
     for name, vals in (("--ball", ball), ("--target", target), ("--robot", robot)):
-        if not all(math.isfinite(v) and abs(v) <= 100 for v in vals):
-            raise InputError(f"{name}: expected finite values within +-100 m")
+        check_pose(name, vals)
     if math.dist(ball, target) < 0.1:
         raise InputError("--target: expected at least 0.1 m from the ball")
     if math.dist(robot[:2], ball) < 0.3:
         raise InputError("--robot: expected a start at least 0.3 m from the ball")
-    if video is not None and video.suffix.lower() != ".mp4":
-        raise InputError(f"--video {video}: expected a .mp4 path")
-    if video is not None and not video.resolve().parent.is_dir():
-        raise InputError(f"--video {video}: its folder does not exist")
+    if video is not None:
+        if video.suffix.lower() != ".mp4":
+            raise InputError(f"--video {video}: expected a .mp4 path")
+        check_target(video, "video (--video)")
+    if walk is not None:
+        from evomotion.studies.biped_kick.walk_play import load_index
+
+        load_index(walk, "--walk")  # refused before any simulation
     genome, source = read_kick(kick)
     res = play(make_problem(KickConfig()), genome, np.array(robot), np.array(ball),
                np.array(target), video, repertoire=walk)
@@ -92,27 +133,41 @@ def play_cmd(
 
 @cli.command("study")
 def study(
-    out: Annotated[Path, typer.Option(help="output folder")] = Path("runs/biped-kick-study"),
-    seeds: Annotated[int, typer.Option(help="runs per optimiser")] = 1,
-    budget: Annotated[int, typer.Option(help="evaluations per run")] = 1500,
-    kicks: Annotated[int, typer.Option(help="kicks from perturbed ball positions")] = 100,
+    out: Annotated[Path | None, typer.Option(
+        help="output folder (default runs/biped-kick-study-*; its parent must exist)")] = None,
+    seeds: Annotated[int, typer.Option(help="runs per optimiser (1 to 1000)")] = 1,
+    budget: Annotated[int, typer.Option(help="evaluations per run (1 to 1e6)")] = 1500,
+    kicks: Annotated[int, typer.Option(
+        help="kicks from perturbed ball positions (1 to 1000)")] = 100,
     variant: Annotated[list[str] | None, typer.Option(help="optimiser (repeatable)")] = None,
     aim: Annotated[list[float] | None, typer.Option(
-        help="training aim in degrees (repeatable); default: the problem's -30 -15 0 15 30; "
-             "--aim 0 trains straight kicks as the seed does")] = None,
+        help="training aim in degrees (repeatable, within +-30); default: the problem's -30 "
+             "-15 0 15 30; --aim 0 trains straight kicks as the seed does")] = None,
 ) -> None:
     """The seed's Table 1: optimisers, 100 perturbed kicks, keyframe baseline, aimed accuracy."""
-    from evomotion.studies.biped_kick.experiment import VARIANTS, run_experiment
+    from evomotion.studies.biped_kick.experiment import (
+        VARIANTS,
+        check_outputs,
+        run_experiment,
+        study_folder,
+        table_md,
+    )
+    from evomotion.studies.biped_kick.motion import MAX_AIM_DEG
 
-    if seeds < 1 or budget < 1 or kicks < 1:
-        raise InputError("--seeds, --budget, --kicks: expected >= 1")
+    check_number("--seeds", seeds, lo=1, hi=MAX_SEEDS, integer=True)
+    check_number("--budget", budget, lo=1, hi=MAX_BUDGET, integer=True)
+    check_number("--kicks", kicks, lo=1, hi=MAX_KICKS, integer=True)
     for v in variant or []:
         if v not in VARIANTS:
             raise InputError(f"--variant: expected one of {', '.join(VARIANTS)}, got {v!r}")
+    for a in aim or []:
+        check_number("--aim", a, lo=-MAX_AIM_DEG, hi=MAX_AIM_DEG)
     cfg = KickConfig() if not aim else KickConfig(aims_deg=tuple(aim))
     cfg.validate()
+    out = study_folder(out)
+    check_outputs(out)
     res = run_experiment(out, seeds, budget, kicks, variants=variant, cfg=cfg, log=typer.echo)
-    typer.echo((out / "table.md").read_text())
+    typer.echo(table_md(res))
     typer.echo(f"best fitness {res['best_fitness']:.3f} m; results in {out}")
 
 

@@ -11,6 +11,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from evomotion.outfile import save_figure  # noqa: E402
 from evomotion.studies.biped_kick.planning import (  # noqa: E402
     WalkModel,
     baseline_time,
@@ -51,9 +52,9 @@ def plot_kick_plan(robot: np.ndarray, ball: np.ndarray, goal: np.ndarray, out_pn
     ax.set_title(f"Kick plan (speed {walk.speed_m_s} m/s, turn {walk.turn_rad_s} rad/s)")
     ax.legend(fontsize=7, loc="best")
     fig.tight_layout()
-    out_png = Path(out_png)
-    out_png.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out_png)
-    plt.close(fig)
+    try:
+        save_figure(fig, Path(out_png), "kick plan")
+    finally:
+        plt.close(fig)
     return {"bezier_length_m": bz_len, "bezier_time_s": bz_t,
             "baseline_length_m": bl_len, "baseline_time_s": bl_t}

@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from evomotion.errors import InputError
+from evomotion.run.config import run_of_study
 from evomotion.sim import nao
 from evomotion.sim.nao.motion import Motion
 from evomotion.sim.nao.repertoire import is_nao_repertoire, read_cell, read_index
@@ -36,6 +37,7 @@ from evomotion.sim.rollout import fall_step, torso_track
 from evomotion.studies.biped_kick.planning import bezier, wrap
 
 HEADING_M_PER_DEG = 0.01
+REPERTOIRE_STUDY = "humanoid-repertoire"
 RISK_M = 0.05  # metres of pose error a step's tilt costs per unit of its (negative) objective
 
 
@@ -97,7 +99,7 @@ def walk(run: SceneRun, repertoire: Path, ctrl: np.ndarray, goal: np.ndarray,
          max_steps: int = 80) -> dict[str, Any]:
     """Walk ``run`` to ``goal`` (x, y, heading) along the Bézier ``ctrl`` with the steps of
     ``repertoire``; returns the steps taken and the final error."""
-    folder, index = read_index(repertoire)
+    folder, index = load_index(repertoire)
     if not is_nao_repertoire(index):
         raise InputError(f"{folder}: a repertoire of robot {index.get('robot')!r} (not the "
                          "NAO's own step); the kick walks the NAO (a humanoid-repertoire run "
@@ -173,3 +175,11 @@ def ready_offset(model: Any, ready_pose: np.ndarray) -> np.ndarray:
         feet = 0.5 * (d.site("l_sole_site").xpos[:2] + d.site("r_sole_site").xpos[:2])
         mid.append(d.body("torso").xpos[:2] - feet)
     return mid[1] - mid[0]
+
+
+def load_index(repertoire: Path, option: str = "--walk") -> tuple[Path, dict]:
+    """``(folder, index)`` of the repertoire run ``repertoire`` (a humanoid-repertoire run
+    folder or its ``repertoire/``, checked by its config.toml; the index bounded and checked
+    field by field)."""
+    return read_index(run_of_study(repertoire, REPERTOIRE_STUDY, option, "repertoire"))
+

@@ -284,21 +284,32 @@ def _read_movingai(path: Path, data: bytes, arr: np.ndarray) -> np.ndarray:
 
 
 def write_map(path: str | Path, blocked: np.ndarray) -> None:
-    """Write ``blocked`` (row 0 = bottom) as a Moving AI ``.map`` file."""
+    """Write ``blocked`` (row 0 = bottom) as a Moving AI ``.map`` file (atomically; the
+    folder must exist)."""
+    from evomotion.outfile import atomic_write_text
+
     h, w = blocked.shape
     rows = ["".join("@" if b else "." for b in row) for row in blocked[::-1]]
-    Path(path).write_text(f"type octile\nheight {h}\nwidth {w}\nmap\n" + "\n".join(rows) + "\n")
+    atomic_write_text(path, f"type octile\nheight {h}\nwidth {w}\nmap\n" + "\n".join(rows)
+                      + "\n", "map file")
+
+
+#: cells drawn and labelled by :func:`random_map` in all its tries at most (a few seconds):
+#: a large map gets fewer tries than ``max_tries``
+RANDOM_MAP_WORK = 2**24
 
 
 def random_map(size: int, density: float, rng: np.random.Generator,
                max_tries: int = 1000) -> GridMap:
     """A ``size`` x ``size`` map with ``round(density * cells)`` obstacles placed uniformly,
-    start bottom-left and goal top-right free and connected (re-drawn until they are)."""
+    start bottom-left and goal top-right free and connected (re-drawn until they are, at
+    most ``max_tries`` times and :data:`RANDOM_MAP_WORK` cells in all)."""
     if size < 2 or not 0.0 <= density < 1.0:
         raise InputError(f"random map needs size >= 2 and 0 <= density < 1, got {size}, "
                          f"{density}")
     n = size * size
     k = int(round(density * n))
+    max_tries = min(max_tries, max(2, RANDOM_MAP_WORK // n))
     for _ in range(max_tries):
         flat = np.zeros(n, dtype=bool)
         others = np.arange(1, n - 1)

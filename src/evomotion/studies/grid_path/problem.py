@@ -40,6 +40,11 @@ MAX_PARTS = 10_000
 MAX_RETRIES = 100_000
 MAX_REPAIR_PATHS = 10_000
 MAX_RANDOM_MAP_SIZE = 4096
+#: the documented ranges of the ``[problem]`` floats: the spacing factor ``m``, the penalty
+#: per invalid segment (cells) and the repair corridor's half-width (cells)
+MAX_M = 100.0
+MAX_PENALTY = 1e9
+MAX_REPAIR_RADIUS = 10_000.0
 
 
 @dataclass(frozen=True)
@@ -70,11 +75,12 @@ class GridPathConfig:
         _cell(self.goal, "goal")
         check_choice("problem.mode", self.mode, ("discrete", "continuous"))
         check_choice("problem.rule", self.rule, ("", *RULES))
-        check_number("problem.m", self.m, lo=0.0, lo_open=True)
+        check_number("problem.m", self.m, lo=0.0, hi=MAX_M, lo_open=True)
         check_number("problem.n_parts", self.n_parts, lo=0, hi=MAX_PARTS, integer=True)
-        check_number("problem.penalty", self.penalty, lo=0.0)
+        check_number("problem.penalty", self.penalty, lo=0.0, hi=MAX_PENALTY)
         check_number("problem.retries", self.retries, lo=0, hi=MAX_RETRIES, integer=True)
-        check_number("problem.repair_radius", self.repair_radius, lo=0.0, lo_open=True)
+        check_number("problem.repair_radius", self.repair_radius, lo=0.0,
+                     hi=MAX_REPAIR_RADIUS, lo_open=True)
         check_number("problem.repair_paths", self.repair_paths, lo=0, hi=MAX_REPAIR_PATHS,
                      integer=True)
 

@@ -69,14 +69,30 @@ cli = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="Grid path planning with a cellular GA (seed 004).")
 
 
+#: ``study``: runs per row, random maps, population and generations at most
+MAX_SEEDS = 1000
+MAX_MAPS = 1000
+MAX_POP = 100_000
+MAX_GENERATIONS = 100_000
+
+
 @cli.command("make-map")
 def make_map(
-    out: Annotated[Path, typer.Argument(help="Output .map file (Moving AI format)")],
-    size: Annotated[int, typer.Option(help="Cells per side")] = 20,
-    density: Annotated[float, typer.Option(help="Fraction of blocked cells")] = 0.25,
-    seed: Annotated[int, typer.Option(help="Random seed")] = 0,
+    out: Annotated[Path, typer.Argument(help="Output .map file (Moving AI format; its folder "
+                                             "must exist)")],
+    size: Annotated[int, typer.Option(help="Cells per side (2 to 4096)")] = 20,
+    density: Annotated[float, typer.Option(help="Fraction of blocked cells, in [0, 1)")] = 0.25,
+    seed: Annotated[int, typer.Option(help="Random seed (>= 0)")] = 0,
 ) -> None:
     """Write a random map whose bottom-left start and top-right goal are connected."""
+    from evomotion.core.checks import check_number
+    from evomotion.outfile import check_target
+    from evomotion.studies.grid_path.problem import MAX_RANDOM_MAP_SIZE
+
+    check_number("--size", size, lo=2, hi=MAX_RANDOM_MAP_SIZE, integer=True)
+    check_number("--density", density, lo=0.0, hi=1.0, hi_open=True)
+    check_number("--seed", seed, lo=0, integer=True)
+    check_target(out, "map file")
     m = random_map(size, density, np.random.default_rng(seed))
     write_map(out, m.blocked)
     typer.echo(f"wrote {out}: {size}x{size}, {int(m.blocked.sum())} blocked cells")
@@ -85,22 +101,43 @@ def make_map(
 @cli.command("study")
 def study(
     experiment: Annotated[str, typer.Option(help="seed or beyond")] = "seed",
-    seeds: Annotated[int, typer.Option(help="Runs per row")] = 30,
+    seeds: Annotated[int, typer.Option(help="Runs per row (1 to 1000)")] = 30,
     maps: Annotated[list[str] | None, typer.Option("--map", help="Seed map (repeatable)")] = None,
     rows: Annotated[list[str] | None, typer.Option("--row", help="Row (repeatable)")] = None,
-    pc: Annotated[float, typer.Option(help="Crossover rate (seed: 0.05)")] = 0.05,
-    pm: Annotated[float, typer.Option(help="Mutation rate per individual (seed: 0.01)")] = 0.01,
-    generations: Annotated[int, typer.Option(help="0: the seed's per map")] = 0,
-    n_maps: Annotated[int, typer.Option(help="beyond: random maps")] = 10,
-    pop: Annotated[int, typer.Option(help="beyond: population")] = 100,
+    pc: Annotated[float, typer.Option(help="Crossover rate in [0, 1] (seed: 0.05)")] = 0.05,
+    pm: Annotated[float, typer.Option(
+        help="Mutation rate per individual in [0, 1] (seed: 0.01)")] = 0.01,
+    generations: Annotated[int, typer.Option(
+        help="0: the seed's per map (at most 100000)")] = 0,
+    n_maps: Annotated[int, typer.Option(help="beyond: random maps (1 to 1000)")] = 10,
+    pop: Annotated[int, typer.Option(help="beyond: population (at most 100000)")] = 100,
     update: Annotated[str, typer.Option(help="beyond: line, sync, fixed, new, uniform")] = "line",
 ) -> None:
     """Print the experiment table (markdown): success within 1% of the optimum, lengths,
     mean generation of convergence and seconds per run."""
+    from evomotion.core.checks import check_choice, check_number
     from evomotion.studies.grid_path import experiments as ex
 
-    if seeds < 1:
-        raise InputError("--seeds: expected >= 1")
+    check_choice("--experiment", experiment, ("seed", "beyond"))
+    check_number("--seeds", seeds, lo=1, hi=MAX_SEEDS, integer=True)
+    check_number("--pc", pc, lo=0.0, hi=1.0)
+    check_number("--pm", pm, lo=0.0, hi=1.0)
+    check_number("--generations", generations, lo=0, hi=MAX_GENERATIONS, integer=True)
+    check_number("--n-maps", n_maps, lo=1, hi=MAX_MAPS, integer=True)
+    check_number("--pop", pop, lo=1, hi=MAX_POP, integer=True)
+    check_choice("--update", update, ex.POLICY_SHORT)
+    for name in maps or []:
+        if name not in ex.SEED_MAPS:
+            raise InputError(f"--map: unknown {name!r}; available: {', '.join(ex.SEED_MAPS)}")
+    known = ex.SEED_ROWS if experiment == "seed" else ex.BEYOND_ROWS
+    for row in rows or []:
+        check_choice("--row", row, known)
+    # every optimizer setting checked before the first run
+    for row in (rows or ex.SEED_ROWS) if experiment == "seed" else ():
+        for name in maps or list(ex.SEED_MAPS):
+            ex.algorithm_for(row, ex.SEED_MAPS[name][0], pc, pm).validate()
+    if experiment == "beyond":
+        ex.algorithm_for(f"cga-L5-{update}", pop, pc, pm).validate()
     literal = " (the seed's literal rates)" if (pc, pm) == (0.05, 0.01) else ""
     if experiment == "seed":
         typer.echo(f"rows: --preset seed (discrete encoding, the seed's m, population and "
@@ -113,18 +150,11 @@ def study(
                    "'continuous+repair-r5' with --update sync)")
     typer.echo(ex.HEADER)
     if experiment == "seed":
-        for name in maps or []:
-            if name not in ex.SEED_MAPS:
-                raise InputError(f"--map: unknown {name!r}; available: {', '.join(ex.SEED_MAPS)}")
         table = ex.seed_table(seeds, maps or list(ex.SEED_MAPS), rows or list(ex.SEED_ROWS),
                               pc, pm, generations)
-    elif experiment == "beyond":
-        if update not in ex.POLICY_SHORT:
-            raise InputError(f"--update: expected one of {', '.join(ex.POLICY_SHORT)}")
+    else:
         table = ex.beyond_table(seeds, n_maps, rows or list(ex.BEYOND_ROWS), pop,
                                 generations or 50, pc, pm, update)
-    else:
-        raise InputError(f"--experiment: expected 'seed' or 'beyond', got {experiment!r}")
     for row in table:
         typer.echo(row.line())
 

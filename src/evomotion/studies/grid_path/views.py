@@ -10,6 +10,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from evomotion.outfile import save_figure  # noqa: E402
 from evomotion.studies.grid_path.maps import GridMap  # noqa: E402
 from evomotion.studies.grid_path.solvers import Solution  # noqa: E402
 
@@ -21,18 +22,17 @@ def save_path_png(m: GridMap, best: np.ndarray, optima: dict[str, Solution], out
                   title: str = "", perpendiculars: np.ndarray | None = None) -> Path:
     """Draw ``best`` (``[k, 2]`` cell units) over the map with the optima; returns ``out``."""
     fig = path_figure(m, best, optima, title, perpendiculars)
-    out = Path(out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
-    return out
+    try:
+        return save_figure(fig, out, "path picture", dpi=110)
+    finally:
+        plt.close(fig)
 
 
 def path_figure(m: GridMap, best: np.ndarray, optima: dict[str, Solution], title: str = "",
                 perpendiculars: np.ndarray | None = None):
     """The figure of :func:`save_path_png` (the studio shows it per generation)."""
     size = max(4.0, min(9.0, 0.45 * max(m.width, m.height)))
-    fig, ax = plt.subplots(figsize=(size, size * m.height / m.width + 0.4))
+    fig, ax = plt.subplots(figsize=(size, min(20.0, size * m.height / m.width + 0.4)))
     ax.imshow(m.blocked, cmap="Greys", vmin=0, vmax=1.4, origin="lower",
               extent=(0, m.width, 0, m.height), interpolation="nearest")
     if max(m.width, m.height) <= 40:

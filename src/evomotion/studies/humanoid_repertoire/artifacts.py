@@ -13,13 +13,16 @@
 from __future__ import annotations
 
 import json
+import os
+import re
+import stat
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from evomotion.outfile import WriteError, atomic_write_text, kind_of, reason
 from evomotion.run.context import RunContext
-from evomotion.run.folder import atomic_write_text
 from evomotion.sim import nao
 from evomotion.sim.nao.motion import Motion, format_motion
 from evomotion.sim.nao.repertoire import INDEX, chain, read_cell, read_index  # noqa: F401
@@ -48,25 +51,34 @@ def write_repertoire(out_dir: Path, hold_s: float, problem: Any = None) -> list[
     whose measured behaviour lies inside the archive's box (a grid puts behaviour outside it
     in its edge cells: those are archived, not exported); returns the index entries.
     ``problem``: the run's problem (its ``motion`` and ``measure_spec``; another robot's
-    steps are motions of its channels); None: the NAO's."""
-    from evomotion.run.archive_file import read_archive
-    from evomotion.studies.humanoid_repertoire.problem import FALLEN_OBJECTIVE, MEASURES
+    steps are motions of its channels); None: the NAO's.
 
+    A function of the archive alone: the same archive gives the same files, byte for byte,
+    however often it is called; cell files of an earlier archive that are no longer in it
+    are removed (after the new index is written), so the folder holds exactly the files the
+    index names (``ready.motion`` and ``contact_sheet.mp4`` besides)."""
+    from evomotion.core.checks import check_number
+    from evomotion.studies.humanoid_repertoire.problem import (
+        FALLEN_OBJECTIVE,
+        MAX_HOLD_S,
+        MEASURES,
+    )
+    from evomotion.studies.humanoid_repertoire.runfiles import load_archive
+
+    check_number("hold (s)", hold_s, lo=0.0, hi=MAX_HOLD_S)
     robot = None if getattr(problem, "is_nao", True) else problem.robot
     box = MEASURES if robot is None else problem.measure_spec
     motion_of = step_motion if robot is None else problem.motion
-    a = read_archive(out_dir / "archive.npz")
-    folder = out_dir / "repertoire"
-    folder.mkdir(exist_ok=True)
-    for old in folder.glob("cell-*.motion"):  # cells change as the archive improves
-        old.unlink()
+    a = load_archive(out_dir / "archive.npz")
+    folder = repertoire_folder(out_dir)
     inside = np.all((a.measures >= box.lower) & (a.measures <= box.upper), axis=1)
     up = a.objective > FALLEN_OBJECTIVE + 1.0
     entries = []
     for k in np.flatnonzero(inside & up):
         c = int(a.cell[k])
         name = f"cell-{c:04d}.motion"
-        atomic_write_text(folder / name, format_motion(motion_of(a.solution[k])))
+        atomic_write_text(folder / name, format_motion(motion_of(a.solution[k])),
+                          "repertoire step")
         entries.append({"cell": c, "file": name,
                         "measured": {n: float(v) for n, v in zip(a.measure_names,
                                                                  a.measures[k], strict=True)},
@@ -74,15 +86,63 @@ def write_repertoire(out_dir: Path, hold_s: float, problem: Any = None) -> list[
                         "centre": [float(v) for v in a.centre[k]],
                         "genes": step.named(a.solution[k])})
     if robot is None:
-        atomic_write_text(folder / "ready.motion", format_motion(ready_motion()))
+        atomic_write_text(folder / "ready.motion", format_motion(ready_motion()),
+                          "repertoire ready motion")
     atomic_write_text(folder / INDEX, json.dumps({
         "robot": "nao" if robot is None else robot.name,
         "is_nao": robot is None,  # the NAO's own step (a copy of nao.toml is another robot)
         "box": {"lower": box.lower.tolist(), "upper": box.upper.tolist()},
         "measures": list(a.measure_names), "cells": a.cells, "archived": int(a.cell.size),
         "fallen": int((~up).sum()), "outside_box": int((up & ~inside).sum()),
-        "hold_s": hold_s, "entries": entries}, indent=1) + "\n")
+        "hold_s": float(hold_s), "entries": entries}, indent=1, allow_nan=False) + "\n",
+        "repertoire index")
+    remove_stale_cells(folder, {e["file"] for e in entries})
     return entries
+
+
+_CELL_FILE = re.compile(r"^cell-[0-9]+\.motion$")
+
+
+def repertoire_folder(out_dir: Path) -> Path:
+    """``out_dir/repertoire``, made if missing; a link or anything but a folder there is
+    refused (the run's files are never written through a link out of the run folder)."""
+    folder = out_dir / "repertoire"
+    try:
+        st = os.lstat(folder)
+    except FileNotFoundError:
+        try:
+            folder.mkdir()
+        except OSError as e:
+            raise WriteError(f"{folder}: cannot make the repertoire folder ({reason(e)})"
+                             ) from None
+        return folder
+    except OSError as e:
+        raise WriteError(f"{folder}: cannot use the repertoire folder ({reason(e)})") from None
+    if not stat.S_ISDIR(st.st_mode):
+        raise WriteError(f"{folder}: expected the repertoire folder, found "
+                         f"{'a link' if stat.S_ISLNK(st.st_mode) else kind_of(st.st_mode)}")
+    return folder
+
+
+def remove_stale_cells(folder: Path, keep: set[str]) -> list[str]:
+    """Remove the cell files of ``folder`` (``cell-N.motion``: regular files or links, never
+    what a link points at, never a folder) that ``keep`` does not name; their names."""
+    removed = []
+    for p in sorted(folder.iterdir()):
+        if p.name in keep or not _CELL_FILE.match(p.name):
+            continue
+        st = os.lstat(p)
+        if not (stat.S_ISREG(st.st_mode) or stat.S_ISLNK(st.st_mode)):
+            continue
+        try:
+            p.unlink()
+        except FileNotFoundError:
+            continue
+        except OSError as e:
+            raise WriteError(f"{p}: cannot remove a step no longer in the archive "
+                             f"({reason(e)})") from None
+        removed.append(p.name)
+    return removed
 
 
 def step_motion(genes: np.ndarray) -> Motion:
@@ -91,31 +151,56 @@ def step_motion(genes: np.ndarray) -> Motion:
     return Motion(nao.JOINTS, np.arange(len(q), dtype=np.int64) * step.POSE_MS, q)
 
 
-def run_problem(run: Path) -> Any:
-    """The problem of a run folder (from its config.toml) when it is another robot's than
-    the NAO, else None (the NAO's steps need no problem to be rebuilt)."""
-    from evomotion.run.config import config_from_dict, config_from_run_dir
+def run_problem(run: Path, config: Any = None) -> Any:
+    """The problem of a run folder (from its config.toml, or ``config``, its resolved
+    :class:`~evomotion.run.config.Config`) when it is another robot's than the NAO, else
+    None (the NAO's steps need no problem to be rebuilt)."""
     from evomotion.sim.robot import is_nao
-    from evomotion.studies import get_study
+    from evomotion.studies.humanoid_repertoire.problem import make_problem
+    from evomotion.studies.humanoid_repertoire.runfiles import run_config
 
-    name, raw = config_from_run_dir(run)
-    problem = raw.get("problem")
-    robot = problem.get("robot", "") if isinstance(problem, dict) else ""
-    if not isinstance(robot, str) or is_nao(robot):
+    cfg = config if config is not None else run_config(run)
+    if is_nao(cfg.problem.robot):
         return None
-    study = get_study(name)
-    return study.make_problem(config_from_dict(study, raw).problem)
+    return make_problem(cfg.problem)
+
+
+def export(run: Path, hold_s: float | None = None) -> tuple[Path, list[dict]]:
+    """``evomotion humanoid-repertoire export``: the run folder checked to be a repertoire
+    run, its ``repertoire/`` rebuilt from ``archive.npz``; ``hold_s`` recorded in the index
+    (default: the run's ``problem.hold_s``)."""
+    from evomotion.core.checks import check_number
+    from evomotion.studies.humanoid_repertoire.problem import MAX_HOLD_S
+    from evomotion.studies.humanoid_repertoire.runfiles import repertoire_run, run_config
+
+    if hold_s is not None:
+        check_number("--hold", hold_s, lo=0.0, hi=MAX_HOLD_S)
+    run = repertoire_run(run)
+    cfg = run_config(run)
+    hold = cfg.problem.hold_s if hold_s is None else hold_s
+    return run, write_repertoire(run, hold, run_problem(run, cfg))
+
+
+def _write(ctx: RunContext) -> list[dict]:
+    """The repertoire of the run's archive, written once per generation (the finishing
+    phase calls both hooks)."""
+    key = ("humanoid-repertoire", ctx.generation, ctx.evaluations)
+    if ctx.cache.get("repertoire-written") != key:
+        ctx.cache["repertoire-entries"] = write_repertoire(ctx.out_dir, ctx.problem.cfg.hold_s,
+                                                           ctx.problem)
+        ctx.cache["repertoire-written"] = key
+    return ctx.cache["repertoire-entries"]
 
 
 def on_checkpoint(ctx: RunContext) -> None:
     if (ctx.out_dir / "archive.npz").exists():
-        write_repertoire(ctx.out_dir, ctx.problem.cfg.hold_s, ctx.problem)
+        _write(ctx)
 
 
 def finalize(ctx: RunContext) -> None:
     if not (ctx.out_dir / "archive.npz").exists():
         return
-    entries = write_repertoire(ctx.out_dir, ctx.problem.cfg.hold_s, ctx.problem)
+    entries = _write(ctx)
     if not entries:
         ctx.log("repertoire: no standing step inside the archive's box yet")
         return

@@ -42,6 +42,12 @@ MEASURES = MeasureSpec(("dx_m", "dy_m", "dtheta_deg"), np.array([-0.10, -0.08, -
                        np.array([0.15, 0.08, 45.0]), (10, 8, 9))
 FALLEN_OBJECTIVE = -10.0
 NAO_TIMESTEP_S = 0.004
+#: the documented ranges of the ``[problem]`` floats: hold and segment (s), objective lost
+#: per joule, fall height (m; no biped's torso falls from higher)
+MAX_HOLD_S = 60.0
+MAX_SEGMENT_S = 60.0
+MAX_EFFORT_WEIGHT = 100.0
+MAX_FALL_HEIGHT_M = 5.0
 
 
 @dataclass(frozen=True)
@@ -70,14 +76,17 @@ class HumanoidRepertoireConfig:
 
     def validate(self) -> None:
         check_fields(self, "problem")
-        check_number("problem.hold_s", self.hold_s, lo=0.0, hi=60.0)
-        check_number("problem.effort_weight", self.effort_weight, lo=0.0)
-        check_number("problem.fall_height_m", self.fall_height_m, lo=0.0, lo_open=True)
+        check_number("problem.hold_s", self.hold_s, lo=0.0, hi=MAX_HOLD_S)
+        check_number("problem.effort_weight", self.effort_weight, lo=0.0,
+                     hi=MAX_EFFORT_WEIGHT)
+        check_number("problem.fall_height_m", self.fall_height_m, lo=0.0,
+                     hi=MAX_FALL_HEIGHT_M, lo_open=True)
         check_number("problem.fall_tilt_rad", self.fall_tilt_rad, lo=0.0, hi=math.pi,
                      lo_open=True)
         check_number("problem.threads", self.threads, lo=0, hi=1024, integer=True)
         validate_backend(self)
-        check_number("problem.segment_s", self.segment_s, lo=0.0, lo_open=True)
+        check_number("problem.segment_s", self.segment_s, lo=0.0, hi=MAX_SEGMENT_S,
+                     lo_open=True)
         check_text("problem.robot", self.robot)
 
     def genome_dim(self) -> int:

@@ -21,9 +21,12 @@ cli = typer.Typer(help="A repertoire of steps (dx, dy, dtheta) of a NAO or anoth
 
 @cli.command("pick")
 def pick_cmd(run: Path = typer.Argument(..., help="a humanoid-repertoire run folder"),
-             dx: float = typer.Option(..., "--dx", help="forward displacement (m)"),
-             dy: float = typer.Option(0.0, "--dy", help="leftward displacement (m)"),
-             dtheta: float = typer.Option(0.0, "--dtheta", help="turn, degrees (+ = left)"),
+             dx: float = typer.Option(..., "--dx", help="forward displacement (m), within "
+                                                        "+-10"),
+             dy: float = typer.Option(0.0, "--dy", help="leftward displacement (m), within "
+                                                        "+-10"),
+             dtheta: float = typer.Option(0.0, "--dtheta", help="turn, degrees (+ = left), "
+                                                                "within +-360"),
              json_out: bool = typer.Option(False, "--json", help="JSON on stdout")) -> None:
     """The repertoire's step nearest the request: its .motion and measured behaviour."""
     from evomotion.studies.humanoid_repertoire.use import pick
@@ -40,20 +43,23 @@ def pick_cmd(run: Path = typer.Argument(..., help="a humanoid-repertoire run fol
 
 @cli.command("export")
 def export_cmd(run: Path = typer.Argument(..., help="a humanoid-repertoire run folder"),
-               hold: float = typer.Option(2.0, "--hold", help="the run's hold (s), recorded "
-                                                             "in index.json")) -> None:
+               hold: float = typer.Option(None, "--hold", help="the hold (s, 0 to 60) "
+                                                               "recorded in index.json; "
+                                                               "default: the run's "
+                                                               "problem.hold_s")) -> None:
     """Rebuild repertoire/ (one .motion per standing cell, index.json) from archive.npz."""
-    from evomotion.studies.humanoid_repertoire.artifacts import run_problem, write_repertoire
+    from evomotion.studies.humanoid_repertoire.artifacts import export
 
-    entries = write_repertoire(Path(run), hold, run_problem(Path(run)))
-    typer.echo(f"{len(entries)} standing steps -> {Path(run) / 'repertoire'}")
+    folder, entries = export(run, hold)
+    typer.echo(f"{len(entries)} standing steps -> {folder / 'repertoire'}")
 
 
 @cli.command("walk-to")
 def walk_to_cmd(run: Path = typer.Argument(..., help="a humanoid-repertoire run folder"),
-                x: float = typer.Option(..., "--x", help="target forward (m)"),
-                y: float = typer.Option(0.0, "--y", help="target left (m)"),
-                theta: float = typer.Option(0.0, "--theta", help="target heading (deg)"),
+                x: float = typer.Option(..., "--x", help="target forward (m), within +-10"),
+                y: float = typer.Option(0.0, "--y", help="target left (m), within +-10"),
+                theta: float = typer.Option(0.0, "--theta", help="target heading (deg), "
+                                                                 "within +-360"),
                 video: Path = typer.Option(None, "--video", help="write an MP4 of the walk"),
                 out: Path = typer.Option(None, "--out", help="the chained .motion (default: "
                                                              "in the run folder)"),

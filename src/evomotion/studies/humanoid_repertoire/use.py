@@ -27,8 +27,21 @@ from pathlib import Path
 
 import numpy as np
 
+from evomotion.core.checks import check_number
 from evomotion.errors import InputError
-from evomotion.sim.nao.repertoire import chain, is_nao_repertoire, read_cell, read_index
+from evomotion.sim.nao.repertoire import chain, is_nao_repertoire, read_cell
+from evomotion.studies.humanoid_repertoire.runfiles import load_index
+
+#: the farthest request or target (m, each of x and y) and the largest turn (degrees)
+MAX_TARGET_M = 10.0
+MAX_TARGET_DEG = 360.0
+
+
+def check_request(names: tuple[str, str, str], x: float, y: float, theta_deg: float) -> None:
+    """One-line error unless (x, y, theta) are finite and within the documented ranges."""
+    for name, v, lim in zip(names, (x, y, theta_deg),
+                            (MAX_TARGET_M, MAX_TARGET_M, MAX_TARGET_DEG), strict=True):
+        check_number(name, v, lo=-lim, hi=lim)
 
 
 def _measures(index: dict) -> tuple[np.ndarray, list[dict]]:
@@ -40,9 +53,8 @@ def _measures(index: dict) -> tuple[np.ndarray, list[dict]]:
 def pick(run: Path, dx: float, dy: float, dtheta_deg: float) -> dict:
     """The nearest filled cell to the request: ``{file, cell, measured, objective,
     distance}`` (``file`` absolute)."""
-    if not np.all(np.isfinite([dx, dy, dtheta_deg])):
-        raise InputError("pick: --dx, --dy and --dtheta must be finite numbers")
-    folder, index = read_index(run)
+    check_request(("--dx", "--dy", "--dtheta"), dx, dy, dtheta_deg)
+    folder, index = load_index(run)
     m, entries = _measures(index)
     scale = _box_size(index)
     d = np.linalg.norm((m - [dx, dy, dtheta_deg]) / scale, axis=1)
@@ -69,11 +81,17 @@ def _box_size(index: dict) -> np.ndarray:
     return size if ok else np.array(NAO_BOX_SIZE)
 
 
-def _compose(pose: np.ndarray, step: np.ndarray) -> np.ndarray:
+def _compose(pose: np.ndarray, steps: np.ndarray) -> np.ndarray:
+    """The poses ``[n, 3]`` after each of ``steps[n, 3]`` from ``pose`` (x, y, theta deg)."""
     x, y, th = pose
     c, s = math.cos(math.radians(th)), math.sin(math.radians(th))
-    return np.array([x + c * step[0] - s * step[1], y + s * step[0] + c * step[1],
-                     th + step[2]])
+    return np.stack([x + c * steps[:, 0] - s * steps[:, 1], y + s * steps[:, 0]
+                     + c * steps[:, 1], th + steps[:, 2]], axis=1)
+
+
+#: successors pushed by one plan at most (about a second of search): the expansions are
+#: cut to ``MAX_PUSHES / len(steps)`` for a large repertoire
+MAX_PUSHES = 1_000_000
 
 
 def plan(steps: np.ndarray, target: np.ndarray, tol_m: float = 0.03, tol_deg: float = 5.0,
@@ -82,28 +100,34 @@ def plan(steps: np.ndarray, target: np.ndarray, tol_m: float = 0.03, tol_deg: fl
          risk_weight: float = 1.0, greed: float = 2.0) -> tuple[list[int], np.ndarray]:
     """Indices of repertoire ``steps[n, 3]`` (dx m, dy m, dtheta deg) to reach ``target`` (x,
     y, theta deg) from the origin, and the planned final pose (A*, see the module doc)."""
+    steps = np.asarray(steps, dtype=float).reshape(-1, 3)
+    target = np.asarray(target, dtype=float)
+    if not len(steps) or not (np.all(np.isfinite(steps)) and np.all(np.isfinite(target))):
+        raise InputError("walk-to: expected a repertoire of finite steps and a finite target")
     reach = max(float(np.hypot(steps[:, 0], steps[:, 1]).max()), 1e-3)
     turn = max(float(np.abs(steps[:, 2]).max()), 1e-3)
 
     def err(p):
-        return float(np.hypot(*(p[:2] - target[:2]))), abs((p[2] - target[2] + 180) % 360 - 180)
+        p = np.asarray(p)
+        return (np.hypot(p[..., 0] - target[0], p[..., 1] - target[1]),
+                np.abs((p[..., 2] - target[2] + 180) % 360 - 180))
 
     def h(p):
         dist, ang = err(p)
-        return max(dist / reach, ang / turn)
+        return np.maximum(dist / reach, ang / turn)
 
     cost = 1.0 + risk_weight * np.maximum(-np.asarray(objective, float), 0.0) \
         if objective is not None else np.ones(len(steps))
     start = np.zeros(3)
-    heap = [(h(start), 0, 0, start, ())]
+    heap = [(float(h(start)), 0.0, 0, start, ())]
     seen: set[tuple[int, int, int]] = set()
     best = (math.inf, start, ())
     tie = 0
-    for _ in range(max_expansions):
+    for _ in range(min(max_expansions, max(1, MAX_PUSHES // len(steps)))):
         if not heap:
             break
         _, g, _, p, path = heapq.heappop(heap)
-        dist, ang = err(p)
+        dist, ang = (float(v) for v in err(p))
         score = dist + 0.01 * ang
         if score < best[0]:
             best = (score, p, path)
@@ -113,11 +137,13 @@ def plan(steps: np.ndarray, target: np.ndarray, tol_m: float = 0.03, tol_deg: fl
         if key in seen or len(path) >= max_steps:
             continue
         seen.add(key)
-        for i, s in enumerate(steps):
-            q = _compose(p, s)
+        q = _compose(p, steps)
+        gq = g + cost
+        fq = (gq + greed * h(q)).tolist()
+        gq = gq.tolist()
+        for i in range(len(steps)):
             tie += 1
-            heapq.heappush(heap, (g + cost[i] + greed * h(q), g + cost[i], tie, q,
-                                  path + (i,)))
+            heapq.heappush(heap, (fq[i], gq[i], tie, q[i], path + (i,)))
     return list(best[2]), best[1]
 
 
@@ -139,14 +165,25 @@ def with_pauses(motions: list, settle_s: float) -> list:
 
 def walk_to(run: Path, x: float, y: float, theta_deg: float, video: Path | None = None,
             out: Path | None = None, hold_s: float = 2.0, settle_s: float = 1.0) -> dict:
-    """Plan, chain, play in simulation; the chained motion goes to ``out``."""
+    """Plan, chain, play in simulation; the chained motion goes to ``out`` (default: in the
+    run folder). Every path is checked before the work starts."""
+    from evomotion.outfile import atomic_write_text, check_target
     from evomotion.sim.nao.motion import format_motion
     from evomotion.sim.nao.replay import replay_motion
 
+    check_request(("--x", "--y", "--theta"), x, y, theta_deg)
     target = np.array([x, y, theta_deg], float)
-    if not np.all(np.isfinite(target)):
-        raise InputError("walk-to: --x, --y and --theta must be finite numbers")
-    folder, index = read_index(run)
+    check_number("hold (s)", hold_s, lo=0.0, hi=60.0)
+    check_number("settle (s)", settle_s, lo=0.0, hi=60.0)
+    folder, index = load_index(run)
+    run = folder.parent
+    if video is not None:
+        if Path(video).suffix.lower() != ".mp4":
+            raise InputError(f"--video {video}: expected a .mp4 path")
+        video = check_target(video, "video (--video)")
+    out = Path(out) if out is not None else \
+        run / f"walk_to_{x:+.2f}_{y:+.2f}_{theta_deg:+.0f}.motion"
+    out = check_target(out, "chained motion (--out)")
     m, entries = _measures(index)
     idx, planned = plan(m, target, objective=np.array([e["objective"] for e in entries]))
     if not idx:
@@ -155,8 +192,7 @@ def walk_to(run: Path, x: float, y: float, theta_deg: float, video: Path | None 
     problem = None if is_nao_repertoire(index) else _robot_problem(folder)
     joints = None if problem is None else problem.robot.joints
     motion = chain(with_pauses([read_cell(folder, entries[i], joints) for i in idx], settle_s))
-    out = out or Path(run) / f"walk_to_{x:+.2f}_{y:+.2f}_{theta_deg:+.0f}.motion"
-    out.write_text(format_motion(motion))
+    atomic_write_text(out, format_motion(motion), "chained motion (--out)")
     if problem is None:
         summary, skipped = replay_motion(motion, video, hold_s)
     else:

@@ -3,13 +3,12 @@ and the exports for a real NAO, ``best_naoqi.py`` and ``best_keyframes.json``.""
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
 
 from evomotion.run.context import RunContext
-from evomotion.run.folder import atomic_write_text
+from evomotion.run.folder import atomic_write_text, write_json
 from evomotion.sim import nao
 from evomotion.sim.nao.motion import Motion, format_motion
 from evomotion.studies.humanoid_step.problem import HumanoidStepProblem
@@ -70,7 +69,7 @@ def finalize(ctx: RunContext) -> None:
     if skipped is not None:  # no GL backend: keep everything but the video
         ctx.log(f"best.mp4 skipped: {skipped}")
         video = None
-    atomic_write_text(ctx.out_dir / "best_replay.json", json.dumps(summary, indent=2) + "\n")
+    write_json(ctx.out_dir / "best_replay.json", summary)
     dx, dy = summary["displacement_m"]
     ctx.log(f"best.motion replayed: dx={dx:+.3f} m dy={dy:+.3f} m, "
             f"{'fell' if summary['fell'] else 'stayed up'}"
@@ -93,7 +92,7 @@ def finalize_robot(ctx: RunContext) -> None:
                "fell": bool(ev.metrics["fell"][0]),
                "time_to_fall_s": float(ev.metrics["time_to_fall_s"][0]),
                "torso_height_m": [float(track.xyz[0, 0, 2]), float(track.xyz[0, -1, 2])]}
-    atomic_write_text(ctx.out_dir / "best_replay.json", json.dumps(summary, indent=2) + "\n")
+    write_json(ctx.out_dir / "best_replay.json", summary)
     video: Path | None = ctx.out_dir / "best.mp4"
     try:
         if not robot.xml:

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import csv
 import dataclasses
+import io
 import os
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
@@ -23,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from evomotion.core.algorithms import ALGORITHMS
+from evomotion.outfile import atomic_write_text, check_target, save_figure
 from evomotion.run.evaluators import SerialEvaluator
 from evomotion.studies.humanoid_step.problem import HumanoidStepConfig, HumanoidStepProblem
 
@@ -97,41 +99,62 @@ def run_experiment(out: Path, quick: bool = False, seeds: int = 10, generations:
         seeds, generations, pop = 1, 2, 8
         problem_cfg = dataclasses.replace(problem_cfg, intervals=4, motion_s=0.4, hold_s=0.2)
     out = Path(out)
-    (out / "curves").mkdir(parents=True, exist_ok=True)
+    check_outputs(out)
     jobs = plan(seeds)
     workers = workers or min(len(jobs), os.cpu_count() or 1)
     args = [(label, s, pop, generations, problem_cfg) for label, s in jobs]
-    with open(out / "results.csv", "w", newline="") as f:
-        csv.writer(f).writerow(["crossover", "seed", "first_step_generation",
-                                "first_full_generation", "final_best"])
-    results = []
+    results: list[dict] = []
+    _write_results(out, results)
     if workers == 1:
         for a in args:
-            results.append(_save(out, run_one(*a)))
+            results.append(_save(out, run_one(*a), results))
     else:
         with ProcessPoolExecutor(workers) as pool:
             futures = [pool.submit(run_one, *a) for a in args]
             for fut in as_completed(futures):
-                results.append(_save(out, fut.result()))
+                results.append(_save(out, fut.result(), results))
     results.sort(key=lambda r: (list(CROSSOVERS).index(r["crossover"]), r["seed"]))
+    _write_results(out, results)
     table = summary_table(results, generations)
-    (out / "summary.md").write_text(
-        f"# humanoid-step study: pop {pop}, {generations} generations, K = "
-        f"{problem_cfg.intervals}, bounds_scale {problem_cfg.bounds_scale}\n\n{table}\n")
+    atomic_write_text(out / "summary.md",
+                      f"# humanoid-step study: pop {pop}, {generations} generations, K = "
+                      f"{problem_cfg.intervals}, bounds_scale {problem_cfg.bounds_scale}\n\n"
+                      f"{table}\n", "study summary")
     plot_curves(results, out / "curves.png")
     echo(table)
     return results
 
 
-def _save(out: Path, r: dict) -> dict:
-    """Write one finished run (its curve and its results row) as soon as it ends."""
-    with open(out / "curves" / f"{r['crossover']}_seed{r['seed']}.csv", "w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(["generation", "max", "mean", "min", "stepped"])
-        w.writerows(r["curve"])
-    with open(out / "results.csv", "a", newline="") as f:
-        csv.writer(f).writerow([r["crossover"], r["seed"], r["first_step_generation"],
-                                r["first_full_generation"], r["final_best"]])
+#: what :func:`run_experiment` writes in its folder (besides ``curves/``)
+OUTPUTS = ("results.csv", "summary.md", "curves.png")
+RESULT_COLUMNS = ["crossover", "seed", "first_step_generation", "first_full_generation",
+                  "final_best"]
+
+
+def check_outputs(out: Path) -> None:
+    """Every file of :data:`OUTPUTS` can be written in the folder ``out`` (before any run)."""
+    for name in OUTPUTS:
+        check_target(out / name, f"study output {name}")
+
+
+def _csv(rows: list[list]) -> str:
+    buf = io.StringIO()
+    csv.writer(buf).writerows(rows)
+    return buf.getvalue()
+
+
+def _write_results(out: Path, results: list[dict]) -> None:
+    """``results.csv``: one row per finished run (rewritten whole, atomically)."""
+    rows = [[r[k] for k in RESULT_COLUMNS] for r in results]
+    atomic_write_text(out / "results.csv", _csv([RESULT_COLUMNS, *rows]), "study results")
+
+
+def _save(out: Path, r: dict, done: list[dict]) -> dict:
+    """Write one finished run (its curve, and the results so far) as soon as it ends."""
+    atomic_write_text(out / "curves" / f"{r['crossover']}_seed{r['seed']}.csv",
+                      _csv([["generation", "max", "mean", "min", "stepped"], *r["curve"]]),
+                      "study curve", mkdir=True)
+    _write_results(out, [*done, r])
     return r
 
 
@@ -178,5 +201,7 @@ def plot_curves(results: list[dict], png: Path) -> None:
     ax.set_ylabel("fitness (median over runs; dashed = mean)")
     ax.legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(png, dpi=120)
-    plt.close(fig)
+    try:
+        save_figure(fig, png, "study curves", dpi=120)
+    finally:
+        plt.close(fig)

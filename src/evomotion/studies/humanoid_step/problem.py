@@ -163,8 +163,17 @@ def leg_initial_pose() -> np.ndarray:
     return nao.pose_vector()[nao.joint_columns(nao.LEG_SERVOS)]
 
 
+#: the documented ranges of the ``[problem]`` floats: weights (m per rad, per m, per s;
+#: s per m), lengths (m), tolerances, times (s), the fall height (m)
+MAX_WEIGHT = 1000.0
+MAX_LENGTH_M = 10.0
+MAX_FALL_HEIGHT_M = 5.0
+MAX_TIME_S = 60.0
+
+
 def validate(cfg: HumanoidStepConfig) -> None:
-    """One-line :class:`InputError` for impossible settings."""
+    """One-line :class:`InputError` for impossible settings: every float finite and within
+    its documented range (the constants above)."""
     check_fields(cfg, "problem")
     check_choice("problem.encoding", cfg.encoding, ENCODINGS)
     check_choice("problem.fitness", cfg.fitness, FITNESSES)
@@ -172,25 +181,25 @@ def validate(cfg: HumanoidStepConfig) -> None:
     check_number("problem.worlds", cfg.worlds, lo=1, hi=1024, integer=True)
     check_number("problem.world_seed", cfg.world_seed, lo=-1, integer=True)
     check_number("problem.world_quantile", cfg.world_quantile, lo=0.0, hi=1.0)
-    for key in ("heading_weight", "lateral_weight", "flight_weight", "heading_tolerance_rad",
-                "lateral_tolerance_m", "excess_weight", "step_bonus_m"):
-        check_number(f"problem.{key}", getattr(cfg, key), lo=0.0)
+    for key in ("heading_weight", "lateral_weight", "flight_weight", "excess_weight",
+                "distance_weight"):
+        check_number(f"problem.{key}", getattr(cfg, key), lo=0.0, hi=MAX_WEIGHT)
+    check_number("problem.heading_tolerance_rad", cfg.heading_tolerance_rad, lo=0.0,
+                 hi=math.pi)
+    for key in ("lateral_tolerance_m", "step_bonus_m", "step_min_m"):
+        check_number(f"problem.{key}", getattr(cfg, key), lo=0.0, hi=MAX_LENGTH_M)
+    check_number("problem.forward_cap_m", cfg.forward_cap_m, lo=0.0, hi=MAX_LENGTH_M,
+                 lo_open=True)
     check_number("problem.intervals", cfg.intervals, lo=2, hi=MAX_INTERVALS, integer=True)
     check_number("problem.threads", cfg.threads, lo=0, hi=MAX_THREADS, integer=True)
     validate_backend(cfg)
-    check_number("problem.fall_height_m", cfg.fall_height_m, lo=0.0, lo_open=True)
+    check_number("problem.fall_height_m", cfg.fall_height_m, lo=0.0, hi=MAX_FALL_HEIGHT_M,
+                 lo_open=True)
     check_number("problem.fall_tilt_rad", cfg.fall_tilt_rad, lo=0.0, hi=math.pi, lo_open=True)
-    check_number("problem.step_min_m", cfg.step_min_m, lo=0.0)
-    checks = [(cfg.intervals >= 2, "problem.intervals must be >= 2"),
-              (cfg.motion_s > 0, "problem.motion_s must be > 0"),
-              (cfg.hold_s >= 0, "problem.hold_s must be >= 0"),
-              (0 < cfg.bounds_scale <= 1, "problem.bounds_scale must be in (0, 1]"),
-              (cfg.segment_s > 0, "problem.segment_s must be > 0"),
-              (cfg.threads >= 0, "problem.threads must be >= 0 (0 = all cores)"),
-              (cfg.forward_cap_m > 0, "problem.forward_cap_m must be > 0")]
-    for ok, message in checks:
-        if not ok:
-            raise InputError(message)
+    check_number("problem.motion_s", cfg.motion_s, lo=0.0, hi=MAX_TIME_S, lo_open=True)
+    check_number("problem.hold_s", cfg.hold_s, lo=0.0, hi=MAX_TIME_S)
+    check_number("problem.bounds_scale", cfg.bounds_scale, lo=0.0, hi=1.0, lo_open=True)
+    check_number("problem.segment_s", cfg.segment_s, lo=0.0, hi=MAX_TIME_S, lo_open=True)
 
 
 def flight_steps(airborne: np.ndarray, min_run: int) -> np.ndarray:

@@ -14,21 +14,46 @@ cli = typer.Typer(help="Seed 000: a forward step of the NAO, evolved by a GA.",
                   no_args_is_help=True)
 
 
+#: ``study``: seeds, generations, population and workers at most
+MAX_SEEDS = 1000
+MAX_GENERATIONS = 100_000
+MAX_POP = 100_000
+MAX_WORKERS = 1024
+
+
 @cli.command("study")
 def study_cmd(out: Path | None = typer.Option(None, "--out",
-                                             help="folder (default runs/humanoid-step-study-*)"),
+                                             help="folder (default runs/humanoid-step-study-*;"
+                                                  " its parent must exist)"),
               quick: bool = typer.Option(False, "--quick", help="tiny budget (tests, smoke)"),
-              seeds: int = typer.Option(10, help="seeds for blx_alpha and arithmetic"),
-              generations: int = typer.Option(100, help="generations per run"),
-              pop: int = typer.Option(100, help="population size"),
-              workers: int = typer.Option(0, help="parallel runs (0 = all cores)"),
-              bounds_scale: float = typer.Option(0.25, help="1 = the seed's whole Table 1"),
-              intervals: int = typer.Option(20, help="K time intervals (seed: 20)")) -> None:
+              seeds: int = typer.Option(10, help="seeds for blx_alpha and arithmetic "
+                                                 "(1 to 1000)"),
+              generations: int = typer.Option(100, help="generations per run (1 to 100000)"),
+              pop: int = typer.Option(100, help="population size (4 to 100000)"),
+              workers: int = typer.Option(0, help="parallel runs (0 = all cores; at most "
+                                                  "1024)"),
+              bounds_scale: float = typer.Option(0.25, help="in (0, 1]; 1 = the seed's whole "
+                                                            "Table 1"),
+              intervals: int = typer.Option(20, help="K time intervals (seed: 20; 2 to "
+                                                     "10000)")) -> None:
     """The seed's experiment: five crossovers, BLX-alpha vs arithmetic on several seeds."""
+    from evomotion.core.checks import check_number
+    from evomotion.outfile import WriteError
     from evomotion.run.folder import make_run_dir
-    from evomotion.studies.humanoid_step.experiment import run_experiment
+    from evomotion.studies.humanoid_step.experiment import check_outputs, run_experiment
+    from evomotion.studies.humanoid_step.problem import MAX_INTERVALS
 
+    check_number("--seeds", seeds, lo=1, hi=MAX_SEEDS, integer=True)
+    check_number("--generations", generations, lo=1, hi=MAX_GENERATIONS, integer=True)
+    check_number("--pop", pop, lo=4, hi=MAX_POP, integer=True)
+    check_number("--workers", workers, lo=0, hi=MAX_WORKERS, integer=True)
+    check_number("--bounds-scale", bounds_scale, lo=0.0, hi=1.0, lo_open=True)
+    check_number("--intervals", intervals, lo=2, hi=MAX_INTERVALS, integer=True)
+    if out is not None and not out.is_dir() and not out.absolute().parent.is_dir():
+        raise WriteError(f"--out {out}: the folder {out.absolute().parent} does not exist "
+                         "(make it first)")
     out = make_run_dir("humanoid-step-study", out)
+    check_outputs(out)
     typer.echo(f"writing {out}")
     run_experiment(out, quick=quick, seeds=seeds, generations=generations, pop=pop,
                    workers=workers, bounds_scale=bounds_scale, intervals=intervals)

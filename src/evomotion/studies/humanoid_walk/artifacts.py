@@ -12,14 +12,13 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from evomotion.run.context import RunContext
-from evomotion.run.folder import atomic_write_text
+from evomotion.run.folder import atomic_write_text, write_json
 from evomotion.sim.nao.motion import Motion, format_motion
 from evomotion.studies.humanoid_walk import gait
 from evomotion.studies.humanoid_walk.walk_motion import assemble, walk_parts
@@ -91,7 +90,7 @@ def finalize(ctx: RunContext) -> None:
     summary.update(hold_s=hold, duration_s=duration, speed_mps=dx / duration,
                    heading_deg_per_m=float(np.degrees(abs(summary["heading_change_rad"]))
                                            / max(dx, 0.01)))
-    atomic_write_text(ctx.out_dir / "best_replay.json", json.dumps(summary, indent=2) + "\n")
+    write_json(ctx.out_dir / "best_replay.json", summary)
     ctx.log(f"best.motion replayed: {dx:+.3f} m forward, {dy:+.3f} m sideways in "
             f"{duration:.2f} s ({summary['speed_mps']:.3f} m/s over the whole motion), "
             f"{'fell' if summary['fell'] else 'stayed up'}"
@@ -114,7 +113,7 @@ def finalize_robot(ctx: RunContext) -> None:
                **{k: float(v[0]) for k, v in ev.metrics.items()},
                "walk_s": float(walk_s[0]), "horizon_s": p.horizon_s}
     summary["fell"] = bool(summary["fell"])
-    atomic_write_text(ctx.out_dir / "best_replay.json", json.dumps(summary, indent=2) + "\n")
+    write_json(ctx.out_dir / "best_replay.json", summary)
     back = 3.0 if p.kind == "biped" else 6.0  # a quadruped is longer than it is tall
     video: Path | None = ctx.out_dir / "best.mp4"
     try:

@@ -25,12 +25,33 @@ MIN_DISTANCE_M = 0.05
 
 
 def walk_motion_path(run: Path) -> Path:
-    """``run/best.motion`` for a run folder, ``run`` for a ``.motion`` file."""
+    """``run/best.motion`` for a run folder (a humanoid-walk run of the NAO, checked by its
+    ``config.toml``), ``run`` for a ``.motion`` file."""
+    run = Path(run)
+    if run.is_dir():
+        check_walk_run(run)
     path = run / "best.motion" if run.is_dir() else run
     if not path.is_file():
         raise InputError(f"{run}: expected a humanoid-walk run folder (with best.motion) or "
                          "a .motion file")
     return path
+
+
+def check_walk_run(run: Path, option: str = "RUN") -> None:
+    """One line unless the folder ``run`` is a ``humanoid-walk`` run of the NAO (its
+    ``config.toml`` names the study; another study's run is refused, naming it)."""
+    from evomotion.run.config import config_from_run_dir
+    from evomotion.sim.robot import is_nao
+
+    name, raw = config_from_run_dir(run)
+    if name != "humanoid-walk":
+        raise InputError(f"{option} {run}: a {name} run, expected a humanoid-walk run folder "
+                         "(or a .motion file)")
+    problem = raw.get("problem", {})
+    robot = problem.get("robot", "") if isinstance(problem, dict) else ""
+    if not isinstance(robot, str) or not is_nao(robot):
+        raise InputError(f"{option} {run}: a walk of robot {str(robot)[:80]!r}; compare "
+                         "replays NAO walks beside Webots' NAO motions")
 
 
 def measure(motion: Motion, hold_s: float, trials: int = 0, seed: int = 0) -> dict:
@@ -84,12 +105,12 @@ def _per_m(v: float | None) -> str:
 
 
 def compare_command(run: Path, hold_s: float = 1.0, json_out: bool = False,
-                    trials: int = 0, seed: int = 0) -> None:
-    """CLI body: the table (or JSON) on stdout."""
+                    trials: int = 0, seed: int = 0) -> str:
+    """CLI body: the table (or JSON) for stdout."""
     from evomotion.core.checks import check_number
 
     check_number("--hold", hold_s, lo=0.0, hi=60.0)
     check_number("--trials", trials, lo=0, hi=1000, integer=True)
     check_number("--seed", seed, lo=0, integer=True)
     rows = compare(run, hold_s, trials, seed)
-    print(json.dumps(rows, indent=2) if json_out else table(rows))
+    return json.dumps(rows, indent=2) if json_out else table(rows)

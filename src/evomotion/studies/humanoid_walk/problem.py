@@ -60,6 +60,13 @@ METRICS = ("time_to_fall_s", "forward_m", "speed_mps", "lateral_m", "heading_cha
 GRAVITY = 9.81
 NAO_TIMESTEP_S = 0.004  # models/nao_h25.xml, for the memory estimate before loading it
 MAX_THREADS = 1024
+#: the documented ranges of the ``[problem]`` floats besides those checked inline: the
+#: weights (m per rad, m per m, m per unit), the heading tolerance (rad per m), the fall
+#: height (m), the segment (s)
+MAX_WEIGHT = 1000.0
+MAX_HEADING_TOLERANCE_RAD_PER_M = 2 * math.pi
+MAX_FALL_HEIGHT_M = 5.0
+MAX_SEGMENT_S = 60.0
 
 
 @dataclass(frozen=True)
@@ -103,11 +110,13 @@ class HumanoidWalkConfig:
         check_fields(self, "problem")
         check_number("problem.walk_s", self.walk_s, lo=0.0, hi=600.0, lo_open=True)
         check_number("problem.hold_s", self.hold_s, lo=0.0, hi=60.0)
-        for key in ("heading_weight", "lateral_weight", "heading_tolerance_rad_per_m",
-                    "excess_weight", "energy_weight"):
-            check_number(f"problem.{key}", getattr(self, key), lo=0.0)
+        for key in ("heading_weight", "lateral_weight", "excess_weight", "energy_weight"):
+            check_number(f"problem.{key}", getattr(self, key), lo=0.0, hi=MAX_WEIGHT)
+        check_number("problem.heading_tolerance_rad_per_m", self.heading_tolerance_rad_per_m,
+                     lo=0.0, hi=MAX_HEADING_TOLERANCE_RAD_PER_M)
         check_number("problem.speed_margin", self.speed_margin, lo=0.0, hi=1.0, lo_open=True)
-        check_number("problem.fall_height_m", self.fall_height_m, lo=0.0, lo_open=True)
+        check_number("problem.fall_height_m", self.fall_height_m, lo=0.0,
+                     hi=MAX_FALL_HEIGHT_M, lo_open=True)
         check_number("problem.fall_tilt_rad", self.fall_tilt_rad, lo=0.0, hi=math.pi,
                      lo_open=True)
         check_number("problem.worlds", self.worlds, lo=1, hi=1024, integer=True)
@@ -118,7 +127,8 @@ class HumanoidWalkConfig:
         check_number("problem.train_push_ns", self.train_push_ns, lo=0.0, hi=100.0)
         check_number("problem.threads", self.threads, lo=0, hi=MAX_THREADS, integer=True)
         validate_backend(self)
-        check_number("problem.segment_s", self.segment_s, lo=0.0, lo_open=True)
+        check_number("problem.segment_s", self.segment_s, lo=0.0, hi=MAX_SEGMENT_S,
+                     lo_open=True)
 
     def with_run_seed(self, seed: int) -> HumanoidWalkConfig:
         return dataclasses.replace(self, world_seed=seed) if self.world_seed < 0 else self

@@ -16,15 +16,18 @@ cli = typer.Typer(help="A NAO walk: 14 gait parameters evolved by CMA-ES.",
 @cli.command("compare")
 def compare_cmd(run: Path = typer.Argument(..., help="a humanoid-walk run folder, or a "
                                                      ".motion file of a walk"),
-                hold: float = typer.Option(1.0, "--hold", help="seconds held after each motion"),
+                hold: float = typer.Option(1.0, "--hold", help="seconds held after each "
+                                                               "motion (0 to 60)"),
                 trials: int = typer.Option(0, "--trials",
-                                           help="also the fall rate in N perturbed worlds"),
-                seed: int = typer.Option(0, "--seed", help="seed of the perturbed worlds"),
+                                           help="also the fall rate in N perturbed worlds "
+                                                "(0 to 1000)"),
+                seed: int = typer.Option(0, "--seed", help="seed of the perturbed worlds "
+                                                           "(>= 0)"),
                 json_out: bool = typer.Option(False, "--json", help="JSON on stdout")) -> None:
     """The evolved walk beside Webots' own NAO motions, replayed on the same model."""
     from evomotion.studies.humanoid_walk.compare import compare_command
 
-    compare_command(run, hold_s=hold, json_out=json_out, trials=trials, seed=seed)
+    typer.echo(compare_command(run, hold_s=hold, json_out=json_out, trials=trials, seed=seed))
 
 
 ARTIFACTS = "evomotion.studies.humanoid_walk.artifacts"

@@ -1,0 +1,76 @@
+"""humanoid-walk against hostile input (issue 31): ``compare`` checks that a run folder is a
+humanoid-walk run of the NAO (from its config.toml) before replaying anything, and the
+problem's floats have documented ranges."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+from pathlib import Path
+
+import pytest
+
+from evomotion.cli import main
+from evomotion.errors import InputError
+from evomotion.sim.nao.motion import format_motion, shipped_motion
+from evomotion.studies.humanoid_walk.problem import HumanoidWalkConfig
+
+
+def cli(*args) -> tuple[int, str]:
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err), pytest.raises(SystemExit) as e:
+        main(["evomotion", "humanoid-walk", *map(str, args)])
+    return e.value.code, err.getvalue()
+
+
+def one_error(code: int, err: str, *needles: str) -> None:
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert code == 2 and len(lines) == 1 and lines[0].startswith("error: "), err
+    for n in needles:
+        assert n in lines[0], err
+
+
+@pytest.fixture()
+def no_replay(monkeypatch):
+    from evomotion.studies.humanoid_walk import compare
+
+    def replay(*a, **k):
+        raise AssertionError("a motion was replayed before the run folder was checked")
+
+    monkeypatch.setattr(compare, "measure", replay)
+
+
+def _run(d: Path, config: str) -> Path:
+    """A run folder with ``config`` as its config.toml and a NAO motion as best.motion."""
+    d.mkdir()
+    (d / "config.toml").write_text(config)
+    (d / "best.motion").write_text(format_motion(shipped_motion("TurnLeft40")))
+    return d
+
+
+def test_compare_refuses_another_studys_run_naming_it(tmp_path, no_replay):
+    kick = _run(tmp_path / "kick", 'study = "biped-kick"\n')
+    one_error(*cli("compare", kick), "biped-kick", "humanoid-walk")
+    one_error(*cli("compare", tmp_path), "config.toml")  # not a run folder at all
+
+
+def test_compare_refuses_a_walk_of_another_robot(tmp_path, no_replay):
+    op3 = _run(tmp_path / "op3", 'study = "humanoid-walk"\n[problem]\nrobot = "op3"\n')
+    one_error(*cli("compare", op3), "op3")
+
+
+@pytest.mark.parametrize("args,needle", [(["--hold", "nan"], "--hold"),
+                                         (["--hold", "1e300"], "--hold"),
+                                         (["--trials", "-1"], "--trials")])
+def test_compare_refuses_non_physical_numbers(tmp_path, no_replay, args, needle):
+    walk = _run(tmp_path / "walk", 'study = "humanoid-walk"\n')
+    one_error(*cli("compare", walk, *args), needle)
+
+
+@pytest.mark.parametrize("key,value", [("heading_weight", 1e300), ("energy_weight", 1e300),
+                                       ("heading_tolerance_rad_per_m", 1e300),
+                                       ("fall_height_m", 1e300), ("segment_s", 1e300),
+                                       ("walk_s", float("nan"))])
+def test_config_floats_have_a_documented_range(key, value):
+    with pytest.raises(InputError, match=f"problem.{key}: expected"):
+        HumanoidWalkConfig(**{key: value}).validate()
