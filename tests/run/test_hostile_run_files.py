@@ -3,6 +3,7 @@ traceback, a huge allocation, a zero-padded file or a forged log line."""
 
 from __future__ import annotations
 
+import contextlib
 import io
 import json
 import os
@@ -132,10 +133,8 @@ def test_plot_on_a_damaged_stats_file(run10, tmp_path, damage):
 @settings(max_examples=200, deadline=None)
 @given(st.binary(max_size=600))
 def test_npz_reader_fuzz(data):
-    try:
+    with contextlib.suppress(InputError):
         loads_npz(data, "x.npz")
-    except InputError:
-        pass
 
 
 @settings(max_examples=60, deadline=None)
@@ -148,10 +147,8 @@ def test_npz_declared_shapes_are_checked_before_allocation(shape):
         z.writestr("a.npy", _npy_header_claiming(tuple(shape)))
     n = int(np.prod(np.array(shape, dtype=object)))
     if n * 8 <= 8:  # fits its 8 bytes (numpy may still refuse a shape like (0, 2**30, 2**30))
-        try:
+        with contextlib.suppress(InputError):
             assert loads_npz(buf.getvalue(), "x.npz")["a"].size == n
-        except InputError:
-            pass
     else:
         with pytest.raises(InputError, match="declares shape"):
             loads_npz(buf.getvalue(), "x.npz")

@@ -42,3 +42,55 @@ def fault_at(step: int, how: str = "interrupt") -> Iterator[None]:
         yield
     finally:
         runner.build_driver = build
+
+
+def in_child(fn) -> int:
+    """Run ``fn`` in a forked child process; its exit status (``-9`` when it was killed by
+    SIGKILL, its return value otherwise). POSIX only; build nothing that starts threads in
+    the parent before calling it."""
+    import sys
+    import traceback
+
+    sys.stdout.flush()
+    sys.stderr.flush()
+    pid = os.fork()
+    if pid == 0:  # pragma: no cover - the child
+        code = 70
+        try:
+            code = int(fn() or 0)
+        except BaseException:  # noqa: BLE001 - reported, then the child ends
+            traceback.print_exc()
+        finally:
+            os._exit(code)
+    _, status = os.waitpid(pid, 0)
+    return -os.WTERMSIG(status) if os.WIFSIGNALED(status) else os.WEXITSTATUS(status)
+
+
+def kill_in_finishing(point: int, count_file=None) -> None:
+    """From the start of a run's finishing phase (its final artifacts), count every write
+    event of :mod:`evomotion.outfile` (a file begun, a file's bytes complete before its rename,
+    a line appended) and SIGKILL this process at event ``point`` (0: as the phase starts; a
+    point past the last event: never). ``count_file`` (a path) receives the running count.
+    For a child process: it changes this process for good."""
+    from evomotion import outfile
+
+    seen = {"on": False, "n": 0}
+    real = runner._finish
+
+    def finish(*a, **kw):
+        seen["on"] = True
+        if point == 0:
+            os.kill(os.getpid(), signal.SIGKILL)
+        return real(*a, **kw)
+
+    def hook(event, path) -> None:
+        if seen["on"]:
+            seen["n"] += 1
+            if seen["n"] == point:
+                os.kill(os.getpid(), signal.SIGKILL)
+            if count_file is not None:
+                with open(count_file, "w") as fh:
+                    fh.write(str(seen["n"]))
+
+    runner._finish = finish
+    outfile.WRITE_HOOKS.append(hook)
