@@ -4,29 +4,15 @@ the one atomic writer; the problem's floats have documented ranges."""
 
 from __future__ import annotations
 
-import contextlib
-import io
 import os
 
 import pytest
+from hostile_cli import one_error, study_cli  # tests/studies/conftest.py
 
-from evomotion.cli import main
 from evomotion.errors import InputError
 from evomotion.studies.arm_ik.problem import ArmIKConfig
 
-
-def cli(*args) -> tuple[int, str]:
-    err = io.StringIO()
-    with contextlib.redirect_stderr(err), pytest.raises(SystemExit) as e:
-        main(["evomotion", "arm-ik", *map(str, args)])
-    return e.value.code, err.getvalue()
-
-
-def one_error(code: int, err: str, *needles: str) -> None:
-    lines = [ln for ln in err.splitlines() if ln.strip()]
-    assert code == 2 and len(lines) == 1 and lines[0].startswith("error: "), err
-    for n in needles:
-        assert n in lines[0], err
+cli = study_cli("arm-ik")
 
 
 @pytest.fixture()

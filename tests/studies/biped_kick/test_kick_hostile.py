@@ -4,35 +4,20 @@ line, before any work; the problem's floats have documented ranges."""
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 import os
 from pathlib import Path
 
 import pytest
 
-from evomotion.cli import main
 from evomotion.errors import InputError
 from evomotion.studies.biped_kick.motion import GENES, START
 from evomotion.studies.biped_kick.problem import KickConfig
 
 X0 = [START[g[0]] for g in GENES]
+from hostile_cli import one_error, study_cli  # noqa: E402 - tests/studies/conftest.py
 
-
-def cli(*args) -> tuple[int, str]:
-    """``evomotion biped-kick ARGS`` in this process: (exit code, stderr)."""
-    err = io.StringIO()
-    with contextlib.redirect_stderr(err), pytest.raises(SystemExit) as e:
-        main(["evomotion", "biped-kick", *map(str, args)])
-    return e.value.code, err.getvalue()
-
-
-def one_error(code: int, err: str, *needles: str) -> None:
-    lines = [ln for ln in err.splitlines() if ln.strip()]
-    assert code == 2 and len(lines) == 1 and lines[0].startswith("error: "), err
-    for n in needles:
-        assert n in lines[0], err
+cli = study_cli("biped-kick")
 
 
 @pytest.fixture()

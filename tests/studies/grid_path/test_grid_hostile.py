@@ -5,30 +5,16 @@ have documented ranges."""
 
 from __future__ import annotations
 
-import contextlib
-import io
 import os
 
 import numpy as np
 import pytest
+from hostile_cli import one_error, study_cli  # tests/studies/conftest.py
 
-from evomotion.cli import main
 from evomotion.errors import InputError
 from evomotion.studies.grid_path.problem import GridPathConfig
 
-
-def cli(*args) -> tuple[int, str]:
-    err = io.StringIO()
-    with contextlib.redirect_stderr(err), pytest.raises(SystemExit) as e:
-        main(["evomotion", "grid-path", *map(str, args)])
-    return e.value.code, err.getvalue()
-
-
-def one_error(code: int, err: str, *needles: str) -> None:
-    lines = [ln for ln in err.splitlines() if ln.strip()]
-    assert code == 2 and len(lines) == 1 and lines[0].startswith("error: "), err
-    for n in needles:
-        assert n in lines[0], err
+cli = study_cli("grid-path")
 
 
 @pytest.fixture()

@@ -16,14 +16,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hostile_cli import one_error, study_cli  # tests/studies/conftest.py
 
-from evomotion.cli import main
 from evomotion.errors import InputError
 from evomotion.studies.humanoid_repertoire import step
 from evomotion.studies.humanoid_repertoire.problem import (
     MEASURES,
     HumanoidRepertoireConfig,
 )
+
+cli = study_cli("humanoid-repertoire")
 
 
 def _archive(path: Path, cells: dict[int, tuple[float, float, float]],
@@ -54,23 +56,6 @@ def _run(d: Path, study: str = "humanoid-repertoire", hold: float = 0.2,
     _archive(d / "archive.npz", cells or {10: (0.05, 0.0, 0.0), 20: (0.0, 0.03, 5.0),
                                           30: (0.08, -0.02, -10.0)})
     return d
-
-
-def cli(*args: str) -> tuple[int, str]:
-    """``evomotion ARGS`` in this process: (exit code, stderr lines joined)."""
-    import contextlib
-
-    err = io.StringIO()
-    with contextlib.redirect_stderr(err), pytest.raises(SystemExit) as e:
-        main(["evomotion", "humanoid-repertoire", *map(str, args)])
-    return e.value.code, err.getvalue()
-
-
-def one_error(code: int, err: str, *needles: str) -> None:
-    lines = [ln for ln in err.splitlines() if ln.strip()]
-    assert code == 2 and len(lines) == 1 and lines[0].startswith("error: "), err
-    for n in needles:
-        assert n in lines[0], err
 
 
 @pytest.fixture()

@@ -4,30 +4,16 @@ problem's floats have documented ranges."""
 
 from __future__ import annotations
 
-import contextlib
-import io
 from pathlib import Path
 
 import pytest
+from hostile_cli import one_error, study_cli  # tests/studies/conftest.py
 
-from evomotion.cli import main
 from evomotion.errors import InputError
 from evomotion.sim.nao.motion import format_motion, shipped_motion
 from evomotion.studies.humanoid_walk.problem import HumanoidWalkConfig
 
-
-def cli(*args) -> tuple[int, str]:
-    err = io.StringIO()
-    with contextlib.redirect_stderr(err), pytest.raises(SystemExit) as e:
-        main(["evomotion", "humanoid-walk", *map(str, args)])
-    return e.value.code, err.getvalue()
-
-
-def one_error(code: int, err: str, *needles: str) -> None:
-    lines = [ln for ln in err.splitlines() if ln.strip()]
-    assert code == 2 and len(lines) == 1 and lines[0].startswith("error: "), err
-    for n in needles:
-        assert n in lines[0], err
+cli = study_cli("humanoid-walk")
 
 
 @pytest.fixture()
