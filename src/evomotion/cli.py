@@ -146,6 +146,11 @@ def plot_cmd(
     for d in run_dirs:
         if not (d / "stats.csv").exists():
             raise InputError(f"{d}: not a run folder (no stats.csv)")
+    if out is not None:  # a path the user names: checked before anything is drawn
+        from evomotion.outfile import check_target
+
+        for suffix in (".png", ".svg"):
+            check_target(out.with_suffix(suffix), "plot (--out)")
     if len(run_dirs) == 1:
         d = run_dirs[0]
         paths = plot_fitness(d / "stats.csv", out or d / "plots" / "fitness")
@@ -181,7 +186,7 @@ def replay_cmd(
     optionally in perturbed worlds or from lying (docs/humanoid-step.md)."""
     from evomotion.sim.nao.replay import StressOptions, replay_command
 
-    if not motion.is_file():
+    if not motion.exists():
         raise InputError(f"{motion}: no such motion file")
     stress = StressOptions(friction=friction, mass_scale=mass_scale, push_ns=push,
                            trials=trials, seed=seed, start=start)

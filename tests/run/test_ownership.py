@@ -116,3 +116,33 @@ def test_new_run_into_an_empty_existing_folder(tmp_path):
     d.mkdir()
     assert _cli("run", "functions", "--out", str(d), *ARGS).returncode == 0
     assert (d / RUN_MARKER).is_file()
+
+
+def test_experiment_output_folders_are_owned_too(tmp_path):
+    """`humanoid-step study --out project` wrote its curves into a project folder."""
+    from evomotion.errors import InputError
+    from evomotion.outfile import atomic_write_text
+    from evomotion.run.folder import make_output_folder
+
+    d = _project(tmp_path / "project")
+    before = _tree(d)
+    with pytest.raises(InputError, match="files this program did not write"):
+        make_output_folder("humanoid-step-study", d)
+    assert _tree(d) == before
+    with pytest.raises(InputError, match="does not exist"):
+        make_output_folder("x", tmp_path / "no" / "such")
+    assert not (tmp_path / "no").exists()
+    out = make_output_folder("x", tmp_path / "results")
+    atomic_write_text(out / "table.md", "| a |\n")
+    assert make_output_folder("x", out) == out  # its own earlier outputs: replaced later
+    (out / "mine.txt").write_text("user\n")
+    with pytest.raises(InputError, match="mine.txt"):
+        make_output_folder("x", out)
+
+
+def test_plot_out_into_a_missing_folder_makes_nothing(tmp_path):
+    d = tmp_path / "run"
+    assert _cli("run", "functions", "--out", str(d), *ARGS).returncode == 0
+    r = _cli("plot", str(d), "--out", str(tmp_path / "missing" / "fig"))
+    assert r.returncode == 2 and "does not exist" in r.stderr and "Traceback" not in r.stderr
+    assert not (tmp_path / "missing").exists()

@@ -79,13 +79,58 @@ def test_a_timeout_is_one_error_and_leaves_nothing(tmp_path, monkeypatch):
 
 
 def test_a_successful_render_is_renamed_into_place(tmp_path, monkeypatch):
-    run, calls = fake_run(0, partial=b"complete video")
+    run, calls = fake_run(0, partial=WHOLE_MP4)
     monkeypatch.setattr(subprocess, "run", run)
     out = render.render_video(QPOS, 0.04, tmp_path / "v.mp4")
-    assert out == tmp_path / "v.mp4" and out.read_bytes() == b"complete video"
+    assert out == tmp_path / "v.mp4" and out.read_bytes() == WHOLE_MP4
     assert names(tmp_path) == ["v.mp4"]
+
+
+def _box(kind: bytes, body: bytes) -> bytes:
+    return (8 + len(body)).to_bytes(4, "big") + kind + body
+
+
+#: the box structure of an MP4 (ftyp, mdat, moov), enough for the completeness check
+WHOLE_MP4 = _box(b"ftyp", b"isom") + _box(b"mdat", b"frames") + _box(b"moov", b"index")
+
+
+def test_an_encoder_that_exits_0_with_a_cut_video_leaves_nothing(tmp_path, monkeypatch):
+    """On a full disk the encoder may end well and leave a 4096-byte file: never renamed."""
+    run, calls = fake_run(0, partial=WHOLE_MP4[:-3])
+    monkeypatch.setattr(subprocess, "run", run)
+    with pytest.raises(RuntimeError, match="incomplete MP4"):
+        render.render_video(QPOS, 0.04, tmp_path / "v.mp4")
+    assert names(tmp_path) == []
 
 
 def test_videos_off_still_skips_before_the_target_check(tmp_path):
     with render.videos_off("run.videos = false"), pytest.raises(render.RenderUnavailableError):
         render.render_video(QPOS, 0.04, tmp_path / "none" / "v.mp4")
+
+
+def test_a_full_disk_during_encoding_is_one_line(tmp_path):
+    """The encoder's 'No space left on device' was a RuntimeError traceback (replay --video)."""
+    import subprocess as sp
+
+    import numpy as np
+
+    from evomotion.outfile import WriteError
+    from evomotion.sim.render import RenderUnavailableError, render_video
+
+    disk = tmp_path / "disk"
+    disk.mkdir()
+    if sp.run(["mount", "-t", "tmpfs", "-o", "size=4k", "tmpfs", str(disk)],
+              capture_output=True).returncode != 0:
+        pytest.skip("cannot mount a tmpfs here (needs root and CAP_SYS_ADMIN)")
+    try:
+        from evomotion.sim.nao.model import MODEL_PATH, load_model
+
+        q = np.tile(load_model().qpos0, (200, 1))
+        try:
+            with pytest.raises(WriteError, match="no space left on the device"):
+                render_video(q, 0.02, disk / "v.mp4", model_path=MODEL_PATH)
+        except RenderUnavailableError:
+            pytest.skip("no offscreen rendering here")
+        assert list(disk.iterdir()) == []
+    finally:
+        sp.run(["umount", "-l", str(disk)], check=False)

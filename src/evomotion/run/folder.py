@@ -24,6 +24,7 @@ from evomotion.outfile import (
     WriteError,
     atomic_write_bytes,  # noqa: F401 - the run loop's writers, re-exported
     atomic_write_text,
+    kind_of,
     read_marker,
     reason,
     write_marker,
@@ -61,8 +62,15 @@ def make_run_dir(study: str, out: Path | str | None = None, root: Path | str = "
             n += 1
             path = Path(root) / f"{study}-{stamp}-{n}"
     try:
-        if path.exists() and not path.is_dir():
-            raise InputError(f"--out {path}: expected a folder, found a file")
+        exists = path.exists() or path.is_symlink()
+    except (OSError, ValueError) as e:
+        raise InputError(f"--out {path}: cannot use the run folder ({reason(e)})") from None
+    if exists and not path.is_dir():
+        raise InputError(f"--out {path}: expected a folder, found "
+                         f"{kind_of(os.stat(path).st_mode) or 'a file'}"
+                         if path.exists() else f"--out {path}: expected a folder, found a "
+                         "dangling link")
+    try:
         path.mkdir(parents=True, exist_ok=True)
         probe = path / f".write-test-{os.getpid()}.tmp"
         probe.touch()
@@ -74,6 +82,33 @@ def make_run_dir(study: str, out: Path | str | None = None, root: Path | str = "
 
 
 _TEMPORARY = re.compile(r"\..+\.tmp(\.[A-Za-z0-9]{1,8})?")
+
+
+def make_output_folder(label: str, out: Path | str | None, option: str = "--out") -> Path:
+    """A folder for a command's several outputs (an experiment's tables and plots): ``out``
+    (made if missing, but its parent must exist: a mistyped path makes no folders) or a new
+    ``runs/<label>-<time>``. It must be new, empty, or a folder this program marked as its own
+    that holds nothing else (its earlier outputs are replaced); it is marked, so that what the
+    command writes there is recorded as its own. A folder holding anything else (a project
+    beside a thesis) is refused, naming what it holds, and nothing is written in it."""
+    if out is not None:
+        out = Path(out)
+        if not out.is_dir() and not out.absolute().parent.is_dir():
+            raise WriteError(f"{option} {out}: the folder {out.absolute().parent} does not "
+                             "exist (make it first)")
+        if out.is_dir():
+            foreign = foreign_entries(out)
+            if foreign:
+                raise InputError(f"{option} {out}: the folder holds files this program did not "
+                                 f"write ({_names(foreign)}); choose a new or empty folder")
+    path = make_run_dir(label, out)
+    if not is_run_folder(path):
+        try:
+            write_marker(path, label, [])
+        except OSError as e:
+            raise WriteError(f"{path / RUN_MARKER}: cannot mark the folder ({reason(e)})"
+                             ) from None
+    return path
 
 
 def _is_temporary(name: str) -> bool:

@@ -16,6 +16,7 @@ import contextlib
 import contextvars
 import io
 import json
+import os
 import subprocess
 import sys
 from collections.abc import Iterator
@@ -80,7 +81,7 @@ def render_video(qpos: np.ndarray, dt: float, out_path: str | Path, fps: int = 2
     existing folder, not a device or FIFO); the encoder writes a temporary file next to it,
     renamed over ``out_path`` only when the whole video is written, so a failed or killed
     render leaves no partial MP4 there."""
-    from evomotion.outfile import atomic_output, check_target
+    from evomotion.outfile import WriteError, atomic_output, check_target
 
     check_videos_on()
     out_path = check_target(out_path, "video")
@@ -113,10 +114,54 @@ def render_video(qpos: np.ndarray, dt: float, out_path: str | Path, fps: int = 2
             if UNAVAILABLE in err:
                 raise RenderUnavailableError(
                     err.split(UNAVAILABLE, 1)[1].strip().splitlines()[0])
+            for text, why in _DISK_ERRORS:  # the encoder could not write: one line
+                if text in err:
+                    raise WriteError(f"{out_path}: cannot write the video ({why})")
             last = err.strip().splitlines()[-1] if err.strip() else f"exit {proc.returncode}"
             raise RuntimeError(f"rendering failed: {last}")
+        if not complete_mp4(tmp):  # the encoder may end "well" on a full disk
+            try:
+                full = os.statvfs(tmp.parent).f_bavail == 0
+            except OSError:
+                full = False
+            if full:
+                raise WriteError(f"{out_path}: cannot write the video (no space left on the "
+                                 "device)")
+            raise RuntimeError(f"rendering {out_path}: the encoder wrote an incomplete MP4")
     return out_path
 
+
+def complete_mp4(path: Path) -> bool:
+    """Whether ``path`` is a whole MP4: top-level boxes that add up to the file's size, with
+    the ``moov`` index and the ``mdat`` data (a video cut short by a full disk is not)."""
+    try:
+        with open(path, "rb") as fh:
+            size = os.fstat(fh.fileno()).st_size
+            pos, kinds = 0, set()
+            while pos < size:
+                fh.seek(pos)
+                head = fh.read(16)
+                if len(head) < 8:
+                    return False
+                n, kind = int.from_bytes(head[:4], "big"), head[4:8]
+                if n == 1 and len(head) == 16:
+                    n = int.from_bytes(head[8:16], "big")
+                elif n == 0:
+                    n = size - pos
+                if n < 8:
+                    return False
+                kinds.add(kind)
+                pos += n
+    except OSError:
+        return False
+    return pos == size and {b"moov", b"mdat"} <= kinds
+
+
+#: what the encoder (ffmpeg) prints when the disk refuses the video, and our reason
+_DISK_ERRORS = (("No space left on device", "no space left on the device"),
+                ("Disk quota exceeded", "disk quota exceeded"),
+                ("Read-only file system", "read-only file system"),
+                ("Permission denied", "permission denied"))
 
 MARK_SPACING_M = 0.5  # floor marks across the +x direction: every 0.5 m, a post every 1 m
 MARK_RANGE_M = (-2.0, 8.0)

@@ -107,17 +107,11 @@ OUTPUTS = ("curves.npz", "convergence.png", "results.json", "table.md")
 
 def study_folder(out: Path | None) -> Path:
     """The study's output folder: ``out`` (made if missing; its parent must exist: a typo in
-    a path does not make folders), else a new ``runs/biped-kick-study-<time>``."""
-    from evomotion.outfile import WriteError
-    from evomotion.run.folder import make_run_dir
+    a path does not make folders; a folder holding files this program did not write is
+    refused), else a new ``runs/biped-kick-study-<time>``."""
+    from evomotion.run.folder import make_output_folder
 
-    if out is None:
-        return make_run_dir("biped-kick-study")
-    out = Path(out)
-    if not out.is_dir() and not out.absolute().parent.is_dir():
-        raise WriteError(f"--out {out}: the folder {out.absolute().parent} does not exist "
-                         "(make it first)")
-    return make_run_dir("biped-kick-study", out)
+    return make_output_folder("biped-kick-study", out)
 
 
 def check_outputs(out_dir: Path) -> None:

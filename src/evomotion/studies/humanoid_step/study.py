@@ -38,8 +38,7 @@ def study_cmd(out: Path | None = typer.Option(None, "--out",
                                                      "10000)")) -> None:
     """The seed's experiment: five crossovers, BLX-alpha vs arithmetic on several seeds."""
     from evomotion.core.checks import check_number
-    from evomotion.outfile import WriteError
-    from evomotion.run.folder import make_run_dir
+    from evomotion.run.folder import make_output_folder
     from evomotion.studies.humanoid_step.experiment import check_outputs, run_experiment
     from evomotion.studies.humanoid_step.problem import MAX_INTERVALS
 
@@ -49,10 +48,7 @@ def study_cmd(out: Path | None = typer.Option(None, "--out",
     check_number("--workers", workers, lo=0, hi=MAX_WORKERS, integer=True)
     check_number("--bounds-scale", bounds_scale, lo=0.0, hi=1.0, lo_open=True)
     check_number("--intervals", intervals, lo=2, hi=MAX_INTERVALS, integer=True)
-    if out is not None and not out.is_dir() and not out.absolute().parent.is_dir():
-        raise WriteError(f"--out {out}: the folder {out.absolute().parent} does not exist "
-                         "(make it first)")
-    out = make_run_dir("humanoid-step-study", out)
+    out = make_output_folder("humanoid-step-study", out)
     check_outputs(out)
     typer.echo(f"writing {out}")
     run_experiment(out, quick=quick, seeds=seeds, generations=generations, pop=pop,
