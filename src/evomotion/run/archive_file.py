@@ -84,7 +84,8 @@ def read_archive(path: Path | str) -> ArchiveFile:
               and data["all_centres"].shape == (cells, m)
               and data["bins"].ndim == 1 and data["bins"].size <= MAX_MEASURES
               and (kind == "cvt" or math.prod(int(b) for b in data["bins"]) == cells))
-        cell = data["cell"].astype(np.int64)
+        ok = ok and all(np.issubdtype(data[k].dtype, np.integer) for k in ("cell", "bins"))
+        cell = data["cell"].astype(np.int64) if ok else np.zeros(0, np.int64)
         ok = ok and bool(np.all((cell >= 0) & (cell < cells)))
         ok = ok and all(bool(np.isfinite(data[k].astype(float)).all()) for k in (
             "lower", "upper", "centre", "objective", "measures", "all_centres", "solution"))
