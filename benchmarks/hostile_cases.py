@@ -1,11 +1,17 @@
-"""Issue 12's hostile cases, run against this tree and, with ``--baseline REV``, the package as
-committed at REV: each case's outcome as a before/after table.
+"""Issue 12's and issue 31's hostile cases, run against this tree and, with ``--baseline REV``,
+the package as committed at REV: each case's outcome as a before/after table.
 
 Outcomes: ``one-line error`` (non-zero exit, one ``error:`` line, no traceback), ``ok`` (the
 correct behaviour, checked), ``TRACEBACK``, ``SILENT`` (exit 0 but wrong), ``HANG`` (over the
-time limit).
+time limit). Issue 31's cases (:mod:`hostile_cases_31`, run in the sandbox of
+:mod:`hostile_harness`) add ``MEMORY`` (peak RSS above 1 GiB), ``TOUCHED`` (something outside
+the paths the case may write changed, or /dev/null), ``KILLED`` (a process outside the run was
+signalled), ``LATE`` (a refusal that came after the work) and ``FAILED`` (a command that should
+have succeeded did not, or its result is wrong); a cell is the worst of them, with the longest
+command's wall time and the peak RSS.
 
-    python benchmarks/hostile_cases.py [--baseline d61c970] [--only SUBSTRING]
+    python benchmarks/hostile_cases.py [--baseline aa2bf48] [--issue 12|31] [--only SUBSTRING]
+                                       [--json DETAILS.json]
 """
 
 from __future__ import annotations
@@ -328,12 +334,83 @@ def cases() -> dict:
     }
 
 
+def _run_31(name: str, case, trees: dict, tmp: Path) -> tuple[list[str], list[dict]]:
+    from hostile_harness import (
+        Box,
+        SetupError,
+        devnull_ok,
+        restore_devnull,
+        worst,
+    )
+
+    cells, details = [], []
+    for label, src in trees.items():
+        work = Path(tempfile.mkdtemp(dir=tmp)) / "case"
+        work.mkdir()
+        box = Box(src, work, label, tmp / "cache" / label.replace(" ", "-"))
+        try:
+            v = case(box)
+        except SetupError as e:
+            v = f"setup failed ({e})"
+        except Exception as e:  # noqa: BLE001 - a broken case is reported, not fatal
+            v = f"case failed ({type(e).__name__}: {e})"[:90]
+        flags = []
+        try:
+            touched = box.touched()
+        finally:
+            box.close()
+        if touched:
+            flags.append(f"TOUCHED ({', '.join(touched)[:40]})")
+        if not devnull_ok():
+            restore_devnull()
+            flags.append("TOUCHED (/dev/null replaced; restored)")
+        if any(r.hang for r in box.results) and not v.startswith("HANG"):
+            flags.append("HANG")
+        if any(r.memory for r in box.results):
+            flags.append(f"MEMORY ({max(r.maxrss_kb for r in box.results) >> 10} MB)")
+        verdict = worst([v, *flags])
+        wall = max((r.wall for r in box.results), default=0.0)
+        rss = max((r.maxrss_kb for r in box.results), default=0) >> 10
+        cells.append(f"{verdict} · {wall:.1f} s · {rss} MB")
+        last = box.results[-1] if box.results else None
+        details.append({"case": name, "tree": label, "verdict": verdict, "case_verdict": v,
+                        "flags": flags, "wall_s": round(wall, 2), "peak_mb": rss,
+                        "argv": [str(a) for a in last.args][-12:] if last else None,
+                        "rc": last.returncode if last else None,
+                        "stderr": last.stderr[-1500:] if last else None,
+                        "stdout": last.stdout[-600:] if last else None})
+        shutil.rmtree(work.parent, ignore_errors=True)
+    return cells, details
+
+
+def _summary(rows: list[list[str]], labels: list[str]) -> str:
+    from hostile_harness import is_good
+
+    parts = []
+    for i, label in enumerate(labels):
+        verdicts = [r[i].split(" · ")[0] for r in rows]
+        good = sum(is_good(v) for v in verdicts)
+        kinds: dict[str, int] = {}
+        for v in verdicts:
+            if not is_good(v):
+                k = v.split(" (")[0].split(" ")[0]
+                kinds[k] = kinds.get(k, 0) + 1
+        bad = ", ".join(f"{n} {k}" for k, n in sorted(kinds.items(), key=lambda x: -x[1]))
+        parts.append(f"{label}: {good} of {len(rows)} ok or one-line error"
+                     + (f" ({bad})" if bad else ""))
+    return "; ".join(parts)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--baseline", default=None)
     ap.add_argument("--only", default=None)
+    ap.add_argument("--issue", choices=("12", "31"), default=None,
+                    help="only this issue's cases (default: both)")
+    ap.add_argument("--json", default=None, help="write every cell's details here")
     a = ap.parse_args()
     trees: dict[str, Path | None] = {"this tree": None}
+    details: list[dict] = []
     with tempfile.TemporaryDirectory() as tmp:
         if a.baseline:
             tar = subprocess.run(["git", "-C", str(ROOT), "archive", a.baseline, "src"],
@@ -341,19 +418,36 @@ def main() -> None:
             (Path(tmp) / "base").mkdir()
             subprocess.run(["tar", "-x", "-C", str(Path(tmp) / "base")], input=tar, check=True)
             trees = {a.baseline: Path(tmp) / "base" / "src", "this tree": None}
-        print("| case | " + " | ".join(trees) + " |\n|---|" + "---|" * len(trees))
-        for name, case in cases().items():
-            if a.only and a.only not in name:
-                continue
-            cells = []
-            for label, src in trees.items():
-                work = Path(tempfile.mkdtemp(dir=tmp))
-                try:
-                    cells.append(case(Env(src, work)))
-                except Exception as e:  # noqa: BLE001 - a broken case is reported, not fatal
-                    cells.append(f"case failed: {type(e).__name__}: {e}"[:80])
-                shutil.rmtree(work, ignore_errors=True)
-            print(f"| {name} | " + " | ".join(cells) + " |", flush=True)
+        header = "| case | " + " | ".join(trees) + " |\n|---|" + "---|" * len(trees)
+        if a.issue in (None, "12"):
+            print("### issue 12\n\n" + header)
+            for name, case in cases().items():
+                if a.only and a.only not in name:
+                    continue
+                cells = []
+                for label, src in trees.items():
+                    work = Path(tempfile.mkdtemp(dir=tmp))
+                    try:
+                        cells.append(case(Env(src, work)))
+                    except Exception as e:  # noqa: BLE001 - a broken case is reported
+                        cells.append(f"case failed: {type(e).__name__}: {e}"[:80])
+                    shutil.rmtree(work, ignore_errors=True)
+                print(f"| {name} | " + " | ".join(cells) + " |", flush=True)
+        if a.issue in (None, "31"):
+            from hostile_cases_31 import cases as cases_31
+
+            print("\n### issue 31\n\n" + header, flush=True)
+            rows = []
+            for name, case in cases_31().items():
+                if a.only and a.only not in name:
+                    continue
+                cells, d = _run_31(name, case, trees, Path(tmp))
+                rows.append(cells)
+                details += d
+                print(f"| {name} | " + " | ".join(cells) + " |", flush=True)
+            print(f"\n{len(rows)} cases; " + _summary(rows, list(trees)), flush=True)
+    if a.json:
+        Path(a.json).write_text(json.dumps(details, indent=1))
 
 
 if __name__ == "__main__":
