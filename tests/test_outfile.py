@@ -183,3 +183,30 @@ def test_cli_turns_a_stray_oserror_into_one_line(tmp_path):
                        cwd=tmp_path)
     assert r.returncode == 2 and "Traceback" not in r.stderr
     assert r.stderr.strip() == "error: x.bin: no space left on the device"
+
+
+def test_modes_are_those_open_would_give(tmp_path):
+    """mkstemp's 0600 used to stick to every file written (exports, plots, replaced files)."""
+    p = tmp_path / "script.py"
+    atomic_write_bytes(p, b"x")
+    umask = os.umask(0)
+    os.umask(umask)
+    assert stat.S_IMODE(os.stat(p).st_mode) == 0o666 & ~umask
+    p.chmod(0o755)
+    atomic_write_bytes(p, b"y")
+    assert stat.S_IMODE(os.stat(p).st_mode) == 0o755
+
+
+def test_a_long_name_can_be_written(tmp_path):
+    p = tmp_path / ("n" * 250)
+    atomic_write_bytes(p, b"x")
+    assert p.read_bytes() == b"x"
+
+
+def test_a_write_into_a_users_subfolder_claims_nothing(tmp_path):
+    """`plot --out RUN/analysis/fit` marked the user's analysis/ as the run's."""
+    write_marker(tmp_path, "functions", ["config.toml"])
+    (tmp_path / "analysis").mkdir()
+    atomic_write_bytes(tmp_path / "analysis" / "fit.png", b"x")
+    atomic_write_bytes(tmp_path / "made" / "a.png", b"x", mkdir=True)
+    assert set(read_marker(tmp_path)["files"]) == {"config.toml", "made"}

@@ -23,6 +23,9 @@ from evomotion.textio import read_file_bytes
 #: the largest npz file, and the largest sum of its arrays' bytes, a reader accepts by default
 MAX_NPZ_BYTES = 256 * 1024 * 1024
 MAX_MEMBERS = 4096
+MAX_ELEMENTS = 1 << 31
+#: the dtype kinds a reader accepts: booleans, integers, floats, complex, text
+KINDS = "biufcUS"
 
 
 def read_npz(path: str | Path, what: str = "npz file", max_bytes: int = MAX_NPZ_BYTES,
@@ -79,10 +82,12 @@ def _check_header(fh, size: int, name: str) -> None:
         shape, _, dtype = np.lib.format.read_array_header_2_0(fh)
     else:
         raise ValueError(f"unknown npy version {version}")
-    if dtype.hasobject:
-        raise ValueError("holds Python objects")
+    if dtype.hasobject or dtype.kind not in KINDS or dtype.fields is not None:
+        raise ValueError(f"holds {dtype} values (expected numbers or text)")
     n = math.prod(int(d) for d in shape)
     need = n * dtype.itemsize
+    if n > 0 and dtype.itemsize == 0 or n > MAX_ELEMENTS:
+        raise ValueError(f"declares shape {tuple(shape)[:8]} of {dtype} (too many elements)")
     if need > size:
         raise ValueError(f"declares shape {tuple(shape)[:8]} ({need} bytes) but holds "
                          f"{size} bytes")

@@ -33,6 +33,8 @@ from evomotion.errors import InputError
 #: the file that makes a folder a run folder; it lists the top-level names runs wrote there
 RUN_MARKER = ".evomotion-run"
 _MARKER_DEPTH = 4  # the target's folder and up to three above it
+_UMASK = os.umask(0o022)
+os.umask(_UMASK)  # read once: new files get 0666 & ~umask, as open() gives them
 
 #: test hooks, called as ``hook(event, path)`` with event ``"begin"`` (nothing written yet),
 #: ``"written"`` (the temporary file is complete, the rename has not happened) or
@@ -121,12 +123,19 @@ def atomic_output(path: str | Path, what: str = "file", mkdir: bool = False,
     """A temporary path next to ``path`` for the block to write; on success it replaces
     ``path`` (made durable), on any failure it is removed. ``suffix`` lets a writer that
     chooses its format by extension see one (``".tmp.mp4"``)."""
+    run_dir = run_folder_of(path) if mkdir else None
+    made = run_dir is not None and not _top(path, run_dir).exists()  # a folder this makes
     path = check_target(path, what, mkdir)
     for hook in WRITE_HOOKS:
         hook("begin", path)
     try:
-        fd, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=suffix)
-        os.close(fd)
+        st = os.stat(path) if path.exists() else None
+        fd, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name[:80]}.",
+                                    suffix=suffix)
+        try:  # mkstemp's 0600 -> the mode the file had, or the umask's (what open() gives)
+            os.fchmod(fd, stat.S_IMODE(st.st_mode) if st is not None else 0o666 & ~_UMASK)
+        finally:
+            os.close(fd)
     except OSError as e:
         raise WriteError(f"{path}: cannot write the {what} ({reason(e)})") from None
     tmp = Path(name)
@@ -144,7 +153,7 @@ def atomic_output(path: str | Path, what: str = "file", mkdir: bool = False,
         tmp.unlink(missing_ok=True)
         raise
     _fsync_dir(path.parent)
-    claim(path)
+    claim(path, made_folder=made)
 
 
 def open_append(path: str | Path, what: str = "file", binary: bool = False):
@@ -152,11 +161,15 @@ def open_append(path: str | Path, what: str = "file", binary: bool = False):
     without blocking on a FIFO; failures are one :class:`WriteError` line."""
     path = Path(path)
     try:
-        fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_NONBLOCK, 0o644)
+        fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_NONBLOCK
+                     | os.O_NOFOLLOW, 0o666)
     except OSError as e:
         if e.errno == errno.ENXIO:  # a FIFO nobody reads
             raise WriteError(f"{path}: expected a regular file for the {what}, found a "
                              "FIFO") from None
+        if e.errno == errno.ELOOP:  # a link: appending would write where it points
+            raise WriteError(f"{path}: expected a regular file for the {what}, found a "
+                             "link") from None
         raise WriteError(f"{path}: cannot write the {what} ({reason(e)})") from None
     kind = kind_of(os.fstat(fd).st_mode)
     if kind is not None:
@@ -287,20 +300,47 @@ def write_marker(run_dir: Path, study: str, files: list[str]) -> None:
         raise
 
 
-def claim(path: str | Path, run_dir: Path | None = None) -> None:
-    """Record ``path``'s top-level name in its run folder's marker (no-op outside one)."""
+def _top(path: str | Path, run_dir: Path) -> Path:
+    rel = Path(path).absolute().relative_to(Path(run_dir).absolute())
+    return Path(run_dir) / rel.parts[0]
+
+
+def claim(path: str | Path, run_dir: Path | None = None, made_folder: bool = False) -> None:
+    """Record in its run folder's marker that ``path`` was written by this program (no-op
+    outside a run folder): its name when it lies directly in the run folder; the top-level
+    folder holding it only when this write made that folder (``made_folder``). A file written
+    into a folder the user made (``plot --out RUN/analysis/fit``) claims nothing, so
+    ``--overwrite`` never takes the user's folder for the run's."""
     run_dir = run_dir if run_dir is not None else run_folder_of(path)
     if run_dir is None:
         return
     try:
-        top = Path(path).absolute().relative_to(Path(run_dir).absolute()).parts[0]
-    except (ValueError, IndexError):
+        parts = Path(path).absolute().relative_to(Path(run_dir).absolute()).parts
+    except ValueError:
         return
-    doc = read_marker(run_dir)
-    if doc is None or top in doc["files"] or top == RUN_MARKER:
+    if not parts or (len(parts) > 1 and not made_folder) or parts[0] == RUN_MARKER:
         return
+    top = parts[0]
     try:
-        write_marker(run_dir, str(doc.get("study", "")), [*doc["files"], top])
+        with _marker_lock(run_dir):
+            doc = read_marker(run_dir)
+            if doc is None or top in doc["files"]:
+                return
+            write_marker(run_dir, str(doc.get("study", "")), [*doc["files"], top])
     except OSError as e:
         raise WriteError(f"{Path(run_dir) / RUN_MARKER}: cannot record {top} as the run's "
                          f"({reason(e)})") from None
+
+
+@contextlib.contextmanager
+def _marker_lock(run_dir: Path) -> Iterator[None]:
+    """An exclusive ``flock`` on the run folder itself while its marker is updated (the run
+    and, say, the studio or ``evomotion plot`` may claim at once)."""
+    import fcntl
+
+    fd = os.open(run_dir, os.O_RDONLY | os.O_DIRECTORY)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+    finally:
+        os.close(fd)  # releases the lock

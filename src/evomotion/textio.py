@@ -120,7 +120,8 @@ def read_text_lines(path: str | Path, what: str = "file",
 
 #: Default deepest nesting of a JSON document a reader accepts (this program writes <= 4)
 MAX_JSON_DEPTH = 32
-_JSON_TOKENS = re.compile(r'"(?:[^"\\]|\\.)*"|[\[\]{}]')
+#: a string (linear: an unterminated one runs to the end of the text) or a bracket
+_JSON_TOKENS = re.compile(r'"[^"\\]*(?:\\.[^"\\]*)*"?|[\[\]{}]')
 
 
 def json_depth(text: str, limit: int) -> int:

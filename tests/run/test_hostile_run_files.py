@@ -152,3 +152,62 @@ def test_npz_declared_shapes_are_checked_before_allocation(shape):
     else:
         with pytest.raises(InputError, match="declares shape"):
             loads_npz(buf.getvalue(), "x.npz")
+
+
+def test_json_depth_is_linear_in_the_text():
+    """An unterminated-string pattern made the scan quadratic: 80 KB of \\" took 20 s."""
+    import time
+
+    from evomotion.textio import json_depth
+
+    t0 = time.perf_counter()
+    assert json_depth('\\"' * 500_000, 32) == 0
+    assert time.perf_counter() - t0 < 2.0
+
+
+def test_zero_size_dtypes_cannot_declare_huge_shapes():
+    import zipfile
+
+    for descr in ("|S0", "|V0"):
+        buf, member = io.BytesIO(), io.BytesIO()
+        np.lib.format.write_array_header_1_0(member, {"descr": descr, "fortran_order": False,
+                                                      "shape": (2**40,)})
+        with zipfile.ZipFile(buf, "w") as z:
+            z.writestr("a.npy", member.getvalue())
+        with pytest.raises(InputError):
+            loads_npz(buf.getvalue(), "x.npz")
+
+
+def test_resume_of_a_folder_that_is_no_run_touches_nothing(tmp_path):
+    d = tmp_path / "proj"
+    (d / "checkpoints").mkdir(parents=True)
+    (d / "config.toml").write_text('study = "functions"\n')
+    (d / ".draft.tmp").write_text("mine\n")
+    before = sorted(p.name for p in d.iterdir())
+    line = _one_line(_cli("resume", str(d)))
+    assert "no checkpoint to resume from" in line
+    assert sorted(p.name for p in d.iterdir()) == before  # no run.lock, log.txt, stats.csv
+    other = tmp_path / "other"
+    other.mkdir()
+    (other / "notes.txt").write_text("x\n")
+    assert "not a run folder" in _one_line(_cli("resume", str(other)))
+    assert sorted(p.name for p in other.iterdir()) == ["notes.txt"]
+
+
+def test_a_stagnated_run_killed_while_finishing_only_finishes(tmp_path):
+    """finish_only needed a limit or the method's own stop: stagnation ran on."""
+    d = tmp_path / "run"
+    args = ("run", "functions", "--out", str(d), "--set", "run.generations=200",
+            "--set", "run.stagnation_generations=2", "--set", "run.stagnation_eps=1e9", *ARGS)
+    assert _cli(*args).returncode == 0
+    ck = d / "checkpoints"
+    latest = json.loads((ck / "latest.json").read_text())["checkpoint"]
+    meta = json.loads((ck / latest).read_text())
+    assert meta["counters"]["stop_reason"] == "stagnation"
+    meta["counters"]["finished"] = False
+    (ck / latest).write_text(json.dumps(meta))
+    rows = (d / "stats.csv").read_text()
+    (d / "best.json").unlink()
+    assert _cli("resume", str(d), "-q").returncode == 0
+    assert (d / "stats.csv").read_text() == rows and (d / "best.json").is_file()
+    assert "to write the final artifacts" in (d / "log.txt").read_text()

@@ -137,3 +137,21 @@ def test_lock_text_fuzz(text):
     if owner is not None:
         assert 1 < owner.pid <= 1 << 22 and isinstance(owner.host, str)
     assert owner_state(owner) in ("none", "running", "stale", "remote", "unknown")
+
+
+def test_a_lock_file_that_is_a_link_is_refused_and_its_target_untouched(tmp_path):
+    from evomotion.outfile import WriteError
+
+    thesis = tmp_path / "thesis.tex"
+    thesis.write_text("chapter 1\n")
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / LOCK_NAME).symlink_to(thesis)
+    with pytest.raises(WriteError, match="found a link"):
+        RunLock(run).acquire()
+    assert thesis.read_text() == "chapter 1\n"
+
+
+def test_non_ascii_digits_in_an_old_lock_are_no_pid():
+    assert parse_owner("pid \u00b2 on host") is None
+    assert parse_owner("pid \u0663\u0663 on host") is None

@@ -153,7 +153,7 @@ def test_resume_refuses_a_changed_seed_or_problem(interrupted, tmp_path):
 def test_leftover_temporaries_are_removed(interrupted, reference, tmp_path):
     d = tmp_path / "run"
     shutil.copytree(interrupted, d)
-    (d / "checkpoints" / ".gen-000012.npz.abc.tmp").write_bytes(b"half")
+    (d / "checkpoints" / ".gen-000012.npz.k3j_9x0q.tmp").write_bytes(b"half")
     log = _resume(d)
     assert "removed 1 temporary file" in log
     assert not list((d / "checkpoints").glob("*.tmp"))

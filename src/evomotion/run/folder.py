@@ -12,6 +12,8 @@ from __future__ import annotations
 import json
 import os
 import re
+import stat
+import tempfile
 import time
 from pathlib import Path
 from typing import Any
@@ -72,16 +74,17 @@ def make_run_dir(study: str, out: Path | str | None = None, root: Path | str = "
                          "dangling link")
     try:
         path.mkdir(parents=True, exist_ok=True)
-        probe = path / f".write-test-{os.getpid()}.tmp"
-        probe.touch()
-        probe.unlink()
+        fd, probe = tempfile.mkstemp(dir=path, prefix=".write-test.", suffix=".tmp")
+        os.close(fd)
+        os.unlink(probe)
     except (OSError, ValueError) as e:
         raise InputError(f"--out {path}: cannot create the run folder "
                          f"({reason(e)})") from None
     return path
 
 
-_TEMPORARY = re.compile(r"\..+\.tmp(\.[A-Za-z0-9]{1,8})?")
+#: the one writer's temporary names: ``.NAME.`` + 8 random characters (tempfile) + ``.tmp``
+_TEMPORARY = re.compile(r"\..+\.[a-z0-9_]{8}\.tmp(\.[A-Za-z0-9]{1,8})?")
 
 
 def make_output_folder(label: str, out: Path | str | None, option: str = "--out") -> Path:
@@ -129,8 +132,25 @@ def foreign_entries(path: Path) -> list[str]:
     there is no marker), other than the lock, the marker and temporary files."""
     doc = read_marker(path)
     own = set(doc["files"]) if doc is not None else set()
-    return [n for n in _listing(path) if n not in own and n not in (LOCK_NAME, RUN_MARKER)
+    ours = {RUN_MARKER} | ({LOCK_NAME} if doc is not None or _our_lock(path) else set())
+    return [n for n in _listing(path) if n not in own and n not in ours
             and not _is_temporary(n)]
+
+
+def _our_lock(path: Path) -> bool:
+    """``run.lock`` is a regular file (not a link) that is empty or names an owner in this
+    program's format: a lock of ours, not a user's file of that name."""
+    from evomotion.run.lock import parse_owner
+
+    p = path / LOCK_NAME
+    try:
+        st = os.lstat(p)
+        if not stat.S_ISREG(st.st_mode) or st.st_size > 4096:
+            return False
+        text = p.read_bytes().decode("utf-8", "replace")
+    except OSError:
+        return False
+    return not text.strip() or parse_owner(text) is not None
 
 
 def _names(names: list[str]) -> str:
@@ -159,6 +179,29 @@ def check_new_run(path: Path, overwrite: bool = False) -> None:
     if holds_run(path) and not overwrite:
         raise InputError(f"{path}: the folder already holds a run; continue it with "
                          f"'evomotion resume {path}' or start it again with --overwrite")
+
+
+def check_resumable(path: Path) -> None:
+    """Refuse (one line, nothing touched) a folder ``evomotion resume`` must not write to:
+    not a run folder (neither the marker nor the run loop's config.toml and checkpoints/ of a
+    run written before the marker), or without a checkpoint."""
+    path = Path(path)
+    if not path.is_dir():
+        raise InputError(f"{path}: no such run folder")
+    legacy = (path / "config.toml").is_file() and (path / "checkpoints").is_dir()
+    if not (is_run_folder(path) or legacy):
+        raise InputError(f"{path}: not a run folder (no {RUN_MARKER}, config.toml or "
+                         "checkpoints/); nothing to resume")
+    ck = path / "checkpoints"
+    try:
+        found = ck.is_dir() and any(_CHECKPOINT.fullmatch(p.name) for p in ck.iterdir())
+    except OSError as e:
+        raise InputError(f"{ck}: cannot list the checkpoints ({reason(e)})") from None
+    if not found:
+        raise InputError(f"{path}: no checkpoint to resume from (checkpoints/ holds none)")
+
+
+_CHECKPOINT = re.compile(r"gen-\d{6,}\.json")
 
 
 def prepare_new_run(path: Path, study: str, overwrite: bool = False) -> None:

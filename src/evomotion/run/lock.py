@@ -19,6 +19,7 @@ concern the same process).
 from __future__ import annotations
 
 import dataclasses
+import errno
 import json
 import os
 import socket
@@ -60,8 +61,12 @@ class RunLock:
         from evomotion.outfile import WriteError, kind_of, reason
 
         try:
-            fd = os.open(self.path, os.O_RDWR | os.O_CREAT | os.O_NONBLOCK, 0o644)
+            fd = os.open(self.path, os.O_RDWR | os.O_CREAT | os.O_NONBLOCK | os.O_NOFOLLOW,
+                         0o644)
         except OSError as e:
+            if e.errno == errno.ELOOP:  # a link: it would write (and empty) its target
+                raise WriteError(f"{self.path}: expected a regular lock file, found a link"
+                                 ) from None
             raise WriteError(f"{self.path}: cannot lock the run folder ({reason(e)})") from None
         kind = kind_of(os.fstat(fd).st_mode)
         if kind is not None:
@@ -163,7 +168,8 @@ def parse_owner(text: str) -> LockOwner | None:
               and isinstance(cmd, str))
         return LockOwner(pid, host, start, boot, cmd[:64]) if ok else None
     parts = text.split()
-    if len(parts) < 4 or parts[0] != "pid" or parts[2] != "on" or not parts[1].isdigit() \
+    if len(parts) < 4 or parts[0] != "pid" or parts[2] != "on" or not parts[1].isascii() \
+            or not parts[1].isdigit() \
             or len(parts[1]) > 8 or not _valid_pid(int(parts[1])) or not _valid_host(parts[3]):
         return None
     return LockOwner(int(parts[1]), parts[3])

@@ -118,7 +118,7 @@ def restore(run_dir: Path, driver: Driver, config: Config) -> tuple[Any, Any, di
             driver.check_state(state)
             rng = rng_from_state(meta["rng"])
         except (KeyError, TypeError, ValueError, AttributeError, IndexError,
-                OverflowError) as e:
+                OverflowError, MemoryError) as e:
             raise CheckpointError(f"the state does not fit this run ({type(e).__name__}: "
                                   f"{str(e)[:120]})") from None
         return state, rng

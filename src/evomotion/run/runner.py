@@ -35,6 +35,7 @@ from evomotion.run.evaluators import SerialEvaluator, make_evaluator
 from evomotion.run.folder import (
     atomic_write_text,
     check_new_run,
+    check_resumable,
     clean_temporaries,
     prepare_new_run,
     write_json,
@@ -50,6 +51,8 @@ from evomotion.run.stats import COLUMNS, MemoryStats, StatsWriter, diversity, po
 from evomotion.run.stopping import limit_reached, stop_reason
 from evomotion.textio import read_json
 
+#: the stop reasons a resume with a raised limit continues from
+LIMIT_REASONS = ("generations", "max_evaluations", "target", "wall_seconds")
 PHYSICS_NAME = "physics.json"  # the physics backend of a MuJoCo study and its guarantees
 
 EXIT_INTERRUPTED = 130
@@ -95,8 +98,8 @@ def run_study(study: Any, config: Config, out_dir: Path | str | None = None,
     out_dir = Path(out_dir)
     if not resume:
         check_new_run(out_dir, overwrite)  # refused before the lock file is made
-    if resume and not (out_dir / "checkpoints").is_dir():
-        raise InputError(f"{out_dir}: no checkpoint to resume from (no checkpoints/ folder)")
+    if resume:
+        check_resumable(out_dir)  # before anything is made or removed in the folder
     out_dir.mkdir(parents=True, exist_ok=True)
     # SIGTERM is Ctrl-C from the moment the lock names this process (a stop from the studio
     # during the set-up ends the run cleanly, not by the signal's default)
@@ -120,10 +123,10 @@ def _run(study: Any, config: Config, out_dir: Path | None, quiet: bool, resume: 
         raise InputError(f"run.evaluator: study {study.name!r} has no batch evaluation to "
                          f"distribute; use 'serial', got {rc.evaluator!r}")
     loggers = make_loggers(rc.loggers if out_dir is not None else (), out_dir)  # before files
-    if out_dir is not None:
+    cleaned = 0
+    if out_dir is not None and not resume:
         cleaned = clean_temporaries(out_dir)
-        if not resume:
-            atomic_write_text(out_dir / "config.toml", config_to_toml(config))
+        atomic_write_text(out_dir / "config.toml", config_to_toml(config))
     sense = driver.sense
     sgn = -1.0 if sense == "max" else 1.0  # fitness = sgn * cost
     reporter = Reporter(rc.generations, quiet=quiet, label=study.name)
@@ -137,15 +140,18 @@ def _run(study: Any, config: Config, out_dir: Path | None, quiet: bool, resume: 
     finish_only = False  # a resume that only writes the final artifacts
     if resume:
         state, rng, c, notes = restore(out_dir, driver, config)
+        cleaned = clean_temporaries(out_dir)
         done = c.get("stop_reason")
         if done not in (None, "interrupted"):
             ended = driver.stop(state) is not None
-            if ended or limit_reached(config, c, driver.best(state)[1], sgn):
-                if c.get("finished") is not False:
-                    raise InputError(f"{out_dir}: the run already finished ({done}); " + (
-                        "it cannot be continued" if ended else
-                        "raise its limit to continue, e.g. --set run.generations=N"))
-                finish_only = True
+            limit = limit_reached(config, c, driver.best(state)[1], sgn)
+            raised = done in LIMIT_REASONS and limit is None and not ended  # a limit raised
+            if c.get("finished") is False and not raised:
+                finish_only = True  # stopped while writing the final artifacts
+            elif ended or limit:
+                raise InputError(f"{out_dir}: the run already finished ({done}); " + (
+                    "it cannot be continued" if ended else
+                    "raise its limit to continue, e.g. --set run.generations=N"))
         c["stop_reason"] = done if finish_only else None
         c.pop("finished", None)
         stats.truncate(c["stats_offset"])
@@ -248,7 +254,11 @@ def _run(study: Any, config: Config, out_dir: Path | None, quiet: bool, resume: 
     except KeyboardInterrupt:
         reason = "interrupted"
         if snap is not None:
-            snap[1]["counters"]["stop_reason"] = reason
+            done = snap[1]["counters"].get("stop_reason")
+            if done in (None, "interrupted"):
+                snap[1]["counters"]["stop_reason"] = reason
+            else:  # the run had ended: only its final artifacts are left for a resume
+                snap[1]["counters"]["finished"] = False
     except Exception as e:
         if snap is not None:
             save_checkpoint(out_dir, max(snap[1]["counters"]["generation"], 0), *snap)

@@ -13,6 +13,7 @@ from evomotion.outfile import append_text, open_append, truncate_file
 from evomotion.textio import read_file_bytes
 
 MAX_STATS_BYTES = 64 * 1024 * 1024  # some 300,000 generations
+MAX_STATS_CELLS = 1 << 24  # 16 million numbers (128 MB as floats)
 COLUMNS = ("generation", "evaluations", "best", "mean", "median", "min", "max", "std",
            "best_so_far", "wall_s", "evals_per_s", "diversity", "failed")
 
@@ -94,22 +95,41 @@ def _fmt(v: object) -> str:
 
 def read_stats(path: Path) -> dict[str, np.ndarray]:
     """``stats.csv`` as columns of floats; a cell that is not a number (a study's text column,
-    such as arm-ik's ``phase``) reads as NaN."""
+    such as arm-ik's ``phase``) reads as NaN. Bounded: at most :data:`MAX_STATS_BYTES` and
+    :data:`MAX_STATS_CELLS` cells, held as float arrays (a few bytes a cell, not a dict a row),
+    and a damaged file (generation or evaluations decreasing) is one line."""
     data = read_file_bytes(path, "stats file", MAX_STATS_BYTES)
+    reader = csv.reader(io.StringIO(data.decode("utf-8", "replace")))
     try:
-        rows = list(csv.DictReader(io.StringIO(data.decode("utf-8", "replace"))))
+        header = next(reader, None)
+        if not header:
+            return {}
+        keys = [(i, k) for i, k in enumerate(header) if k]
+        chunks: list[np.ndarray] = []
+        rows: list[list[float]] = []
+        cells = 0
+        for row in reader:
+            rows.append([_float(row[i]) if i < len(row) else float("nan") for i, _ in keys])
+            cells += len(keys)
+            if cells > MAX_STATS_CELLS:
+                raise FileFormatError(path, None, f"expected at most {MAX_STATS_CELLS} cells")
+            if len(rows) == 4096:
+                chunks.append(np.array(rows, dtype=float).reshape(-1, len(keys)))
+                rows = []
     except csv.Error as e:
         raise FileFormatError(path, None, f"expected CSV ({e})") from None
-    if not rows:
+    if rows:
+        chunks.append(np.array(rows, dtype=float).reshape(-1, len(keys)))
+    if not chunks:
         return {}
-    keys = [k for k in rows[0] if isinstance(k, str) and k]
+    table = np.concatenate(chunks)
     out = {}
-    for k in keys:
-        col = np.array([_float(r.get(k)) for r in rows])
+    for j, (_, k) in enumerate(keys):
+        col = table[:, j]
         if k in ("generation", "evaluations") and not np.all(np.diff(col) >= 0):
             raise FileFormatError(path, None, f"column {k}: expected numbers that never "
                                               "decrease (the file is damaged)")
-        out[k] = col
+        out.setdefault(k, col)
     return out
 
 

@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from evomotion.errors import InputError
 from evomotion.sim.nao import MODEL_PATH
 
 UNAVAILABLE = "RENDER-UNAVAILABLE: "
@@ -32,6 +33,11 @@ RENDER_TIMEOUT_S = 600
 
 class RenderUnavailableError(RuntimeError):
     """No working OpenGL backend for offscreen rendering."""
+
+
+class RenderError(InputError, RuntimeError):
+    """A video could not be made (the encoder failed, timed out or wrote a cut file): one
+    line for the command line, never a traceback; no partial video is left."""
 
 
 CAMERAS = ("follow", "kick", "overview")
@@ -107,7 +113,7 @@ def render_video(qpos: np.ndarray, dt: float, out_path: str | Path, fps: int = 2
             proc = subprocess.run(cmd, input=buf.getvalue(), capture_output=True,
                                   timeout=RENDER_TIMEOUT_S)
         except subprocess.TimeoutExpired:
-            raise RuntimeError(f"rendering {out_path} took more than {RENDER_TIMEOUT_S} s"
+            raise RenderError(f"rendering {out_path} took more than {RENDER_TIMEOUT_S} s"
                                ) from None
         err = proc.stderr.decode(errors="replace")
         if proc.returncode != 0:
@@ -118,7 +124,7 @@ def render_video(qpos: np.ndarray, dt: float, out_path: str | Path, fps: int = 2
                 if text in err:
                     raise WriteError(f"{out_path}: cannot write the video ({why})")
             last = err.strip().splitlines()[-1] if err.strip() else f"exit {proc.returncode}"
-            raise RuntimeError(f"rendering failed: {last}")
+            raise RenderError(f"rendering {out_path} failed: {last}")
         if not complete_mp4(tmp):  # the encoder may end "well" on a full disk
             try:
                 full = os.statvfs(tmp.parent).f_bavail == 0
@@ -127,7 +133,7 @@ def render_video(qpos: np.ndarray, dt: float, out_path: str | Path, fps: int = 2
             if full:
                 raise WriteError(f"{out_path}: cannot write the video (no space left on the "
                                  "device)")
-            raise RuntimeError(f"rendering {out_path}: the encoder wrote an incomplete MP4")
+            raise RenderError(f"rendering {out_path}: the encoder wrote an incomplete MP4")
     return out_path
 
 

@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from evomotion.outfile import WriteError, atomic_write_text, kind_of, reason
+from evomotion.outfile import WriteError, atomic_write_text, claim, kind_of, reason
 from evomotion.run.context import RunContext
 from evomotion.sim import nao
 from evomotion.sim.nao.motion import Motion, format_motion
@@ -115,6 +115,7 @@ def repertoire_folder(out_dir: Path) -> Path:
         except OSError as e:
             raise WriteError(f"{folder}: cannot make the repertoire folder ({reason(e)})"
                              ) from None
+        claim(folder)  # a folder the run made: the run's (--overwrite removes it)
         return folder
     except OSError as e:
         raise WriteError(f"{folder}: cannot use the repertoire folder ({reason(e)})") from None
