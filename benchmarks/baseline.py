@@ -13,9 +13,10 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def export(rev: str, into: Path) -> Path:
-    """``src/`` of the package as committed at ``rev``, extracted below ``into``."""
-    tar = subprocess.run(["git", "-C", str(ROOT), "archive", rev, "src"], check=True,
+def export(rev: str, into: Path, paths: tuple[str, ...] = ("src",)) -> Path:
+    """``src/`` of the package as committed at ``rev`` (and the other ``paths`` of the
+    repository, e.g. ``pyproject.toml``), extracted below ``into``."""
+    tar = subprocess.run(["git", "-C", str(ROOT), "archive", rev, *paths], check=True,
                          capture_output=True).stdout
     subprocess.run(["tar", "-x", "-C", str(into)], input=tar, check=True)
     return Path(into) / "src"

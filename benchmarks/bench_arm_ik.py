@@ -1,4 +1,4 @@
-"""arm-ik (seed 001) benchmarks.
+"""arm-ik (paper 001) benchmarks.
 
 1. Population evaluations per second at population 200 on the largest bundled scenario
    (``four_fingers``): the vectorized ``ArmIKProblem.assess`` against a per-individual Python
@@ -22,11 +22,10 @@ import time
 
 import numpy as np
 
-from evomotion.studies.arm_ik.outcome import evolve, split_overrides
+from evomotion.studies.arm_ik.experiment import evolve, split_overrides, success_table
 from evomotion.studies.arm_ik.problem import ArmIKConfig, ArmIKProblem
 from evomotion.studies.arm_ik.scenario import bundled_names
 from evomotion.studies.arm_ik.schedule import ScheduleConfig
-from evomotion.studies.arm_ik.success import success_table
 
 
 def _orient(a, b, c):
@@ -114,20 +113,20 @@ def success(seeds: int, matchings: list[str], wall: float, scenarios: list[str])
 
 ABLATIONS: dict[str, dict] = {
     "default": {},
-    "greedy matching (seed)": {"matching": "greedy"},
+    "greedy matching (paper)": {"matching": "greedy"},
     "assignment in chromosome": {"matching": "chromosome"},
     "no short-arc blend": {"circular_blend": False},
     "fixed 5 deg mutation": {"mutation_min_deg": 5.0, "mutation_max_deg": 5.0},
     "no restarts": {"restart_after": 0},
     "obstacle-aware distance": {"distance": "obstacle"},
-    "survival with replacement (seed)": {"survival": "tournament"},
+    "survival with replacement (paper)": {"survival": "tournament"},
 }
-SEED_LIKE = {"matching": "greedy", "circular_blend": False, "mutation_min_deg": 5.0,
+PAPER_LIKE = {"matching": "greedy", "circular_blend": False, "mutation_min_deg": 5.0,
              "mutation_max_deg": 5.0, "restart_after": 0, "survival": "tournament"}
-ABLATIONS["seed-like (all five seed choices)"] = SEED_LIKE
-ABLATIONS["seed-like + optimal matching"] = {**SEED_LIKE, "matching": "optimal"}
-ABLATIONS["seed-like + restarts"] = {**SEED_LIKE, "restart_after": 60}
-ABLATIONS["seed-like + pairwise survival"] = {**SEED_LIKE, "survival": "pairwise"}
+ABLATIONS["paper-like (all five paper choices)"] = PAPER_LIKE
+ABLATIONS["paper-like + optimal matching"] = {**PAPER_LIKE, "matching": "optimal"}
+ABLATIONS["paper-like + restarts"] = {**PAPER_LIKE, "restart_after": 60}
+ABLATIONS["paper-like + pairwise survival"] = {**PAPER_LIKE, "survival": "pairwise"}
 
 
 def ablation(seeds: int, wall: float, scenarios: list[str], only: list[str] | None) -> None:

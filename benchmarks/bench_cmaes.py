@@ -1,4 +1,4 @@
-"""CMA-ES of evomotion against pycma on BBOB (cocoex), ask/tell overhead, and seed 002's
+"""CMA-ES of evomotion against pycma on BBOB (cocoex), ask/tell overhead, and paper 002's
 improvements (Tent chaos, Lévy flights) against plain CMA-ES on multimodal BBOB functions.
 
 Run: ``python benchmarks/bench_cmaes.py [--quick]`` (needs ``cma`` and ``coco-experiment``).

@@ -47,7 +47,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
-from evomotion.sim import nao  # noqa: E402
+from evomotion.sim.robots import nao  # noqa: E402
 from evomotion.sim.rollout import BatchSimulator  # noqa: E402
 from evomotion.sim.warp_rollout import WarpSimulator, import_warp  # noqa: E402
 

@@ -1,9 +1,9 @@
 """grid-path benchmark: wall time per run on 20x20 and cGA generations/s vs pure Python.
 
-1. Median wall time of one run on the bundled 20x20 map with the seed's settings
-   (population 400, 100 generations, m = 1.05), cGA line sweep (the seed) and synchronous.
+1. Median wall time of one run on the bundled 20x20 map with the paper's settings
+   (population 400, 100 generations, m = 1.05), cGA line sweep (the paper) and synchronous.
 2. Generations per second of the same cGA (L5, roulette mate, one-point crossover, the
-   seed's validity-keeping mutation, replace-if-better) at population 400, for the line
+   paper's validity-keeping mutation, replace-if-better) at population 400, for the line
    sweep and for the synchronous update: the vectorised implementation (20 generations,
    median of 3) against a pure-Python one that updates one cell at a time (the synchronous
    one building the new population from the old) with a pure-Python exact segment test.
@@ -25,9 +25,12 @@ from evomotion.core.cellular_ga import CGAConfig
 from evomotion.core.neighbourhoods import neighbour_table
 
 try:
-    from evomotion.studies.grid_path.outcome import evolve
-except ImportError:  # a tree from before the one run loop (PYTHONPATH=... for a baseline)
-    from evomotion.studies.grid_path.driver import evolve
+    from evomotion.studies.grid_path.experiments import evolve
+except ImportError:  # a tree from before issue 32 (the in-memory runner in run/)
+    try:
+        from evomotion.studies.grid_path.outcome import evolve
+    except ImportError:  # a tree from before the one run loop (PYTHONPATH=... for a baseline)
+        from evomotion.studies.grid_path.driver import evolve
 from evomotion.studies.grid_path.problem import GridPathConfig, GridPathProblem
 
 
@@ -144,7 +147,7 @@ def main() -> None:
     for update in ("line_sweep", "synchronous"):
         cfg = CGAConfig(pop_size=400, update=update, crossover_rate=0.9, mutation_rate=0.2)
         t = [_timed(lambda cfg=cfg, s=s: evolve(p, cfg, s, 100))[1:] for s in range(a.runs)]
-        print(f"20x20 seed map, pop 400, 100 generations, cGA {update}: median "
+        print(f"20x20 paper map, pop 400, 100 generations, cGA {update}: median "
               f"{statistics.median(w for w, _ in t):.2f} s wall "
               f"({statistics.median(c for _, c in t):.2f} s CPU) per run over {a.runs} runs")
     gens = 20

@@ -54,7 +54,7 @@ def main() -> None:
     ap.add_argument("--out", default=None, help="run folder (default: none)")
     a = ap.parse_args()
     pcfg = HumanoidStepConfig(intervals=a.intervals, bounds_scale=0.25, threads=a.threads,
-                              fitness="seed", hold_s=1.0)  # the workload measured before
+                              fitness="seed", hold_s=1.0)  # paper fitness, old name
     problem = HumanoidStepProblem(pcfg)
     cfg_cls, _ = ALGORITHMS["ga"]
     alg = cfg_cls(pop_size=a.pop, crossover="blx_alpha", crossover_params={"alpha": 0.7},

@@ -1,6 +1,6 @@
-"""Benchmark: quadruped-plan search speed (seed 003).
+"""Benchmark: quadruped-plan search speed (paper 003).
 
-Prints expansions per second of the seed's best-first search and the time to run the whole
+Prints expansions per second of the paper's best-first search and the time to run the whole
 12-configuration table (2 starts x rule sets A, B x functions 1-3). Both are given in CPU
 seconds of this process (robust on a shared machine) and in wall seconds, with the load
 average. Targets: >= 50,000 expansions/s; the table in < 10 s.
@@ -31,8 +31,8 @@ ROOT = Path(__file__).resolve().parents[1]
 def table_once() -> tuple[int, float, float, dict[str, list]]:
     """Run the 12 configurations once: (expansions, CPU s, wall s, per-configuration
     [expansions, CPU s, rules of the plan])."""
-    from evomotion.studies.quadruped_plan.experiment import STARTS
-    from evomotion.studies.quadruped_plan.planner import (
+    from evomotion.studies.quadruped_plan.plans.experiment import STARTS
+    from evomotion.studies.quadruped_plan.plans.planner import (
         QuadrupedPlanConfig,
         make_problem,
         solve,

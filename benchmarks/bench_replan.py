@@ -29,10 +29,10 @@ def main() -> None:
                     help="also run the Python successors and print the ratio")
     args = ap.parse_args()
 
-    from evomotion.studies.quadruped_plan import rules
-    from evomotion.studies.quadruped_plan.mission import Mission, run_mission
-    from evomotion.studies.quadruped_plan.model import QuadrupedModel
-    from evomotion.studies.quadruped_plan.world import bundled_worlds, load_world
+    from evomotion.studies.quadruped_plan.missions.mission import Mission, run_mission
+    from evomotion.studies.quadruped_plan.rules import rules
+    from evomotion.studies.quadruped_plan.rules.model import QuadrupedModel
+    from evomotion.studies.quadruped_plan.worlds.world import bundled_worlds, load_world
 
     core = rules._walkcore
     print(f"load {os.getloadavg()[0]:.1f}, {time.strftime('%Y-%m-%d %H:%M')}, successors: "

@@ -75,7 +75,7 @@ def main() -> None:
 
 
 def _repertoire_row(name: str, robot: str, out: Path, res, wall: float) -> dict:
-    from evomotion.studies.humanoid_repertoire.use import walk_to
+    from evomotion.studies.humanoid_repertoire.step_planning import walk_to
 
     stats = em.load_run(out).stats
     index = json.loads((out / "repertoire" / "index.json").read_text())

@@ -1,6 +1,6 @@
 """The sole/floor contact model measured against Webots' own NAO motions (issue 13, part 0).
 
-Replays every fixture of ``shared/fixtures/webots-motions`` (1 s hold) on the NAO model with
+Replays every fixture of ``tests/fixtures/webots-motions`` (1 s hold) on the NAO model with
 the sole contact replaced by each candidate (condim, torsional and rolling friction) and
 prints, per candidate, the heading change and displacement of each motion and the error of the
 heading against the motion's name (TurnLeft40: +40 deg, TurnRight40: -40 deg, TurnLeft60:
@@ -14,11 +14,11 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from evomotion.sim.nao import model as nao_model
-from evomotion.sim.nao import replay as nao_replay
-from evomotion.sim.nao.motion import read_motion
+from evomotion.sim.motion import read_motion
+from evomotion.sim.robots.nao import model as nao_model
+from evomotion.sim.robots.nao import replay as nao_replay
 
-FIXTURES = Path(__file__).resolve().parents[2] / "shared" / "fixtures" / "webots-motions"
+FIXTURES = Path(__file__).resolve().parents[1] / "tests" / "fixtures" / "webots-motions"
 INTENT_DEG = {"TurnLeft40": 40.0, "TurnLeft60": 60.0, "TurnRight40": -40.0,
               "SideStepLeft": 0.0, "SideStepRight": 0.0, "HandWave": 0.0, "Shoot": 0.0}
 FOOT = 'condim="4"\n            friction="0.7 0.02 0.0001" solref="0.008 1"/>'

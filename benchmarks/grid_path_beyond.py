@@ -1,4 +1,4 @@
-"""grid-path "beyond the seed": the best configuration over 10 random maps x 30 seeds.
+"""grid-path "beyond the paper": the best configuration over 10 random maps x 30 seeds.
 
 Random 20x20 maps at 25% density (``random:20:0.25:K``, K = 0..9), success = final path
 within 1% of the exact *free* optimum. Maps are spread over ``--procs`` processes (each run
@@ -36,7 +36,8 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=30)
     ap.add_argument("--maps", type=int, default=10)
     ap.add_argument("--procs", type=int, default=2)
-    ap.add_argument("--row", default="continuous+repair-r5", choices=ex.BEYOND_ROWS)
+    ap.add_argument("--row", default="continuous+repair-r5",  # old names too (seed-encoding)
+                    choices=(*ex.BEYOND_ROWS, *getattr(ex, "OLD_ROW_NAMES", {})))
     ap.add_argument("--update", default="sync", choices=ex.POLICY_SHORT)
     ap.add_argument("--pop", type=int, default=100)
     ap.add_argument("--generations", type=int, default=50)

@@ -28,7 +28,7 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-FIXTURES = ROOT.parent / "shared" / "fixtures" / "webots-motions"
+FIXTURES = ROOT / "tests" / "fixtures" / "webots-motions"
 
 
 class Env:

@@ -21,7 +21,7 @@ from pathlib import Path
 
 from hostile_harness import Box, Result, SetupError, expect_error, expect_ok, q, run_command
 
-MOTIONS = Path(str(resources.files("evomotion.sim.nao") / "motions"))
+MOTIONS = Path(str(resources.files("evomotion.sim.robots.nao") / "motions"))
 FN = ["--set", "problem.dim=4", "--set", "algorithm.pop_size=10", "--set", "run.generations=3"]
 TINY_WORLD = """# a small world: a rock to walk round, a puddle, a hidden post
 name tiny
@@ -230,12 +230,12 @@ def walk_compare_kick(b: Box) -> str:
 def spec_copy(b: Box, edit: dict | None = None, name: str = "robot") -> Path:
     """A copy of the bundled OP3 spec and MJCF in ``box/robot/`` (``edit``: text
     replacements in the spec)."""
-    specs = Path(str(resources.files("evomotion.sim.robot") / "specs"))
-    model = Path(str(resources.files("evomotion.sim") / "models" / "op3" / "op3.xml"))
+    specs = Path(str(resources.files("evomotion.sim.robots") / "op3"))
+    model = specs / "op3.xml"
     d = b.tmp / name
     d.mkdir(exist_ok=True)
     shutil.copy(model, d / "op3.xml")
-    text = (specs / "op3.toml").read_text().replace('"evomotion:sim/models/op3/op3.xml"',
+    text = (specs / "op3.toml").read_text().replace('"evomotion:sim/robots/op3/op3.xml"',
                                                       '"op3.xml"')
     for old, new in (edit or {}).items():
         if old not in text:

@@ -20,8 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
-from evomotion.sim.nao.motion import read_motion
-from evomotion.sim.nao.replay import simulate_motion
+from evomotion.sim.motion import read_motion
+from evomotion.sim.robots.nao.replay import simulate_motion
 from evomotion.studies.biped_kick.experiment import accuracy, perturbed_kicks
 from evomotion.studies.biped_kick.play import play, read_kick
 from evomotion.studies.biped_kick.problem import KickConfig, KickProblem

@@ -1,10 +1,10 @@
 """Simulated execution of quadruped plans on the MuJoCo quadruped (issue 16).
 
-Plans: the seed's four start / rule-set plans (best-first, function (1), as in the seed's
+Plans: the paper's four start / rule-set plans (best-first, function (1), as in the paper's
 first experiment) and one plan per bundled world (the receding-horizon walker without
 disturbances, rule set B, 5,000 expansions per replan: an offline plan), each also made
 *robust*: planned with a lift margin of 0.1 units
-and the body shifts (rules 28-31; function (3) for the seed's task). Each plan is executed
+and the body shifts (rules 28-31; function (3) for the paper's task). Each plan is executed
 quasi-statically (:func:`evomotion.sim.quadruped.execute_plan`); printed: whether the body
 stayed up, the least support margin from the contact forces, the largest tilt, the final
 position / heading error, simulated and wall time. ``--video DIR`` also renders each world's
@@ -24,9 +24,9 @@ from pathlib import Path
 import numpy as np
 
 
-def seed_plans(robust: bool) -> list[tuple[str, dict]]:
-    from evomotion.studies.quadruped_plan.plan import plan_document
-    from evomotion.studies.quadruped_plan.planner import (
+def paper_plans(robust: bool) -> list[tuple[str, dict]]:
+    from evomotion.studies.quadruped_plan.plans.plan import plan_document
+    from evomotion.studies.quadruped_plan.plans.planner import (
         QuadrupedPlanConfig,
         make_problem,
         solve,
@@ -41,18 +41,18 @@ def seed_plans(robust: bool) -> list[tuple[str, dict]]:
             p = make_problem(cfg)
             res = solve(cfg, p)
             if not res.found:
-                out.append((f"seed {rs}/{label}", {}))
+                out.append((f"paper {rs}/{label}", {}))
                 continue
             doc = plan_document(p.model, res.states, res.rules, p.goal, p.goal_tolerance,
                                 cfg.sense, rs, None, {})
             doc["shifts"] = robust
-            out.append((f"seed {rs}/{label}", doc))
+            out.append((f"paper {rs}/{label}", doc))
     return out
 
 
 def _search_plan(world: str, robust: bool) -> dict:
-    from evomotion.studies.quadruped_plan.plan import plan_document, world_section
-    from evomotion.studies.quadruped_plan.planner import (
+    from evomotion.studies.quadruped_plan.plans.plan import plan_document, world_section
+    from evomotion.studies.quadruped_plan.plans.planner import (
         QuadrupedPlanConfig,
         make_problem,
         solve,
@@ -70,15 +70,15 @@ def _search_plan(world: str, robust: bool) -> dict:
 
 
 def world_plans(robust: bool) -> list[tuple[str, dict]]:
-    from evomotion.studies.quadruped_plan.mission import (
+    from evomotion.studies.quadruped_plan.missions.doc import mission_document
+    from evomotion.studies.quadruped_plan.missions.mission import (
         Disturbances,
         Mission,
         ReplanSettings,
         run_mission,
     )
-    from evomotion.studies.quadruped_plan.mission_doc import mission_document
-    from evomotion.studies.quadruped_plan.model import QuadrupedModel
-    from evomotion.studies.quadruped_plan.world import bundled_worlds, load_world
+    from evomotion.studies.quadruped_plan.rules.model import QuadrupedModel
+    from evomotion.studies.quadruped_plan.worlds.world import bundled_worlds, load_world
 
     out = []
     for name in bundled_worlds():
@@ -99,16 +99,16 @@ def main() -> None:
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
 
-    from evomotion.studies.quadruped_plan.checker import check_plan
-    from evomotion.studies.quadruped_plan.simulate import simulate_document
+    from evomotion.studies.quadruped_plan.plans.checker import check_plan
+    from evomotion.studies.quadruped_plan.plans.simulate import simulate_document
 
     rows = []
     print(f"{time.strftime('%Y-%m-%d %H:%M')}")
     print(f"{'plan':>15} {'variant':>7} {'states':>6} {'body up':>7} {'margin mm':>9} "
           f"{'tilt deg':>8} {'err mm':>7} {'err deg':>7} {'sim s':>6} {'wall s':>6}")
     for robust in (False, True):
-        for label, doc in [*seed_plans(robust), *world_plans(robust)]:
-            variant = "robust" if robust else "seed"
+        for label, doc in [*paper_plans(robust), *world_plans(robust)]:
+            variant = "robust" if robust else "paper"
             if not doc:
                 print(f"{label:>15} {variant:>7}  no plan")
                 continue

@@ -1,7 +1,7 @@
 """humanoid-repertoire figures (issue 14) from a finished run folder.
 
 1. Filled cells, and the share whose ``.motion``, replayed as ``evomotion replay FILE --hold
-   2`` does (``sim/nao/replay.simulate_motion``, the same code), reproduces the indexed
+   2`` does (``sim/robots/nao/replay.simulate_motion``, the same code), reproduces the indexed
    behaviour within 2 cm (dx and dy) and 5 degrees and does not fall.
 2. ``pick`` for ten requests spread over the archive's box: the picked cell's replayed
    behaviour against the request (error in cm / degrees).
@@ -20,9 +20,9 @@ from pathlib import Path
 
 import numpy as np
 
-from evomotion.sim.nao.replay import simulate_motion
+from evomotion.sim.robots.nao.replay import simulate_motion
 from evomotion.studies.humanoid_repertoire.artifacts import read_cell, read_index
-from evomotion.studies.humanoid_repertoire.use import pick, walk_to
+from evomotion.studies.humanoid_repertoire.step_planning import pick, walk_to
 
 PICKS = [(0.10, 0.0, 0.0), (0.05, 0.0, 0.0), (-0.06, 0.0, 0.0), (0.0, 0.05, 0.0),
          (0.0, -0.05, 0.0), (0.0, 0.0, 30.0), (0.0, 0.0, -30.0), (0.06, 0.04, 15.0),
@@ -59,7 +59,7 @@ def main() -> None:
            "reproduced": ok, "reproduced_share": ok / len(entries), "fell_on_replay": fell,
            "worst_replay_error": {"dx_m": worst[0], "dy_m": worst[1], "dtheta_deg": worst[2]},
            "replay_s": time.perf_counter() - t0, "pick": [], "walk_to": []}
-    from evomotion.sim.nao.motion import read_motion
+    from evomotion.sim.motion import read_motion
 
     for req in PICKS:
         r = pick(a.run, *req)

@@ -10,6 +10,8 @@ from pathlib import Path
 
 import pytest
 
+from fixture_files import WEBOTS_MOTIONS
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -83,9 +85,7 @@ def test_readme_examples_run(tmp_path):
 
 
 def test_replay_json_only_on_stdout():
-    motion = ROOT.parent / "shared" / "fixtures" / "webots-motions" / "HandWave.motion"
-    if not motion.exists():
-        pytest.skip("shared fixtures not present")
+    motion = WEBOTS_MOTIONS / "HandWave.motion"
     r = cli("replay", str(motion), "--json")
     assert r.returncode == 0, r.stderr
     out = json.loads(r.stdout)
@@ -96,3 +96,20 @@ def test_replay_json_only_on_stdout():
 def test_replay_missing_file_is_one_line_error(tmp_path):
     r = cli("replay", str(tmp_path / "none.motion"))
     assert r.returncode == 2 and "Traceback" not in r.stderr and "no such motion" in r.stderr
+
+
+def test_old_preset_name_runs_the_paper_preset_and_old_folders_resume(tmp_path):
+    """``--preset seed`` is the old name of ``--preset paper`` (issue 32): it still runs, with
+    one note line; a run folder that recorded the old name resumes."""
+    out = tmp_path / "r"
+    r = cli("run", "grid-path", "--preset", "seed", "--set", "run.generations=2",
+            "--set", "algorithm.pop_size=16", "--set", "run.checkpoint_every=1",
+            "--out", str(out), "--quiet")
+    assert r.returncode == 0, r.stderr
+    assert r.stderr.splitlines() == ["note: --preset seed is the old name of --preset paper"]
+    toml = (out / "config.toml").read_text()
+    assert 'preset = "paper"' in toml and 'update = "line_sweep"' in toml  # the paper's
+    (out / "config.toml").write_text(toml.replace('preset = "paper"', 'preset = "seed"'))
+    r = cli("resume", str(out), "--set", "run.generations=3", "--quiet")
+    assert r.returncode == 0, r.stderr
+    assert json.loads((out / "best.json").read_text())["generation"] == 3

@@ -6,7 +6,9 @@ for a registered study (by name or :class:`~evomotion.studies.base.Study`) or fo
 that follows the :class:`~evomotion.core.problem.Problem` protocol (``genome``, ``sense``,
 ``metric_names``, ``evaluate``). ``config`` is a dict of sections (``{"algorithm": {...},
 "run": {...}, "problem": {...}}``) checked like a TOML config file: an unknown key is a
-one-line :class:`~evomotion.errors.InputError` naming it.
+one-line :class:`~evomotion.errors.InputError` naming it. Without ``out_dir`` the run stays in
+memory (:func:`run_in_memory`, re-exported from :mod:`evomotion.run.in_memory`: the one
+in-memory runner, which the studies' experiments use with a typed config and a built problem).
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ import numpy as np
 
 from evomotion.core.problem import Problem
 from evomotion.errors import InputError
+from evomotion.run.in_memory import GivenProblem, run_in_memory
 from evomotion.run.runner import RunResult
 from evomotion.studies.base import Study
 from evomotion.textio import read_file_bytes, read_json
@@ -29,17 +32,6 @@ MAX_LOG_BYTES = 64 * 1024 * 1024
 @dataclass(frozen=True)
 class NoProblemConfig:
     """The ``[problem]`` section of a problem given as an object: it has no keys."""
-
-
-class _GivenProblem:
-    """``make_problem`` of a problem given as an object: the object itself (picklable when the
-    problem is, so process, Ray and Dask workers receive a copy)."""
-
-    def __init__(self, problem: Problem) -> None:
-        self.problem = problem
-
-    def __call__(self, _cfg: Any) -> Problem:
-        return self.problem
 
 
 def problem_study(problem: Problem, name: str | None = None) -> Study:
@@ -65,7 +57,7 @@ def problem_study(problem: Problem, name: str | None = None) -> Study:
         raise InputError("evomotion.run: problem.evaluate must be callable")
     label = name or type(problem).__name__
     return Study(name=label, description=f"{label} (a problem given as a Python object)",
-                 problem_config=NoProblemConfig, make_problem=_GivenProblem(problem))
+                 problem_config=NoProblemConfig, make_problem=GivenProblem(problem))
 
 
 def _study_of(problem_or_study: Any) -> Study:
@@ -115,7 +107,9 @@ def run(problem_or_study: Any, config: dict[str, Any] | None = None,
         study, cfg = resume_config(Path(out_dir), study, changes)
         return run_study(study, cfg, Path(out_dir), quiet=quiet, resume=True)
     cfg = resolve_config(study, None, (), preset=preset, values=values)
-    return run_study(study, cfg, Path(out_dir) if out_dir is not None else None, quiet=quiet)
+    if out_dir is None:
+        return run_in_memory(cfg, make_problem=study.make_problem, algorithms=study.algorithms)
+    return run_study(study, cfg, Path(out_dir), quiet=quiet)
 
 
 def _read_toml(path: Path) -> dict[str, Any]:

@@ -43,7 +43,8 @@ def run_cmd(
     address: Annotated[str | None, typer.Option(help="Cluster address (ray/dask)")] = None,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No console output")] = False,
     preset: Annotated[str | None, typer.Option(
-        help="Named setting, e.g. 'seed' (the paper's literal one); default: best known")] = None,
+        help="Named setting, e.g. 'paper' (the source paper's literal one; 'seed' is its old "
+             "name); default: best known")] = None,
     overwrite: Annotated[bool, typer.Option(
         "--overwrite", help="Empty --out first if it already holds a run")] = False,
     robot: Annotated[str | None, typer.Option(
@@ -51,7 +52,7 @@ def run_cmd(
              "or a spec .toml (recorded as an absolute path)")] = None,
 ) -> None:
     """Run STUDY and write a run folder (config, stats, checkpoints, plots, artifacts)."""
-    from evomotion.run.config import resolve_config
+    from evomotion.run.config import current_preset_name, resolve_config
     from evomotion.run.folder import make_run_dir
     from evomotion.run.runner import run_study
 
@@ -62,14 +63,17 @@ def run_cmd(
 
         if "robot" not in {f.name for f in dataclasses.fields(s.problem_config)}:
             raise InputError(f"--robot: study {s.name!r} runs only its own robot")
-        from evomotion.sim.robot import spec_path
+        from evomotion.sim.robots import bundled_robots, spec_path
 
-        if spec_path(robot).resolve().parent != spec_path("nao").parent:  # a spec file:
-            robot = str(Path(robot).resolve())  # recorded absolute, so resume works anywhere
+        if robot not in bundled_robots():  # a spec file (spec_path: one line if neither):
+            robot = str(spec_path(robot).resolve())  # recorded absolute: resume anywhere
         overrides.insert(0, f"problem.robot={robot!r}")
     for key, val in (("evaluator", evaluator), ("workers", workers), ("address", address)):
         if val is not None:
             overrides.append(f"run.{key}={val!r}" if isinstance(val, str) else f"run.{key}={val}")
+    if current_preset_name(s, preset) != preset:
+        typer.echo(f"note: --preset {preset} is the old name of "
+                   f"--preset {current_preset_name(s, preset)}", err=True)
     cfg = resolve_config(s, config, overrides, preset=preset)
     out_dir = make_run_dir(s.name, out)
     _finish(run_study(s, cfg, out_dir, quiet=quiet, overwrite=overwrite), quiet)
@@ -112,7 +116,7 @@ def resume_cmd(
         if not eq:
             raise InputError(f"--set {item!r}: expected section.key=value")
         changes[key.strip()] = parse_value(text.strip())
-    s, cfg = resume_config(run_dir, None, changes)
+    s, cfg = resume_config(run_dir, None, changes, resolve=get_study)
     _finish(run_study(s, cfg, run_dir, quiet=quiet, resume=True), quiet)
 
 
@@ -184,7 +188,7 @@ def replay_cmd(
 ) -> None:
     """Play a Webots .motion on the NAO model: displacement, heading change, fall;
     optionally in perturbed worlds or from lying (docs/humanoid-step.md)."""
-    from evomotion.sim.nao.replay import StressOptions, replay_command
+    from evomotion.sim.robots.nao.replay import StressOptions, replay_command
 
     if not motion.exists():
         raise InputError(f"{motion}: no such motion file")
@@ -205,7 +209,7 @@ def export_cmd(
         help="Fraction of each motor's no-load speed allowed, in (0, 1]")] = 1.0,
 ) -> None:
     """Check a .motion against a real NAO's limits; write a NAOqi script and/or keyframes."""
-    from evomotion.sim.nao.export import export_command
+    from evomotion.sim.robots.nao.export import export_command
 
     for line in export_command(motion, naoqi, json_out, clip, speed_margin):
         typer.echo(line)

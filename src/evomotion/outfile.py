@@ -22,13 +22,17 @@ from __future__ import annotations
 import contextlib
 import errno
 import json
+import math
+import numbers
 import os
 import stat
 import tempfile
 from collections.abc import Callable, Iterator
 from pathlib import Path
+from typing import Any
 
 from evomotion.errors import InputError
+from evomotion.textio import kind_of, read_json
 
 #: the file that makes a folder a run folder; it lists the top-level names runs wrote there
 RUN_MARKER = ".evomotion-run"
@@ -41,8 +45,6 @@ os.umask(_UMASK)  # read once: new files get 0666 & ~umask, as open() gives them
 #: ``"append"`` (before a line is appended to a log or table)
 WRITE_HOOKS: list[Callable[[str, Path], None]] = []
 
-_KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO"), (stat.S_ISSOCK, "a socket"),
-          (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"))
 _REASONS = {errno.ENOSPC: "no space left on the device", errno.EDQUOT: "disk quota exceeded",
             errno.EROFS: "read-only file system", errno.EACCES: "permission denied",
             errno.EPERM: "operation not permitted", errno.ENOENT: "its folder does not exist",
@@ -60,14 +62,6 @@ def reason(e: BaseException) -> str:
         return _REASONS[e.errno]
     text = getattr(e, "strerror", None) or str(e) or type(e).__name__
     return " ".join(str(text).split())
-
-
-def kind_of(mode: int) -> str | None:
-    """``"a FIFO"`` etc. for anything but a regular file; ``None`` for a regular file."""
-    for test, name in _KINDS:
-        if test(mode):
-            return name
-    return None if stat.S_ISREG(mode) else "not a regular file"
 
 
 def check_target(path: str | Path, what: str = "output file", mkdir: bool = False) -> Path:
@@ -225,11 +219,30 @@ def save_figure(fig, path: str | Path, what: str = "figure", mkdir: bool = False
     return atomic_write_bytes(path, buf.getvalue(), what, mkdir)
 
 
-def write_json(path: str | Path, obj: object, what: str = "JSON file",
-               mkdir: bool = False) -> Path:
-    """``obj`` as indented JSON (``NaN``/``inf`` refused: callers write ``null``)."""
-    return atomic_write_text(path, json.dumps(obj, indent=2, allow_nan=False) + "\n", what,
-                             mkdir)
+def write_json(path: str | Path, obj: object, what: str = "JSON file", mkdir: bool = False,
+               indent: int = 2) -> Path:
+    """``obj`` as JSON, atomically: numpy arrays and scalars become lists and numbers, and a
+    non-finite float ``null`` (JSON has no NaN)."""
+    text = json.dumps(json_safe(obj), indent=indent, default=_json_default, allow_nan=False)
+    return atomic_write_text(path, text + "\n", what, mkdir)
+
+
+def json_safe(obj: Any) -> Any:
+    """``obj`` with every non-finite float (Python or numpy) as ``None``."""
+    if isinstance(obj, dict):
+        return {k: json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [json_safe(v) for v in obj]
+    if isinstance(obj, numbers.Real) and not isinstance(obj, numbers.Integral) \
+            and not math.isfinite(obj):  # float, numpy's floats
+        return None
+    return obj
+
+
+def _json_default(obj: Any) -> Any:
+    if hasattr(obj, "tolist") and type(obj).__module__ == "numpy":  # arrays and scalars
+        return json_safe(obj.tolist())
+    raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
 
 
 def _fsync_file(path: Path) -> None:
@@ -269,14 +282,11 @@ def run_folder_of(path: str | Path) -> Path | None:
 
 def read_marker(run_dir: Path) -> dict | None:
     """The run folder's marker (``{"evomotion_run": 1, "study": ..., "files": [...]}``), or
-    ``None`` when it is missing or not this program's."""
-    p = Path(run_dir) / RUN_MARKER
+    ``None`` when it is missing, unreadable (a FIFO, 1 MiB or more, not JSON) or not this
+    program's."""
     try:
-        st = os.stat(p)
-        if not stat.S_ISREG(st.st_mode) or st.st_size > 1 << 20:
-            return None
-        doc = json.loads(p.read_bytes().decode("utf-8"))
-    except (OSError, ValueError, RecursionError):
+        doc = read_json(Path(run_dir) / RUN_MARKER, "run marker", 1 << 20)
+    except InputError:
         return None
     if not isinstance(doc, dict) or doc.get("evomotion_run") != 1:
         return None
@@ -287,14 +297,21 @@ def read_marker(run_dir: Path) -> dict | None:
 
 
 def write_marker(run_dir: Path, study: str, files: list[str]) -> None:
-    """(Re)write the marker of ``run_dir`` naming ``files`` (top-level names) as the run's."""
+    """(Re)write the marker of ``run_dir`` naming ``files`` (top-level names) as the run's;
+    a failure is one :class:`WriteError` line naming the marker."""
     doc = {"evomotion_run": 1, "study": study, "files": sorted(set(files))}
     p = Path(run_dir) / RUN_MARKER
-    fd, name = tempfile.mkstemp(dir=run_dir, prefix=f".{RUN_MARKER}.", suffix=".tmp")
+    try:
+        fd, name = tempfile.mkstemp(dir=run_dir, prefix=f".{RUN_MARKER}.", suffix=".tmp")
+    except OSError as e:
+        raise WriteError(f"{p}: cannot mark the run folder ({reason(e)})") from None
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as fh:
             fh.write(json.dumps(doc, indent=1) + "\n")
         os.replace(name, p)
+    except OSError as e:
+        Path(name).unlink(missing_ok=True)
+        raise WriteError(f"{p}: cannot mark the run folder ({reason(e)})") from None
     except BaseException:
         Path(name).unlink(missing_ok=True)
         raise

@@ -66,12 +66,21 @@ def read_file_bytes(path: str | Path, what: str = "file",
 def _check_regular(path: Path, mode: int, what: str) -> None:
     if stat.S_ISDIR(mode):
         raise FileFormatError(path, None, f"expected a {what}, got a directory")
-    if not stat.S_ISREG(mode):
-        kind = next((n for t, n in ((stat.S_ISFIFO, "a FIFO"), (stat.S_ISSOCK, "a socket"),
-                                    (stat.S_ISCHR, "a character device"),
-                                    (stat.S_ISBLK, "a block device")) if t(mode)),
-                    "not a regular file")
+    kind = kind_of(mode)
+    if kind is not None:
         raise FileFormatError(path, None, f"expected a regular {what}, got {kind}")
+
+
+_KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO"), (stat.S_ISSOCK, "a socket"),
+          (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"))
+
+
+def kind_of(mode: int) -> str | None:
+    """``"a FIFO"`` etc. for anything but a regular file; ``None`` for a regular file."""
+    for test, name in _KINDS:
+        if test(mode):
+            return name
+    return None if stat.S_ISREG(mode) else "not a regular file"
 
 
 def _reason(e: BaseException) -> str:

@@ -32,8 +32,8 @@ def test_tent_not_periodic(mu, x0):
     assert np.unique(np.round(seq, 12)).size > 0.95 * seq.size
 
 
-def test_seed_figure_case_covers_the_invariant_interval():
-    seq = tent_sequence(0.8, 1.5, 500)[50:]  # seed 002, Fig. 1: x0 = 0.8, mu = 1.5
+def test_paper_figure_case_covers_the_invariant_interval():
+    seq = tent_sequence(0.8, 1.5, 500)[50:]  # paper 002, Fig. 1: x0 = 0.8, mu = 1.5
     a, b = tent_interval(1.5)
     hist, _ = np.histogram(seq, bins=10, range=(a, b))
     assert np.all(hist > 0)

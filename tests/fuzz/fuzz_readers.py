@@ -7,19 +7,20 @@ from pathlib import Path
 import numpy as np
 
 from evomotion.errors import FileFormatError, InputError
-from evomotion.sim.nao.motion import MAX_MOTION_MS, NAO_JOINT_NAMES, read_motion
+from evomotion.sim.motion import MAX_MOTION_MS, NAO_JOINT_NAMES, read_motion
 from evomotion.studies.arm_ik.scenario import MAX_ABS, SCENARIO_DIR, load_scenario
 from evomotion.studies.grid_path.maps import MAX_MAP_CELLS, read_map
-from evomotion.studies.quadruped_plan.checker import PlanViolationError, check_plan
-from evomotion.studies.quadruped_plan.plan import read_plan
-from evomotion.studies.quadruped_plan.world import WORLD_DIR, read_world
+from evomotion.studies.quadruped_plan.plans.checker import PlanViolationError, check_plan
+from evomotion.studies.quadruped_plan.plans.plan import read_plan
+from evomotion.studies.quadruped_plan.worlds.world import WORLD_DIR, read_world
+from fixture_files import WEBOTS_MOTIONS
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "fuzz" / "data"
 CORPUS = ROOT / "corpus"
-WEBOTS = ROOT.parents[1] / "shared" / "fixtures" / "webots-motions"
+WEBOTS = WEBOTS_MOTIONS
 MAPS = ROOT.parent / "src" / "evomotion" / "studies" / "grid_path" / "maps"
-SHOOT = ROOT.parent / "src" / "evomotion" / "sim" / "nao" / "motions" / "Shoot.motion"
+SHOOT = ROOT.parent / "src" / "evomotion" / "sim" / "robots" / "nao" / "motions" / "Shoot.motion"
 
 
 def check_motion(path: Path) -> None:

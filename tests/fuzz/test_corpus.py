@@ -82,8 +82,8 @@ def test_directory_missing_and_oversize_files(reader, tmp_path, monkeypatch):
     big.write_bytes(b"0" * 100)
     real = textio.read_file_bytes
     monkeypatch.setattr(textio, "read_file_bytes", lambda p, what, _max: real(p, what, 10))
-    for mod in ("evomotion.sim.nao.motion", "evomotion.studies.arm_ik.scenario",
-                "evomotion.studies.grid_path.maps", "evomotion.studies.quadruped_plan.plan",
+    for mod in ("evomotion.sim.motion", "evomotion.studies.arm_ik.scenario",
+                "evomotion.studies.grid_path.maps", "evomotion.studies.quadruped_plan.plans.plan",
                 "evomotion.textio"):
         monkeypatch.setattr(f"{mod}.read_file_bytes", textio.read_file_bytes)
     with pytest.raises(FileFormatError, match="of at most 10 bytes, got 100 bytes"):

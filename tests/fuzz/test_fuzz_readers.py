@@ -20,7 +20,7 @@ from fuzz_readers import READERS, accepts_or_one_line_error, seeds
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from evomotion.sim.nao.motion import NAO_JOINT_NAMES
+from evomotion.sim.motion import NAO_JOINT_NAMES
 
 #: EVOMOTION_FUZZ_SCALE=N multiplies the counts and draws fresh random inputs (a longer hunt);
 #: the default run is derandomized (the same inputs every run).

@@ -60,3 +60,19 @@ def test_switching_algorithm_drops_the_study_tuning_of_the_other_one():
     assert cfg.algorithm.name == "cmaes"
     cfg = resolve_config(S, None, ["algorithm.name=ga"])
     assert cfg.algorithm.replacement == "plus"  # same algorithm: study tuning kept
+
+
+def test_old_preset_name_resolves_to_the_paper_preset():
+    """``preset="seed"`` is the old name of ``"paper"`` (issue 32) where a study has it."""
+    from evomotion.run.config import current_preset_name
+
+    arm = get_study("arm-ik")
+    assert resolve_config(arm, preset="seed") == resolve_config(arm, preset="paper")
+    assert resolve_config(arm, preset="seed").preset == "paper"
+    assert current_preset_name(arm, "seed") == "paper"
+    assert current_preset_name(arm, None) is None
+    assert current_preset_name(S, "seed") == "seed"  # no paper preset: nothing to map
+    with pytest.raises(InputError, match="unknown preset 'seed'"):
+        resolve_config(S, preset="seed")
+    raw = {"study": "arm-ik", "preset": "seed", "run": {}, "problem": {}}
+    assert config_from_dict(arm, raw).preset == "seed"  # an old run's config.toml still loads

@@ -1,8 +1,8 @@
 import numpy as np
 import pytest
 
-from evomotion.sim import nao
 from evomotion.sim.render import RenderUnavailableError, render_video
+from evomotion.sim.robots import nao
 
 
 def test_render_video_writes_moving_frames(tmp_path):

@@ -123,7 +123,7 @@ def test_a_full_disk_during_encoding_is_one_line(tmp_path):
               capture_output=True).returncode != 0:
         pytest.skip("cannot mount a tmpfs here (needs root and CAP_SYS_ADMIN)")
     try:
-        from evomotion.sim.nao.model import MODEL_PATH, load_model
+        from evomotion.sim.robots.nao.model import MODEL_PATH, load_model
 
         q = np.tile(load_model().qpos0, (200, 1))
         try:

@@ -2,7 +2,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from evomotion.sim import nao
+from evomotion.sim.robots import nao
 from evomotion.sim.rollout import (
     BatchSimulator,
     TorsoTrack,

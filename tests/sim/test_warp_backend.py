@@ -10,18 +10,15 @@ is the same and the displacement agrees within 1 cm and the heading within 0.05 
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 
 pytest.importorskip("mujoco_warp")
 
 from evomotion.errors import InputError  # noqa: E402
-from evomotion.sim import nao  # noqa: E402
-from evomotion.sim.nao.motion import read_motion  # noqa: E402
-from evomotion.sim.nao.replay import motion_targets  # noqa: E402
-from evomotion.sim.nao.worlds import World, make_world, simulate_worlds  # noqa: E402
+from evomotion.sim.motion import read_motion  # noqa: E402
+from evomotion.sim.robots import nao  # noqa: E402
+from evomotion.sim.robots.nao.replay import motion_targets  # noqa: E402
 from evomotion.sim.rollout import (  # noqa: E402
     BatchSimulator,
     fall_step,
@@ -31,8 +28,10 @@ from evomotion.sim.rollout import (  # noqa: E402
 )
 from evomotion.sim.warp_memory import bucket_size  # noqa: E402
 from evomotion.sim.warp_rollout import WarpSimulator  # noqa: E402
+from evomotion.sim.worlds import World, make_world, simulate_worlds  # noqa: E402
+from fixture_files import WEBOTS_MOTIONS
 
-FIXTURES = Path(__file__).resolve().parents[3] / "shared" / "fixtures" / "webots-motions"
+FIXTURES = WEBOTS_MOTIONS
 MOTIONS = ("SideStepLeft.motion", "TurnRight40.motion", "Shoot.motion")
 NSTEP = 750  # 3 s
 EARLY = 125  # 0.5 s
@@ -56,10 +55,7 @@ def batch(model):
     dt = float(model.opt.timestep)
     inits, ctrls = [nao.initial_state(model)], [np.tile(nao.pose_vector(), (NSTEP, 1))]
     for name in MOTIONS:
-        path = FIXTURES / name
-        if not path.is_file():
-            pytest.skip(f"fixture {path} missing")
-        first, c = motion_targets(read_motion(path), dt, NSTEP)
+        first, c = motion_targets(read_motion(FIXTURES / name), dt, NSTEP)
         inits.append(nao.initial_state(model, first))
         ctrls.append(c)
     return np.array(inits), np.array(ctrls)

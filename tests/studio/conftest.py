@@ -7,11 +7,10 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
-from studio_helpers import ARGS, CHROMIUM, TOKEN, free_port, get, smoke_sets  # noqa: E402
+from studio_helpers import ARGS, CHROMIUM, TOKEN, free_port, smoke_sets, wait_until_up  # noqa: E402
 
 from evomotion.run.config import resolve_config
 from evomotion.run.runner import run_study
@@ -38,19 +37,7 @@ def studio(runs_root):
                              "--port", str(port)], env=env, stdout=subprocess.PIPE,
                             stderr=subprocess.STDOUT)
     base = f"http://127.0.0.1:{port}"
-    deadline = time.time() + 60
-    while time.time() < deadline:
-        try:
-            if get(f"{base}/?token={TOKEN}")[0] == 200:
-                break
-        except OSError:
-            pass
-        if proc.poll() is not None:
-            pytest.fail(f"the studio exited: {proc.stdout.read().decode()[-2000:]}")
-        time.sleep(0.3)
-    else:
-        proc.kill()
-        pytest.fail("the studio did not answer within 60 s")
+    wait_until_up(proc, f"{base}/?token={TOKEN}")
     yield base, runs_root
     proc.terminate()
     try:

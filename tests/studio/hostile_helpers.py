@@ -10,7 +10,7 @@ from pathlib import Path
 
 from evomotion.run.lock import boot_id, process_start
 
-SHOOT = resources.files("evomotion.sim.nao") / "motions" / "Shoot.motion"
+SHOOT = resources.files("evomotion.sim.robots.nao") / "motions" / "Shoot.motion"
 
 
 def fake_run(root: Path, name: str, study: str = "functions", robot: str | None = None) -> Path:

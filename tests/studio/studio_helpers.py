@@ -35,3 +35,25 @@ def get(url: str, headers: dict | None = None, method: str = "GET") -> tuple[int
             return r.status, r.read()
     except urllib.error.HTTPError as e:
         return e.code, e.read()
+
+
+def wait_until_up(proc, url: str, headers: dict | None = None, timeout_s: float = 60) -> None:
+    """Wait until the studio process ``proc`` answers ``url`` with 200; fail the test when it
+    exits first or does not answer within ``timeout_s`` (then it is killed)."""
+    import time
+
+    import pytest
+
+    deadline = time.time() + timeout_s
+    while time.time() < deadline:
+        try:
+            if get(url, headers)[0] == 200:
+                return
+        except OSError:
+            pass
+        if proc.poll() is not None:
+            pytest.fail(f"the studio exited: {proc.stdout.read().decode()[-2000:]}")
+        time.sleep(0.3)
+    proc.kill()
+    pytest.fail(f"the studio did not answer within {timeout_s:g} s")
+

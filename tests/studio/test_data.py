@@ -130,10 +130,10 @@ def test_form_fields_and_one_line_errors():
     with pytest.raises(InputError) as e:
         actions.check_new_run("functions", None, ["algorithm.pop_size=-4"])
     assert actions.field_of_error(str(e.value), keys) == "algorithm.pop_size"
-    assert actions.run_command("functions", "seed", ["run.seed=1"], tmp := "out")[-3:] == \
+    assert actions.run_command("functions", "paper", ["run.seed=1"], tmp := "out")[-3:] == \
         ["--out", tmp, "--quiet"]
     for name in ("arm-ik", "grid-path", "quadruped-plan", "humanoid-step"):
-        assert actions.form_fields(name, "seed")  # every study's schema makes a form
+        assert actions.form_fields(name, "paper")  # every study's schema makes a form
 
 
 def test_history_records_every_generation_and_survives_resume(tmp_path):

@@ -15,7 +15,7 @@ from urllib.parse import quote
 
 import pytest
 from hostile_helpers import fake_run, hostile_root, json_lock, stale_locks
-from studio_helpers import TOKEN, free_port, get
+from studio_helpers import TOKEN, free_port, get, wait_until_up
 
 API = {"X-Evomotion-Token": TOKEN}
 HOST = socket.gethostname()
@@ -49,19 +49,8 @@ def hostile_studio(tmp_path_factory):
                              "--port", str(port)], env=env, stdout=subprocess.PIPE,
                             stderr=subprocess.STDOUT, cwd=root)
     base = f"http://127.0.0.1:{port}"
-    deadline = time.time() + 60
     try:
-        while time.time() < deadline:
-            try:
-                if get(f"{base}/api/runs", API)[0] == 200:
-                    break
-            except OSError:
-                pass
-            if proc.poll() is not None:
-                pytest.fail(f"the studio exited: {proc.stdout.read().decode()[-2000:]}")
-            time.sleep(0.3)
-        else:
-            pytest.fail("the studio did not answer within 60 s")
+        wait_until_up(proc, f"{base}/api/runs", API)
         yield base, root, proc, sleeper
     finally:
         proc.terminate()

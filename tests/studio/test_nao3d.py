@@ -2,19 +2,18 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import mujoco
 import numpy as np
 import pytest
 
 from evomotion.errors import InputError
-from evomotion.sim import nao
-from evomotion.sim.nao.motion import read_motion
-from evomotion.sim.nao.replay import motion_targets, simulate_motion
+from evomotion.sim.motion import read_motion
+from evomotion.sim.robots import nao
+from evomotion.sim.robots.nao.replay import motion_targets, simulate_motion
 from evomotion.studio.nao3d import geom_table, load_scene_model, mesh_stl, record_poses
+from fixture_files import WEBOTS_MOTIONS
 
-FIXTURES = Path(__file__).resolve().parents[3] / "shared" / "fixtures" / "webots-motions"
+FIXTURES = WEBOTS_MOTIONS
 WAVE = FIXTURES / "HandWave.motion"  # 1.4 s, arms only
 
 
@@ -99,9 +98,9 @@ def test_another_robots_motion_plays_on_that_robot(tmp_path):
     """A run of another robot (problem.robot): its motions (its channels) play on it, from
     its initial state, the recorded poses its own replay's."""
     from evomotion.run.config import config_to_toml, resolve_config
-    from evomotion.sim.nao.motion import format_motion
-    from evomotion.sim.robot import load_robot
-    from evomotion.sim.robot.play import play_motion
+    from evomotion.sim.motion import format_motion
+    from evomotion.sim.play import play_motion
+    from evomotion.sim.robots import load_robot
     from evomotion.studies import get_study
     from evomotion.studies.humanoid_repertoire.problem import (
         HumanoidRepertoireConfig,

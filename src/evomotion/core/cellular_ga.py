@@ -2,13 +2,13 @@
 
 Source: Alba & Dorronsoro, *Cellular Genetic Algorithms* (Springer 2008): each cell holds
 one individual; the cell is one parent, its mate is chosen among its neighbours (here by
-roulette, as in Zhang et al. 2014, seed 004, sec. 3.2.1), one-point crossover with
+roulette, as in Zhang et al. 2014, paper 004, sec. 3.2.1), one-point crossover with
 probability ``crossover_rate``, mutation, and the offspring replaces the cell if better.
 
 Update policies (Alba & Dorronsoro 2008, sec. 2.3; Schoenauer et al.):
 
 - ``synchronous``: every cell breeds from the old population, all replaced at once;
-- ``line_sweep``: cells updated one by one in row-major order (the seed's "順序掃描");
+- ``line_sweep``: cells updated one by one in row-major order (the paper's "順序掃描");
 - ``fixed_random_sweep``: one random permutation drawn once and reused every generation;
 - ``new_random_sweep``: a fresh random permutation every generation;
 - ``uniform_choice``: ``pop_size`` cells drawn uniformly with replacement per generation.
@@ -151,6 +151,8 @@ def roulette_rows(cost: np.ndarray, rng: np.random.Generator | None,
     [0, 1) to use instead of drawing them from ``rng``.
     """
     if u is None:
+        if rng is None:
+            raise ValueError("roulette_rows needs rng or u")
         u = rng.random((cost.shape[0], 1))
     # ufunc reductions: the same values as the ndarray methods without their Python
     # wrappers (this runs once per wave of a cellular-GA sweep)
@@ -303,7 +305,7 @@ class CellularGA(Optimizer):
                                           **c.mutation_params)
         return clip_to_bounds(child, g.lower, g.upper), state
 
-    def _tell(self, state: CGAState, genomes, cost, rng):
+    def _tell(self, state: CGAState, genomes, cost, rng, measures=None):
         if not state.evaluated:
             return replace(state, pop=np.array(genomes, dtype=float), cost=cost.copy(),
                            evaluated=True)

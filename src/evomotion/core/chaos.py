@@ -1,4 +1,4 @@
-"""Tent chaotic map used by the improved CMA-ES of seed 002 to perturb the mean.
+"""Tent chaotic map used by the improved CMA-ES of paper 002 to perturb the mean.
 
 The Tent map (e.g. Kuo & Kuo; Shan et al. 2005, "Chaotic optimization algorithm based on Tent
 map") with slope ``mu``::
@@ -8,10 +8,10 @@ map") with slope ``mu``::
 
 For ``1 < mu < 2`` every orbit from ``0 < x0 < 1`` enters the invariant interval
 ``[a, b] = [mu (1 - mu / 2), mu / 2]`` and is chaotic there (Lyapunov exponent ``ln mu > 0``),
-except at the fixed points ``0`` and ``mu / (1 + mu)``. The seed requires ``x0 != mu``; we also
+except at the fixed points ``0`` and ``mu / (1 + mu)``. The paper requires ``x0 != mu``; we also
 reject the fixed points, whose orbits are periodic (period 1).
 
-Seed 002 maps the chaotic variable into the search range ``[L_d, U_d]`` of each dimension.
+Paper 002 maps the chaotic variable into the search range ``[L_d, U_d]`` of each dimension.
 Because for ``mu < 2`` the orbit only covers ``[a, b]``, :func:`tent_to_box` first stretches
 ``[a, b]`` onto ``[0, 1]`` and then onto ``[L_d, U_d]``, so the chaotic points reach the whole box.
 How the point enters the CMA-ES mean (``Delta m_d``) is documented in :mod:`evomotion.core.cmaes`.

@@ -1,4 +1,4 @@
-"""CMA-ES with IPOP/BIPOP restarts, box bounds and the Tent/Lévy improvements of seed 002.
+"""CMA-ES with IPOP/BIPOP restarts, box bounds and the Tent/Lévy improvements of paper 002.
 
 Sources:
 - N. Hansen, "The CMA Evolution Strategy: A Tutorial", arXiv:1604.00772 (2016/2023): sampling,
@@ -10,14 +10,14 @@ Sources:
 - A. Auger & N. Hansen, "A Restart CMA Evolution Strategy With Increasing Population Size",
   CEC 2005 (IPOP); N. Hansen, "Benchmarking a BI-Population CMA-ES on the BBOB-2009 Function
   Testbed", GECCO 2009 (BIPOP).
-- Seed 002 (Zhou & Liang 2023), sections 2.2-2.3: Tent-map mean perturbation and Lévy flights.
+- Paper 002 (Zhou & Liang 2023), sections 2.2-2.3: Tent-map mean perturbation and Lévy flights.
 
 Everything runs in normalised coordinates ``u = (x - lower) / span`` so that ``sigma0`` is a
 fraction of each gene's range. How the options enter one generation:
 
 1. ``ask``: ``z ~ N(0, I)``, ``u_i = m + sigma B D z_i``.  *Lévy* (if ``levy``): a random
    ``round(levy_fraction * lambda)`` of the candidates get ``u_i += alpha sigma B (D (.) s_i)``
-   with ``s_i`` a vector of Mantegna steps: seed 002's ``x' = x + alpha (.) Levy(beta)``, taken
+   with ``s_i`` a vector of Mantegna steps: paper 002's ``x' = x + alpha (.) Levy(beta)``, taken
    element-wise in the eigenbasis of C so that the jump respects the learned shape (a jump
    along the genome axes degraded CMA-ES on Rosenbrock in our tests).  *Bounds*
    (``bound_handling="reinject"``): candidates are clipped into the box. Every candidate changed
@@ -46,7 +46,7 @@ Modules: the strategy parameters are in :mod:`~evomotion.core.cmaes_params` (Tab
 update steps in :mod:`~evomotion.core.cmaes_update` (one function per tutorial equation), the
 termination criteria in :mod:`~evomotion.core.cmaes_stop`, IPOP/BIPOP in
 :mod:`~evomotion.core.cmaes_restarts`, the Lévy and Tent options in
-:mod:`~evomotion.core.cmaes_extras`; this module holds the config, the state and the ask/tell
+:mod:`~evomotion.core.cmaes_levy_tent`; this module holds the config, the state and the ask/tell
 that chain them. State is replaced, never mutated. ``state.generation`` counts every
 generation (all restarts); ``state.restart_generation`` is the tutorial's ``g`` within the
 current run (reset by a restart or a Tent jump).
@@ -65,7 +65,7 @@ import numpy as np
 
 from evomotion.core.chaos import validate_tent
 from evomotion.core.checks import MAX_POP_SIZE, check_fields, check_number
-from evomotion.core.cmaes_extras import chaos_due, chaos_jump, levy_candidates, tent_start
+from evomotion.core.cmaes_levy_tent import chaos_due, chaos_jump, levy_candidates, tent_start
 from evomotion.core.cmaes_params import StrategyParams, strategy_params
 from evomotion.core.cmaes_restarts import fresh_distribution, initial_lambda, restart
 from evomotion.core.cmaes_stop import push_history, stop_reason
@@ -189,7 +189,7 @@ class CMAESState:
 
 
 class CMAES(Optimizer):
-    """CMA-ES (Hansen 2016) with optional Tent-map and Lévy-flight improvements (seed 002)."""
+    """CMA-ES (Hansen 2016) with optional Tent-map and Lévy-flight improvements (paper 002)."""
 
     name = "cmaes"
 
@@ -255,7 +255,7 @@ class CMAES(Optimizer):
                             levy_moves=levy_moves)
 
     def _tell(self, s: CMAESState, genomes: np.ndarray, cost: np.ndarray,
-              rng: np.random.Generator) -> CMAESState:
+              rng: np.random.Generator, measures: np.ndarray | None = None) -> CMAESState:
         """One generation: selection, the tutorial's update of m, p_sigma, p_c, C, sigma,
         then termination (and restart) or a Tent jump."""
         if genomes.shape[0] != s.lam:

@@ -3,7 +3,7 @@
 A real-coded GA in the form of Goldberg (1989) / Eiben & Smith (2015, ch. 3-5): parent
 selection, pairwise crossover with probability ``crossover_rate``, mutation, bound repair
 by clipping, and survivor selection (generational with elites, or (mu+lambda)). This is the
-GA of seeds 000 (BLX-alpha, roulette, elitism 0.1) and 004 (panmictic baseline).
+GA of papers 000 (BLX-alpha, roulette, elitism 0.1) and 004 (panmictic baseline).
 
 Wright's linear crossover yields three children per pair; all three are evaluated and
 ``tell`` keeps the best two of each triple before replacement (Wright 1991).
@@ -145,7 +145,7 @@ class GA(Optimizer):
             flat = self.mutate(flat, rng, c.mutation_rate)
         return flat, state
 
-    def _tell(self, state: GAState, genomes, cost, rng):
+    def _tell(self, state: GAState, genomes, cost, rng, measures=None):
         if not state.evaluated:
             return replace(state, pop=np.array(genomes, dtype=float), cost=cost.copy(),
                            evaluated=True)

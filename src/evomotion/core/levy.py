@@ -1,8 +1,8 @@
-"""Lévy-flight steps by Mantegna's algorithm (seed 002, section 2.3).
+"""Lévy-flight steps by Mantegna's algorithm (paper 002, section 2.3).
 
 R. N. Mantegna, "Fast, accurate algorithm for numerical simulation of Lévy stable stochastic
 processes", Phys. Rev. E 49(5):4677-4683 (1994); the form used in cuckoo search (Yang & Deb
-2009) and in seed 002::
+2009) and in paper 002::
 
     s = u / |v|^(1/beta),   u ~ N(0, sigma_u^2),  v ~ N(0, 1),
     sigma_u = [ Gamma(1 + beta) sin(pi beta / 2)
@@ -41,6 +41,6 @@ def mantegna_steps(rng: np.random.Generator, shape: tuple[int, ...] | int,
 
 def levy_flight(x: np.ndarray, alpha: np.ndarray | float, rng: np.random.Generator,
                 beta: float = 1.5) -> np.ndarray:
-    """Seed 002's update ``x' = x + alpha (.) Levy(beta)`` for each row of ``x``."""
+    """Paper 002's update ``x' = x + alpha (.) Levy(beta)`` for each row of ``x``."""
     x = np.asarray(x, dtype=float)
     return x + np.asarray(alpha, dtype=float) * mantegna_steps(rng, x.shape, beta)

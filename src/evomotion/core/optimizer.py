@@ -69,9 +69,9 @@ class Optimizer(ABC):
 
     @abstractmethod
     def _tell(self, state: Any, genomes: np.ndarray, cost: np.ndarray,
-              rng: np.random.Generator) -> Any:
+              rng: np.random.Generator, measures: np.ndarray | None = None) -> Any:
         """The algorithm's update; ``best_x``, ``best_cost`` and ``generation`` are left to
-        :meth:`tell`."""
+        :meth:`tell`. ``measures`` is ``None`` unless the optimizer ``needs_measures`` (QD)."""
 
     def ask(self, state: Any, rng: np.random.Generator) -> tuple[np.ndarray, Any]:
         """Genomes to evaluate next, and the new state."""
@@ -92,8 +92,7 @@ class Optimizer(ABC):
             raise ValueError(f"{self.name}: {cost.shape} costs for {genomes.shape[0]} genomes")
         if not math.isfinite(np.add.reduce(cost)):  # one reduction; exact check below
             cost = np.where(np.isfinite(cost), cost, np.inf)
-        new = self._tell(state, genomes, cost, rng, measures) if self.needs_measures \
-            else self._tell(state, genomes, cost, rng)
+        new = self._tell(state, genomes, cost, rng, measures if self.needs_measures else None)
         changes: dict[str, Any] = {}
         if cost.size:
             i = int(cost.argmin())  # the first of equal minima

@@ -19,6 +19,7 @@ from evomotion.core.problem import Problem
 from evomotion.core.qd import QDOptimizer
 from evomotion.core.registry import lookup
 from evomotion.errors import InputError
+from evomotion.run.contracts import HasMeasures, OwnInitialPopulation, OwnMutation
 from evomotion.run.driver import Driver, Evaluate, StepReport
 
 
@@ -27,11 +28,10 @@ def make_optimizer(problem: Problem, algorithm_cfg: Any) -> Optimizer:
     mutation; its measure spec for a quality-diversity optimizer)."""
     _, factory = lookup(ALGORITHMS, "algorithm", algorithm_cfg.name)
     kwargs: dict[str, Any] = {}
-    mutate = getattr(problem, "mutate", None)
-    if mutate is not None:
-        kwargs["mutate"] = mutate
+    if isinstance(problem, OwnMutation):
+        kwargs["mutate"] = problem.mutate
     if getattr(algorithm_cfg, "needs_measures", False):
-        spec = getattr(problem, "measure_spec", None)
+        spec = problem.measure_spec if isinstance(problem, HasMeasures) else None
         if spec is None:
             raise InputError(f"algorithm.name: {algorithm_cfg.name!r} is a quality-diversity "
                              "optimizer and needs a problem with measures (behaviour "
@@ -60,11 +60,10 @@ class AskTellDriver(Driver):
         self.extra_columns = tuple(optimizer.extra_columns)
 
     def init(self, rng: np.random.Generator) -> Any:
-        make_pop = getattr(self.problem, "initial_population", None)
-        if make_pop is None:
+        if not isinstance(self.problem, OwnInitialPopulation):
             return self.opt.init(rng)
-        n = getattr(self.opt.cfg, "pop_size", None)
-        return self.opt.init(rng, make_pop(n, rng))
+        n: Any = getattr(getattr(self.opt, "cfg", None), "pop_size", None)
+        return self.opt.init(rng, self.problem.initial_population(n, rng))
 
     def state_type(self) -> type:
         return type(self.opt.init(np.random.default_rng(0)))

@@ -42,14 +42,18 @@ class CheckpointError(ValueError):
     """One checkpoint is unusable (the message says why); older ones may still be."""
 
 
-def save_checkpoint(run_dir: Path, generation: int, arrays: dict[str, np.ndarray],
+def save_checkpoint(run_dir: Path, generation: int, arrays: dict[str, np.ndarray] | None,
                     meta: dict[str, Any], keep: int = 3) -> Path:
+    """Write checkpoint ``generation``: its arrays (npz) first, then its JSON, then
+    ``latest.json``. ``arrays=None`` rewrites only the JSON of a checkpoint whose arrays are
+    written already (the run loop records that its final artifacts are done)."""
     ck = Path(run_dir) / "checkpoints"
     ck.mkdir(parents=True, exist_ok=True)
     stem = f"gen-{generation:06d}"
-    buf = io.BytesIO()
-    np.savez(buf, **arrays)
-    atomic_write_bytes(ck / f"{stem}.npz", buf.getvalue())
+    if arrays is not None:
+        buf = io.BytesIO()
+        np.savez(buf, **arrays)  # type: ignore[arg-type]  # numpy's stub: allow_pickle
+        atomic_write_bytes(ck / f"{stem}.npz", buf.getvalue())
     meta = dict(meta, arrays_file=f"{stem}.npz", generation=generation)
     atomic_write_text(ck / f"{stem}.json", json.dumps(meta, allow_nan=True))
     atomic_write_text(ck / "latest.json", json.dumps({"checkpoint": f"{stem}.json"}))
@@ -64,7 +68,7 @@ def candidates(run_dir: Path) -> list[str]:
     """Checkpoint JSON names, the one ``latest.json`` points at first, then newest first."""
     ck = Path(run_dir) / "checkpoints"
     names = sorted((p.name for p in ck.glob("gen-*.json") if NAME.fullmatch(p.name)),
-                   key=lambda n: int(NAME.fullmatch(n)[1]), reverse=True)
+                   key=lambda n: int(n[4:-5]), reverse=True)  # gen-NNNNNN.json
     try:
         path = ck / "latest.json"
         latest = loads_json(decode_utf8(read_file_bytes(path, "checkpoint pointer", 4096), path),
@@ -190,8 +194,8 @@ def _int(c: dict, key: str, low: int) -> int:
     return v
 
 
-def _number(c: dict, key: str) -> float:
-    v = c.get(key)
+def _number(c: dict[str, Any], key: str) -> float:
+    v: Any = c.get(key)
     if not _is_num(v) or v < 0:
         raise CheckpointError(f"counters.{key}: expected a finite number >= 0, got {v!r}")
     return float(v)

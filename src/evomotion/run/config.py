@@ -30,6 +30,7 @@ from evomotion.core.algorithms import ALGORITHMS
 from evomotion.core.checks import ALLOW_INF, check_fields, check_number, check_text
 from evomotion.core.registry import lookup
 from evomotion.errors import FileFormatError, InputError
+from evomotion.run.contracts import ConfiguredStudy
 
 #: a config file is refused above this size (it is a handful of keys)
 MAX_CONFIG_BYTES = 1 << 20
@@ -193,10 +194,10 @@ def _check_type(value: Any, tp: Any, key: str, allow_inf: bool = False) -> Any:
     if (origin is dict or tp is dict) and isinstance(value, dict):
         return dict(value)
     if (origin in (tuple, list) or tp in (tuple, list)) and isinstance(value, list | tuple):
-        args = [a for a in typing.get_args(tp) if a is not Ellipsis]
-        items = [_check_type(v, args[0], f"{key}[{i}]", allow_inf)
-                 for i, v in enumerate(value)] if args else list(value)
-        return tuple(items) if (origin is tuple or tp is tuple) else items
+        item_types = [a for a in typing.get_args(tp) if a is not Ellipsis]
+        elems = [_check_type(v, item_types[0], f"{key}[{i}]", allow_inf)
+                 for i, v in enumerate(value)] if item_types else list(value)
+        return tuple(elems) if (origin is tuple or tp is tuple) else elems
     name = getattr(tp, "__name__", str(tp))
     raise InputError(f"{key}: expected {name}, got {type(value).__name__} {value!r}")
 
@@ -227,12 +228,12 @@ def build_section(cls: type, values: dict[str, Any], section: str) -> Any:
     return obj
 
 
-def study_algorithms(study: Any) -> dict[str, type]:
+def study_algorithms(study: ConfiguredStudy) -> dict[str, type]:
     """``algorithm.name`` -> config dataclass of every method ``study`` accepts: its own
     (``study.algorithms``) and the registered optimizers it allows (``study.core_algorithms``)."""
-    allowed = getattr(study, "core_algorithms", None)
+    allowed = study.core_algorithms
     out = {n: cls for n, (cls, _f) in ALGORITHMS.items() if allowed is None or n in allowed}
-    out.update({n: cls for n, (cls, _f) in getattr(study, "algorithms", {}).items()})
+    out.update({n: cls for n, (cls, _f) in study.algorithms.items()})
     return out
 
 
@@ -256,7 +257,22 @@ def _drop_other_operator_params(study: Any, defaults: dict, user_alg: dict,
             alg.pop(f"{op}_params", None)
 
 
-def resolve_config(study: Any, file: Path | None = None,
+#: Old preset names and the names they have now (issue 32: "seed" is the random seed only;
+#: the source paper's literal setting is ``--preset paper``). Old commands keep working.
+OLD_PRESET_NAMES = {"seed": "paper"}
+
+
+def current_preset_name(study: ConfiguredStudy, preset: str | None) -> str | None:
+    """``preset`` under its name now: an old name (:data:`OLD_PRESET_NAMES`) becomes the new
+    one when ``study`` has that preset and no preset of the old name."""
+    presets = study.presets
+    new = OLD_PRESET_NAMES.get(preset) if isinstance(preset, str) else None
+    if new is not None and preset not in presets and new in presets:
+        return new
+    return preset
+
+
+def resolve_config(study: ConfiguredStudy, file: Path | None = None,
                    overrides: list[str] | tuple[str, ...] = (),
                    preset: str | None = None,
                    values: dict[str, Any] | None = None) -> Config:
@@ -273,8 +289,9 @@ def resolve_config(study: Any, file: Path | None = None,
     for item in overrides:
         user = apply_override(user, item)
     defaults = {k: dict(v) for k, v in study.defaults.items()}
+    preset = current_preset_name(study, preset)
     if preset is not None:
-        presets = getattr(study, "presets", {})
+        presets = study.presets
         if preset not in presets:
             raise InputError(f"--preset: unknown preset {preset!r} for study {study.name!r}; "
                              f"available: {', '.join(presets) or 'none'}")
@@ -283,7 +300,7 @@ def resolve_config(study: Any, file: Path | None = None,
         if p_alg is not None and p_alg != defaults.get("algorithm", {}).get("name"):
             # a preset with another algorithm: the defaults' tuning was for the other one
             defaults = {k: v for k, v in defaults.items() if k != "algorithm"}
-        defaults = _merge(defaults, chosen)
+        defaults = _merge(defaults, dict(chosen))
     default_alg = defaults.get("algorithm", {}).get("name") or default_algorithm(study)
     user_alg = user.get("algorithm", {}) if isinstance(user.get("algorithm"), dict) else {}
     if user_alg.get("name", default_alg) != default_alg:

@@ -35,6 +35,8 @@ class RunContext:
 
     @property
     def plots_dir(self) -> Path:
+        if self.out_dir is None:
+            raise ValueError("a run without a folder has no plots folder")
         d = self.out_dir / "plots"
         d.mkdir(parents=True, exist_ok=True)
         return d

@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from evomotion.core.problem import Evaluation, Problem, failed_evaluation
+from evomotion.core.problem import Evaluation, Problem, Sense, failed_evaluation
 from evomotion.errors import ClusterError, InputError
 from evomotion.run.evaluators import WORKER_ENV, evaluate_safely, split_chunks, worker_config
 
@@ -116,7 +116,7 @@ class DaskEvaluator:
                                  f"(KilledWorker); marked worst")
                 log.warning(ev.errors[-1])
                 parts[k] = ev
-        return Evaluation.concat(parts)
+        return Evaluation.concat([p for p in parts if p is not None])  # none is left None
 
     def _run(self, batches: list[np.ndarray], keys: list[str]) -> list[Evaluation | None]:
         """Evaluate ``batches`` as tasks, in order; ``None`` where the task hit KilledWorker."""
@@ -165,7 +165,7 @@ class DaskEvaluator:
                                f"{self.start_timeout_s:g} s")
         return no_worker_since
 
-    def _spec(self) -> tuple[str, tuple[str, ...]]:
+    def _spec(self) -> tuple[Sense, tuple[str, ...]]:
         problem = self._make_problem(self._problem_cfg)
         return problem.sense, tuple(problem.metric_names)
 

@@ -28,9 +28,10 @@ from typing import Any
 
 import numpy as np
 
-from evomotion.core.problem import Evaluation, Problem, failed_evaluation, sanitize
+from evomotion.core.problem import Evaluation, Problem, Sense, failed_evaluation, sanitize
 from evomotion.core.registry import lookup
 from evomotion.errors import ClusterError
+from evomotion.run.contracts import ConfigForWorker
 
 WORKER_ENV = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
 
@@ -45,8 +46,7 @@ def worker_config(problem_cfg: Any) -> Any:
     one: a problem config with a ``for_worker()`` method returns the config a one-core worker
     should build; any other config is used unchanged.
     """
-    hook = getattr(problem_cfg, "for_worker", None)
-    return hook() if callable(hook) else problem_cfg
+    return problem_cfg.for_worker() if isinstance(problem_cfg, ConfigForWorker) else problem_cfg
 
 
 def evaluate_safely(problem: Problem, genomes: np.ndarray) -> Evaluation:
@@ -227,7 +227,8 @@ class ProcessEvaluator:
         self.max_attempts = max_attempts or self.max_attempts
         self.replaced = 0
         self.failed_rows = 0
-        self.sense, self.metric_names = "min", ()
+        self.sense: Sense = "min"
+        self.metric_names: tuple[str, ...] = ()
         # spawn, not fork: MuJoCo and BLAS thread pools do not survive a fork safely
         self._ctx = multiprocessing.get_context("spawn")
         self._args = (make_problem, worker_config(problem_cfg))

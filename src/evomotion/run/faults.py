@@ -29,12 +29,13 @@ def fault_at(step: int, how: str = "interrupt") -> Iterator[None]:
         def step_once(*a, **k):
             count["n"] += 1
             if count["n"] == step + 1:
-                if HOW[how] is None:
+                sig = HOW[how]
+                if sig is None:
                     raise KeyboardInterrupt
-                os.kill(os.getpid(), HOW[how])
+                os.kill(os.getpid(), sig)
             return real(*a, **k)
 
-        driver.step = step_once
+        driver.step = step_once  # type: ignore[method-assign]
         return driver
 
     runner.build_driver = faulty

@@ -9,34 +9,30 @@ those, and refuses a folder holding anything else, naming it: a folder that mere
 
 from __future__ import annotations
 
-import json
 import os
 import re
 import stat
 import tempfile
 import time
 from pathlib import Path
-from typing import Any
-
-import numpy as np
 
 from evomotion.errors import InputError
 from evomotion.outfile import (
     RUN_MARKER,
     WriteError,
-    atomic_write_bytes,  # noqa: F401 - the run loop's writers, re-exported
-    atomic_write_text,
     kind_of,
     read_marker,
     reason,
     write_marker,
 )
+from evomotion.run.checkpoint import NAME
 from evomotion.run.lock import LOCK_NAME
 
 RUN_MARKERS = ("config.toml", "stats.csv", "checkpoints")
 #: what the run loop itself writes in every run folder (recorded in the marker when a run starts)
-RUN_FILES = ("config.toml", "stats.csv", "log.txt", "checkpoints", "run.lock", "physics.json",
-             "best.json", "plots", "population.bin", "archive.npz", "finish.json")
+#: (a study's own files, e.g. physics.json or best.motion, are claimed as they are written)
+RUN_FILES = ("config.toml", "stats.csv", "log.txt", "checkpoints", "run.lock", "best.json",
+             "plots", "population.bin", "archive.npz")
 _SHOWN = 5
 
 
@@ -106,11 +102,7 @@ def make_output_folder(label: str, out: Path | str | None, option: str = "--out"
                                  f"write ({_names(foreign)}); choose a new or empty folder")
     path = make_run_dir(label, out)
     if not is_run_folder(path):
-        try:
-            write_marker(path, label, [])
-        except OSError as e:
-            raise WriteError(f"{path / RUN_MARKER}: cannot mark the folder ({reason(e)})"
-                             ) from None
+        write_marker(path, label, [])
     return path
 
 
@@ -194,14 +186,11 @@ def check_resumable(path: Path) -> None:
                          "checkpoints/); nothing to resume")
     ck = path / "checkpoints"
     try:
-        found = ck.is_dir() and any(_CHECKPOINT.fullmatch(p.name) for p in ck.iterdir())
+        found = ck.is_dir() and any(NAME.fullmatch(p.name) for p in ck.iterdir())
     except OSError as e:
         raise InputError(f"{ck}: cannot list the checkpoints ({reason(e)})") from None
     if not found:
         raise InputError(f"{path}: no checkpoint to resume from (checkpoints/ holds none)")
-
-
-_CHECKPOINT = re.compile(r"gen-\d{6,}\.json")
 
 
 def prepare_new_run(path: Path, study: str, overwrite: bool = False) -> None:
@@ -215,11 +204,7 @@ def prepare_new_run(path: Path, study: str, overwrite: bool = False) -> None:
         _remove_own(path)
     doc = read_marker(path)
     kept = [n for n in (doc["files"] if doc else []) if (path / n).exists()]
-    try:
-        write_marker(path, study, [*kept, *RUN_FILES])
-    except OSError as e:
-        raise WriteError(f"{path / RUN_MARKER}: cannot mark the run folder ({reason(e)})"
-                         ) from None
+    write_marker(path, study, [*kept, *RUN_FILES])
 
 
 def _remove_own(path: Path) -> None:
@@ -227,7 +212,9 @@ def _remove_own(path: Path) -> None:
     files; the lock and the marker stay."""
     import shutil
 
-    own = set(read_marker(path)["files"])
+    doc = read_marker(path)
+    assert doc is not None, "only a marked run folder is emptied"
+    own = set(doc["files"])
     for name in _listing(path):
         if name in (LOCK_NAME, RUN_MARKER) or not (name in own or _is_temporary(name)):
             continue
@@ -262,28 +249,3 @@ def clean_temporaries(run_dir: Path, depth: int = 4) -> int:
                 n += 1
     return n
 
-
-def _jsonable(obj: Any) -> Any:
-    if isinstance(obj, np.ndarray):
-        return _clean(obj.tolist())
-    if isinstance(obj, np.generic):
-        return obj.item()
-    if isinstance(obj, float) and not np.isfinite(obj):
-        return None
-    raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
-
-
-def write_json(path: Path | str, obj: Any, mkdir: bool = False) -> None:
-    """Atomic JSON write; numpy arrays become lists, non-finite floats ``null``."""
-    text = json.dumps(_clean(obj), indent=2, default=_jsonable, allow_nan=False)
-    atomic_write_text(path, text + "\n", "JSON file", mkdir)
-
-
-def _clean(obj: Any) -> Any:
-    if isinstance(obj, dict):
-        return {k: _clean(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [_clean(v) for v in obj]
-    if isinstance(obj, float | np.floating) and not np.isfinite(obj):
-        return None
-    return obj

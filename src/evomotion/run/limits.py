@@ -17,30 +17,21 @@ without the problem; the run loop calls it again with the problem it built.
 
 from __future__ import annotations
 
-import os
 from typing import Any
 
 from evomotion.errors import InputError
+from evomotion.run.contracts import (
+    EstimatesDeviceMemory,
+    EstimatesMemory,
+    NamesMemoryKeys,
+    SizedGenome,
+)
+from evomotion.sysmem import available_bytes
 
 #: arrays of ``pop_size x dim`` doubles alive at once in a generation (a generous count)
 POPULATION_FACTOR = 16
 #: ``dim x dim`` double matrices alive at once in a CMA-ES update
 COVARIANCE_FACTOR = 8
-
-
-def available_bytes() -> int | None:
-    """Memory available to a new allocation now, or ``None`` when it cannot be told."""
-    try:
-        with open("/proc/meminfo", encoding="ascii") as fh:
-            for line in fh:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
-    except (OSError, ValueError, IndexError):
-        pass
-    try:
-        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_AVPHYS_PAGES")
-    except (AttributeError, OSError, ValueError):
-        return None
 
 
 def format_bytes(n: float) -> str:
@@ -56,8 +47,7 @@ def genome_dim(config: Any, problem: Any = None) -> int | None:
     """The genome's length: the problem's, else the problem config's ``genome_dim()``."""
     if problem is not None and getattr(problem, "genome", None) is not None:
         return int(problem.genome.dim)
-    fn = getattr(config.problem, "genome_dim", None)
-    return int(fn()) if callable(fn) else None
+    return int(config.problem.genome_dim()) if isinstance(config.problem, SizedGenome) else None
 
 
 def population_size(algorithm: Any, dim: int) -> int:
@@ -89,11 +79,11 @@ def memory_terms(config: Any, problem: Any = None) -> list[tuple[int, str]]:
     if getattr(alg, "name", None) == "cmaes":
         terms.append((d * d * 8 * COVARIANCE_FACTOR,
                       f"algorithm.name=cmaes with {d} genes: its covariance matrices need"))
-    fn = getattr(config.problem, "memory_bytes", None)
-    if callable(fn) and pop:
-        keys = ", ".join(_setting(config, f"problem.{k}")
-                         for k in getattr(config.problem, "memory_keys", ()))
-        terms.append((int(fn(pop)), f"algorithm.pop_size={pop}"
+    if isinstance(config.problem, EstimatesMemory) and pop:
+        named = config.problem.memory_keys if isinstance(config.problem, NamesMemoryKeys) \
+            else ()
+        keys = ", ".join(_setting(config, f"problem.{k}") for k in named)
+        terms.append((int(config.problem.memory_bytes(pop)), f"algorithm.pop_size={pop}"
                                     f"{', ' + keys if keys else ''}: the simulated "
                                     "trajectories need"))
     return terms
@@ -123,14 +113,15 @@ def check_memory(study: Any, config: Any, problem: Any = None) -> None:
 def check_device_memory(config: Any, problem: Any) -> None:
     """Raise a one-line :class:`InputError` when a GPU-backend problem's batch (its
     ``device_memory(pop_size) -> (needed, free, device) | None``) cannot fit on its device."""
-    fn = getattr(problem, "device_memory", None)
-    if not callable(fn):
+    if not isinstance(problem, EstimatesDeviceMemory):
         return
     pop = population_size(config.algorithm, max(genome_dim(config, problem) or 1, 1))
-    found = fn(pop) if pop else None
-    if found is None or found[1] is None or found[0] <= found[1]:
+    found = problem.device_memory(pop) if pop else None
+    if found is None:
         return
     needed, free, device = found
+    if free is None or needed <= free:
+        return
     raise InputError(f"algorithm.pop_size={pop}, problem.backend="
                      f"{getattr(config.problem, 'backend', '?')}: one batch needs about "
                      f"{format_bytes(needed)} on {device}, more than the {format_bytes(free)} "

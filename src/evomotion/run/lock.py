@@ -24,6 +24,7 @@ import json
 import os
 import socket
 from pathlib import Path
+from typing import cast
 
 from evomotion.errors import InputError
 
@@ -166,7 +167,7 @@ def parse_owner(text: str) -> LockOwner | None:
                                      and 0 <= start < 1 << 63))
               and (boot is None or (isinstance(boot, str) and len(boot) <= 64))
               and isinstance(cmd, str))
-        return LockOwner(pid, host, start, boot, cmd[:64]) if ok else None
+        return LockOwner(cast(int, pid), cast(str, host), start, boot, cmd[:64]) if ok else None
     parts = text.split()
     if len(parts) < 4 or parts[0] != "pid" or parts[2] != "on" or not parts[1].isascii() \
             or not parts[1].isdigit() \

@@ -1,4 +1,4 @@
-"""Fitness plots: max/mean/min per generation (the seeds' figures) and multi-run bands."""
+"""Fitness plots: max/mean/min per generation (the papers' figures) and multi-run bands."""
 
 from __future__ import annotations
 

@@ -9,6 +9,7 @@ seed, the study, any ``[algorithm]`` or ``[problem]`` key) is refused, naming th
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -16,8 +17,15 @@ from evomotion.core.state import rng_from_state
 from evomotion.errors import InputError
 from evomotion.run.checkpoint import NAME, CheckpointError, candidates, load_checkpoint
 from evomotion.run.config import Config
+from evomotion.run.contracts import LoopStudy
+from evomotion.run.counters import Counters
 from evomotion.run.driver import Driver
+from evomotion.run.folder import clean_temporaries
+from evomotion.run.run_state import RunFiles, RunState
+from evomotion.run.stopping import limit_reached
 
+#: the stop reasons a resume with a raised limit continues from
+LIMIT_REASONS = ("generations", "max_evaluations", "target", "wall_seconds")
 #: the keys a resume may change: limits, the evaluator, the loggers, videos (results stay
 #: the same)
 RESUME_KEYS = frozenset(f"run.{k}" for k in (
@@ -27,19 +35,21 @@ RESUME_KEYS = frozenset(f"run.{k}" for k in (
 
 
 def resume_config(run_dir: Path, study: Any = None,
-                  changes: dict[str, Any] | None = None) -> tuple[Any, Config]:
+                  changes: dict[str, Any] | None = None,
+                  resolve: Callable[[str], Any] | None = None) -> tuple[Any, Config]:
     """(study, config) to resume ``run_dir`` with: its saved ``config.toml`` with
     ``changes`` (``{"section.key": value}``, only :data:`RESUME_KEYS`) applied, and the file
     rewritten when something changed (so ``evomotion resume`` later sees the new limits).
-    ``study`` (a Study) defaults to the registered one the file names."""
+    ``study`` (a Study) is the run's study; without it, ``resolve(name)`` finds the study the
+    file names (the caller's registry, e.g. :func:`evomotion.studies.get_study`)."""
+    from evomotion.outfile import atomic_write_text
     from evomotion.run.config import config_from_dict, config_from_run_dir, config_to_toml
-    from evomotion.run.folder import atomic_write_text
 
     name, raw = config_from_run_dir(run_dir)
     if study is None:
-        from evomotion.studies import get_study
-
-        study = get_study(name)
+        if resolve is None:
+            raise ValueError("resume_config: give the study or a resolver of study names")
+        study = resolve(name)
     elif name != study.name:
         raise InputError(f"{run_dir}: the run is of study {name!r}, not {study.name!r}")
     raw.setdefault("run", {})
@@ -62,7 +72,7 @@ def config_record(config: Config) -> dict[str, Any]:
             **{f"problem.{k}": v for k, v in _flat(dataclasses.asdict(config.problem))}}
 
 
-def _flat(d: dict, prefix: str = ""):
+def _flat(d: dict[str, Any], prefix: str = "") -> Iterator[tuple[str, Any]]:
     for k, v in d.items():
         if isinstance(v, dict):
             yield from _flat(v, f"{prefix}{k}.")
@@ -104,6 +114,12 @@ def _field_default(config: Config, key: str) -> Any:
 _NO_DEFAULT = object()
 
 
+def _generation(name: str) -> int:
+    """The generation of a checkpoint's name (``gen-000012.json``: 12)."""
+    found = NAME.fullmatch(name)
+    return int(found[1]) if found else -1
+
+
 def restore(run_dir: Path, driver: Driver, config: Config) -> tuple[Any, Any, dict, list[str]]:
     """``(state, rng, counters, log lines)`` of the newest valid checkpoint of ``run_dir``
     (the lines say which damaged checkpoints were skipped; log them after the log is cut back
@@ -129,8 +145,45 @@ def restore(run_dir: Path, driver: Driver, config: Config) -> tuple[Any, Any, di
     if notes:
         used = f"gen-{meta['generation']:06d}.json"
         lines.append(f"resuming from the newest valid checkpoint, checkpoints/{used}")
-        newer = [n for n in names if int(NAME.fullmatch(n)[1]) > meta["generation"]]
+        newer = [n for n in names if _generation(n) > meta["generation"]]
         for n in newer:
             (run_dir / "checkpoints" / n).unlink(missing_ok=True)
             (run_dir / "checkpoints" / n.replace(".json", ".npz")).unlink(missing_ok=True)
     return state, rng, meta["counters"], lines
+
+
+def resume_run(study: LoopStudy, config: Config, problem: Any, driver: Driver, out_dir: Path,
+               files: RunFiles) -> tuple[RunState, bool, int]:
+    """The run restored from its newest valid checkpoint, whether it only has its final
+    artifacts left to write, and how many temporary files were cleaned; the files are cut
+    back to the checkpoint."""
+    log = files.log
+    state, rng, doc, notes = restore(out_dir, driver, config)
+    c = Counters.from_json(doc)
+    cleaned = clean_temporaries(out_dir)
+    done = c.stop_reason
+    finish_only = False  # a resume that only writes the final artifacts
+    if done not in (None, "interrupted"):
+        ended = driver.stop(state) is not None
+        sgn = -1.0 if driver.sense == "max" else 1.0
+        limit = limit_reached(config, c, driver.best(state)[1], sgn)
+        raised = done in LIMIT_REASONS and limit is None and not ended  # a limit raised
+        if c.finished is False and not raised:
+            finish_only = True  # stopped while writing the final artifacts
+        elif ended or limit:
+            raise InputError(f"{out_dir}: the run already finished ({done}); " + (
+                "it cannot be continued" if ended else
+                "raise its limit to continue, e.g. --set run.generations=N"))
+    c.stop_reason, c.reason_recorded = (done if finish_only else None), True
+    c.finished = None
+    files.stats.truncate(c.stats_offset)
+    if files.history is not None:
+        files.history.truncate(c.history_offset)
+    log.truncate(c.log_offset)
+    for line in notes:
+        log(line)
+    log(f"resumed at generation {c.generation} to write the final artifacts (the run was "
+        "stopped while writing them)" if finish_only else
+        f"resumed at generation {c.generation} with evaluator {config.run.evaluator}")
+    run = RunState(study, config, problem, driver, state, rng, c, log, out_dir)
+    return run, finish_only, cleaned

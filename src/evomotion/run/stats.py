@@ -123,7 +123,7 @@ def read_stats(path: Path) -> dict[str, np.ndarray]:
     if not chunks:
         return {}
     table = np.concatenate(chunks)
-    out = {}
+    out: dict[str, np.ndarray] = {}
     for j, (_, k) in enumerate(keys):
         col = table[:, j]
         if k in ("generation", "evaluations") and not np.all(np.diff(col) >= 0):

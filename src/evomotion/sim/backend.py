@@ -1,4 +1,5 @@
-"""Physics backends behind one simulator interface: ``problem.backend = "cpu" | "warp"``.
+"""Physics backends behind one simulator interface: ``problem.backend = "cpu" | "warp"`` (the
+keys and their checks: :mod:`evomotion.sim.physics_config`).
 
 - ``cpu`` (default): :class:`~evomotion.sim.rollout.BatchSimulator`, MuJoCo's C engine in
   ``mujoco.rollout`` threads, float64, bit-identical for one seed whatever the evaluator;
@@ -22,23 +23,7 @@ from typing import Any
 
 import mujoco
 
-from evomotion.core.checks import check_choice, check_number
 from evomotion.errors import InputError
-
-BACKENDS = ("cpu", "warp")
-
-
-def validate_backend(cfg: Any, section: str = "problem") -> None:
-    """One-line :class:`InputError` for a bad ``backend``/``warp_*`` value of ``cfg``."""
-    check_choice(f"{section}.backend", cfg.backend, BACKENDS)
-    check_number(f"{section}.warp_nconmax", cfg.warp_nconmax, lo=1, hi=4096, integer=True)
-    check_number(f"{section}.batch_rollouts", cfg.batch_rollouts, lo=1, hi=2**20, integer=True)
-    if not isinstance(cfg.warp_device, str):
-        raise InputError(f"{section}.warp_device: expected a device name such as 'cuda:0' or "
-                         f"'cpu' ('' = the first GPU, else the CPU), got {cfg.warp_device!r}")
-    if not isinstance(cfg.warp_deterministic, bool):
-        raise InputError(f"{section}.warp_deterministic: expected true or false, got "
-                         f"{cfg.warp_deterministic!r}")
 
 
 def make_simulator(model: mujoco.MjModel, cfg: Any, threads: int = 0):
@@ -66,7 +51,7 @@ def robot_identity(robot: Any) -> dict[str, str]:
     the robot was built from them; the spec read again, bounded: ``"?"`` when it cannot be)."""
     import hashlib
 
-    from evomotion.sim.robot.spec import MAX_SPEC_BYTES
+    from evomotion.sim.robots.spec import MAX_SPEC_BYTES
     from evomotion.textio import read_file_bytes
 
     try:

@@ -25,7 +25,6 @@ from pathlib import Path
 import numpy as np
 
 from evomotion.errors import InputError
-from evomotion.sim.nao import MODEL_PATH
 
 UNAVAILABLE = "RENDER-UNAVAILABLE: "
 RENDER_TIMEOUT_S = 600
@@ -68,11 +67,14 @@ def check_videos_on() -> None:
 
 
 def render_video(qpos: np.ndarray, dt: float, out_path: str | Path, fps: int = 25,
-                 width: int = 480, height: int = 352, model_path: Path = MODEL_PATH,
+                 width: int = 480, height: int = 352, model_path: Path | None = None,
                  model_xml: str | None = None, camera: str = "follow",
-                 assets: dict[str, bytes] | None = None) -> Path:
+                 assets: dict[str, bytes] | None = None, robot=None) -> Path:
     """Render ``qpos[T, nq]`` (one row per physics step of ``dt`` s) at ``fps`` to an MP4.
 
+    The model: ``robot`` (any :class:`~evomotion.sim.robots.Robot`: its edited model and
+    assets, the camera following its torso unless ``camera`` is given otherwise), else
+    ``model_xml``, else the file ``model_path``, else the NAO's MJCF.
     ``model_xml`` (MJCF text) replaces the model file (a scene built in memory, such as the
     kick's NAO + ball, or a robot's ``Robot.xml``); ``assets``: the files it names (meshes,
     textures; by default those of the robot built from that text). ``camera``: ``"follow"``
@@ -90,11 +92,23 @@ def render_video(qpos: np.ndarray, dt: float, out_path: str | Path, fps: int = 2
     from evomotion.outfile import WriteError, atomic_output, check_target
 
     check_videos_on()
+    if robot is not None:
+        if not robot.xml:
+            raise RuntimeError("the robot's edited model cannot be written as MJCF text")
+        model_xml, assets = robot.xml, robot.assets if assets is None else assets
+        if camera == "follow":
+            from evomotion.sim.play import robot_camera
+
+            camera = robot_camera(robot)
+    if model_path is None:
+        from evomotion.sim.robots.nao.model import MODEL_PATH
+
+        model_path = MODEL_PATH
     out_path = check_target(out_path, "video")
     if camera not in CAMERAS and not camera.startswith("follow="):
         raise ValueError(f"unknown camera {camera!r}; available: {', '.join(CAMERAS)}")
     if assets is None and model_xml:
-        from evomotion.sim.robot.mjcf import assets_for
+        from evomotion.sim.robots.mjcf import assets_for
 
         assets = assets_for(model_xml)
     assets = assets or {}
@@ -213,16 +227,29 @@ def _render_frames(model_path: str, frames_q: np.ndarray, width: int, height: in
     return _frames(model, data, renderer, frames_q, camera)
 
 
+def _torso_body(model) -> int:
+    """The body the cameras follow: the body ``torso``, else (a robot whose torso has another
+    name, such as the OP3's ``body``) the body of the model's first free joint."""
+    import mujoco
+
+    try:
+        return int(model.body("torso").id)
+    except KeyError:
+        free = np.flatnonzero(model.jnt_type == mujoco.mjtJoint.mjJNT_FREE)
+        return int(model.jnt_bodyid[free[0]]) if free.size else 0
+
+
 def _frames(model, data, renderer, frames_q: np.ndarray, camera: str):
     import mujoco
 
     cam = mujoco.MjvCamera()
     cam.distance, cam.azimuth, cam.elevation = 1.1, -70.0, -12.0
+    torso_id = _torso_body(model)
     try:
         for q in frames_q:
             data.qpos[:] = q
             mujoco.mj_kinematics(model, data)
-            torso = None if camera.startswith("follow=") else data.body("torso").xpos
+            torso = None if camera.startswith("follow=") else data.xpos[torso_id]
             if camera == "kick":
                 ball = data.body("ball").xpos
                 mid = 0.5 * (torso[:2] + ball[:2])

@@ -17,9 +17,7 @@ import mujoco
 import numpy as np
 from mujoco import rollout as mj_rollout
 
-from evomotion.sim.nao import STATE_SPEC
-
-QPOS_OFFSET = 1  # the state vector starts with time (mjSTATE_TIME), then qpos
+from evomotion.sim.state import QPOS_OFFSET, STATE_SPEC
 
 
 class SegmentedSimulator:

@@ -16,9 +16,9 @@ from typing import Any
 
 import mujoco
 
-from evomotion.run.limits import available_bytes
+from evomotion.sim.state import state_size
+from evomotion.sysmem import available_bytes
 
-STATE_SPEC = mujoco.mjtState.mjSTATE_FULLPHYSICS
 _PROBES: dict[tuple, tuple[mujoco.MjModel, tuple[int, int]]] = {}
 
 
@@ -82,7 +82,7 @@ def estimate_bytes(model: mujoco.MjModel, data0: mujoco.MjData, device: str, bat
     """Device bytes for ``batches`` batches of ``bucket_size(batch)`` worlds recording
     ``nstep`` steps each (controls, states and sensors in float32)."""
     fixed, per_world = _probe(model, data0, device, nconmax, njmax)
-    nstate = mujoco.mj_stateSize(model, STATE_SPEC)
+    nstate = state_size(model)
     buffers = 4 * int(nstep) * (model.nu + nstate + model.nsensordata)
     needed = fixed + batches * bucket_size(batch) * (per_world + buffers)
     return MemoryEstimate(int(needed), free_bytes(device), device)

@@ -12,7 +12,7 @@ smallest batch of a power-of-two size that holds them (padding repeats the last 
 whose results are dropped), so fallen robots are not stepped. One device batch (MuJoCo Warp
 ``Data``, control and recording buffers) is kept per batch size, at most ``2 x`` the largest.
 
-Perturbed worlds (:func:`evomotion.sim.nao.worlds.simulate_worlds`) give each trajectory its
+Perturbed worlds (:func:`evomotion.sim.worlds.simulate_worlds`) give each trajectory its
 own copy of the model fields that differ between the worlds (MuJoCo Warp's batched model
 fields, indexed by world) and its torso push, applied on the device in the step it is due.
 
@@ -33,9 +33,8 @@ import numpy as np
 
 from evomotion.errors import InputError
 from evomotion.sim.rollout import SegmentedSimulator
+from evomotion.sim.state import STATE_SPEC
 from evomotion.sim.warp_memory import MemoryEstimate, bucket_size, estimate_bytes
-
-STATE_SPEC = mujoco.mjtState.mjSTATE_FULLPHYSICS
 
 
 def import_warp() -> tuple[Any, Any]:

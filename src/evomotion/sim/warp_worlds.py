@@ -1,7 +1,7 @@
 """Perturbed worlds on MuJoCo Warp: one batch, each trajectory with its own model fields.
 
-:func:`evomotion.sim.nao.worlds.simulate_worlds` with a :class:`~evomotion.sim.warp_rollout.
-WarpSimulator` comes here. Each :class:`~evomotion.sim.nao.worlds.World` is an edited copy of
+:func:`evomotion.sim.worlds.simulate_worlds` with a :class:`~evomotion.sim.warp_rollout.
+WarpSimulator` comes here. Each :class:`~evomotion.sim.worlds.World` is an edited copy of
 the NAO model; the fields that differ between the worlds (friction, masses and inertias, the
 torso's centre of mass, servo gains and force ranges, and what ``mj_setConst`` derived from
 them) are found by comparing the models as MuJoCo Warp puts them on the device, and become

@@ -8,6 +8,9 @@ from typing import Any
 
 from evomotion.core.problem import Problem
 from evomotion.run.context import RunContext
+from evomotion.run.contracts import ArtifactScope, ReplayHook, RunRecord
+from evomotion.studies.run_hooks import motion_replay, physics_run_record, videos_scope
+from evomotion.studies.view import StudyView
 
 
 @dataclass(frozen=True)
@@ -19,7 +22,7 @@ class Study:
     - ``make_problem(problem_cfg)`` builds the :class:`Problem` (once per worker).
     - ``defaults``: the study's best-known setting, as overrides of the sections, e.g.
       ``{"algorithm": {"pop_size": 100, "crossover": "blx_alpha"}, "run": {"generations": 60}}``.
-    - ``presets``: named settings over the defaults (``--preset seed``: the paper's literal
+    - ``presets``: named settings over the defaults (``--preset paper``: the paper's literal
       setting), same form as ``defaults``; ``preset_notes`` says in one line what each is.
     - ``core_algorithms``: the registered optimizers the study accepts (``None``: all of them).
     - ``algorithms``: the study's own methods, ``name -> (config dataclass, factory(problem,
@@ -29,7 +32,19 @@ class Study:
       example to write ``best.motion``); ``finalize(ctx)`` once at the end of a run that was not
       interrupted (plots, videos); it may return an exit code (e.g. 3: not solved).
     - ``best_record(ctx) -> dict``: the study's own ``best.json`` keys (after the envelope).
+    - ``artifact_scope(ctx)``: the context manager the artifact hooks run in (default:
+      rendering off for ``run.videos = false``, :func:`~evomotion.studies.run_hooks.
+      videos_scope`).
+    - ``replay(ctx) -> Replay | None``: the best motion played on the study's robot, for the
+      rerun logger (default: ``best.motion`` on the problem's ``robot``,
+      :func:`~evomotion.studies.run_hooks.motion_replay`).
+    - ``run_record(problem) -> RunRecord | None``: what the run runs on, recorded in the run
+      folder (default: ``physics.json`` of a problem that simulates,
+      :func:`~evomotion.studies.run_hooks.physics_run_record`).
+    These hooks are the run loop's contracts (:mod:`evomotion.run.contracts`).
     - ``cli``: a ``typer.Typer`` with the study's own subcommands (``evomotion <name> ...``).
+    - ``view``: what the studio shows of a run (:class:`~evomotion.studies.view.StudyView`;
+      ``None``: its curves only).
     - ``smoke``: ``--set`` items that make a run of a few seconds (the conformance tests and
       ``benchmarks/run_loop_table.py`` use them; a user can too, to check an installation).
     """
@@ -46,8 +61,12 @@ class Study:
     on_checkpoint: Callable[[RunContext], None] | None = None
     finalize: Callable[[RunContext], int | None] | None = None
     best_record: Callable[[RunContext], dict[str, Any]] | None = None
+    artifact_scope: ArtifactScope | None = videos_scope
+    replay: ReplayHook | None = motion_replay
+    run_record: Callable[[Any], RunRecord | None] | None = physics_run_record
     cli: Any = None
     smoke: tuple[str, ...] = ()
+    view: StudyView | None = None
 
 
 def lazy_hook(module: str, name: str) -> Callable[[RunContext], Any]:

@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from evomotion.errors import InputError
-from evomotion.run.lock import LockOwner, owner_state
+from evomotion.run.lock import LOCK_NAME, LockOwner, owner_state
 from evomotion.run.lock import lock_owner as read_lock_owner
 from evomotion.run.stats import step_values
 from evomotion.studio import readers
@@ -109,7 +109,7 @@ def lock_state(run_dir: Path) -> tuple[LockOwner | None, str]:
     """The owner ``run.lock`` names (``None``: none, or nothing readable) and its state:
     ``none | running | stale | remote | unknown`` (:func:`evomotion.run.lock.owner_state`)."""
     owner = read_lock_owner(run_dir)
-    return owner, owner_state(owner)
+    return owner, owner_state(owner, Path(run_dir) / LOCK_NAME)  # a run from Python too
 
 
 def _log_status(run_dir: Path) -> tuple[str, str]:

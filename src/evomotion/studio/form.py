@@ -23,10 +23,10 @@ def build(root: Path) -> None:
     from evomotion.studio.pages import header
 
     @ui.page("/new")
-    def new_page(study: str = "functions") -> None:
+    def new_page(study: str = "") -> None:
         header(ui, "new run")
         if study not in STUDIES:
-            study = "functions"
+            study = next(iter(STUDIES))  # the registry's first (the quickest to try)
         s = get_study(study)
         with ui.row().classes("items-end"):
             pick = ui.select(list(STUDIES), value=study, label="study").classes("w-56 new-study")

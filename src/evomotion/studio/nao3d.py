@@ -1,4 +1,4 @@
-"""The NAO (or the kick scene with its ball, or another robot of :mod:`evomotion.sim.robot`)
+"""The NAO (or the kick scene with its ball, or another robot of :mod:`evomotion.sim.robots`)
 playing a ``.motion`` in 3D in the browser.
 
 The geometry is the simulation's own MJCF: :func:`geom_table` lists every geom MuJoCo's viewer
@@ -13,14 +13,14 @@ no meshes). The geoms are placed once in one group per body; a frame moves the b
 (one batched message per frame).
 
 The poses come from the physics replay: the open-loop targets of
-:func:`evomotion.sim.nao.replay.motion_targets` (as ``evomotion replay``) from the robot at
-rest in the motion's first pose (the kick scene: the ball at
-:func:`~evomotion.studies.biped_kick.scene.default_ball_xy`), rolled out with
+:func:`evomotion.sim.robots.nao.replay.motion_targets` (as ``evomotion replay``) from the
+robot at rest in the motion's first pose (a study's scene: its own initial state, e.g. the
+kick's ball in front of the foot), rolled out with
 :class:`~evomotion.sim.rollout.BatchSimulator`; every ``1 / fps`` s (frame 0: the initial
 state) ``mj_kinematics`` turns the state's ``qpos`` into geom and body poses. The browser shows
 what the simulation did, falls included. Scene ``"robot:<spec>"`` (a bundled spec name or a
 spec path, as ``--robot`` takes it): that robot from its initial state, the motion's channels
-interpolated by :func:`evomotion.sim.robot.play.motion_controls`, its own fall thresholds.
+interpolated by :func:`evomotion.sim.play.motion_controls`, its own fall thresholds.
 """
 
 from __future__ import annotations
@@ -37,7 +37,8 @@ import numpy as np
 from evomotion.core.checks import check_choice, check_number
 from evomotion.errors import InputError
 
-SCENES = ("nao", "kick")  # and "robot:<spec>"
+#: "nao", a study's scene (its :class:`~evomotion.studies.view.Scene`'s name, e.g. the kick's
+#: "kick") or "robot:<spec>"
 VISUAL_GROUPS = (0, 1, 2)  # the groups MuJoCo's viewer shows by default
 _TYPES = {mujoco.mjtGeom.mjGEOM_BOX: "box", mujoco.mjtGeom.mjGEOM_SPHERE: "sphere",
           mujoco.mjtGeom.mjGEOM_CAPSULE: "capsule", mujoco.mjtGeom.mjGEOM_CYLINDER: "cylinder",
@@ -52,19 +53,36 @@ _CACHE_SIZE = 8
 MAX_PLAY_S = 120.0
 
 
+def study_scenes() -> dict[str, Any]:
+    """The 3D scenes the registered studies declare (:class:`~evomotion.studies.view.Scene`),
+    by name."""
+    from evomotion.studies import all_studies
+
+    return {s.view.scene.name: s.view.scene for s in all_studies()
+            if s.view is not None and s.view.scene is not None}
+
+
+def _study_scene(scene: str) -> Any:
+    """The study's :class:`~evomotion.studies.view.Scene` named ``scene`` (``None``: the
+    NAO's own scene "nao"); an unknown name is one :class:`InputError` line."""
+    if scene == "nao":
+        return None
+    found = study_scenes()
+    check_choice("scene", scene, ("nao", *found))
+    return found.get(scene)
+
+
 def load_scene_model(scene: str = "nao") -> mujoco.MjModel:
-    """The model of ``scene`` ("nao": the NAO on its floor, "kick": plus the ball); one shared
-    instance per scene, not to be modified."""
+    """The model of ``scene`` ("nao": the NAO on its floor; a study's scene, e.g. "kick": the
+    NAO and the ball); one shared instance per scene, not to be modified."""
     if scene.startswith("robot:"):  # load_robot caches it (and reloads an edited spec)
         return _robot(scene).model
-    check_choice("scene", scene, SCENES)
     if scene not in _MODELS:
-        if scene == "kick":
-            from evomotion.studies.biped_kick.scene import load_scene
-
-            _MODELS[scene] = load_scene()
+        declared = _study_scene(scene)
+        if declared is not None:
+            _MODELS[scene] = declared.load_model()
         else:
-            from evomotion.sim import nao
+            from evomotion.sim.robots import nao
 
             _MODELS[scene] = nao.load_model()
     return _MODELS[scene]
@@ -115,28 +133,27 @@ def mesh_stl(vertices: np.ndarray, faces: np.ndarray) -> bytes:
 
 
 def _initial_state(model: mujoco.MjModel, scene: str, pose: np.ndarray) -> np.ndarray:
-    from evomotion.sim import nao
+    from evomotion.sim.robots import nao
 
-    if scene == "kick":
-        from evomotion.studies.biped_kick.scene import default_ball_xy, initial_scene_state
-
-        return initial_scene_state(model, default_ball_xy(model, pose=pose), pose)
+    declared = _study_scene(scene)
+    if declared is not None:
+        return declared.initial_state(model, pose)
     return nao.initial_state(model, pose)
 
 
 def _robot(scene: str) -> Any:
     """The robot of scene ``"robot:<spec>"``, loaded only when the studio may load it
     (:func:`~evomotion.studio.readers.check_robot`: a bundled name or a bounded spec file)."""
-    from evomotion.sim.robot import load_robot
+    from evomotion.sim.robots import load_robot
     from evomotion.studio.readers import check_robot
 
     return load_robot(check_robot(scene.split(":", 1)[1]))
 
 
 def _record(path: Path, scene: str, fps: float, hold_s: float) -> dict[str, Any]:
-    from evomotion.sim import nao
-    from evomotion.sim.nao.motion import read_motion
-    from evomotion.sim.nao.replay import MAX_HOLD_S, motion_targets
+    from evomotion.sim.motion import read_motion
+    from evomotion.sim.robots import nao
+    from evomotion.sim.robots.nao.replay import MAX_HOLD_S, motion_targets
     from evomotion.sim.rollout import BatchSimulator, fall_step, torso_track
 
     check_number("fps", fps, lo=0.0, lo_open=True, hi=1000.0)
@@ -154,7 +171,7 @@ def _record(path: Path, scene: str, fps: float, hold_s: float) -> dict[str, Any]
         state0 = _initial_state(model, scene, first)
         limits = nao.FALL_HEIGHT_M, nao.FALL_TILT_RAD
     else:  # another robot: from its initial state, as the studies evaluate and play it
-        from evomotion.sim.robot.play import motion_controls
+        from evomotion.sim.play import motion_controls
 
         ctrl, state0 = motion_controls(robot, motion, dt, nstep), robot.state0
         limits = robot.fall_height_m, robot.fall_tilt_rad
@@ -265,7 +282,8 @@ class NaoPlayer:
                         if g["body"] == b:
                             _add_geom(self.scene, g)
                 self.groups.append(group)
-        look_x = 0.1 if scene == "kick" else 0.0
+        declared = None if scene.startswith("robot:") else _study_scene(scene)
+        look_x = declared.look_x_m if declared is not None else 0.0
         size = 1.0  # the NAO's camera, scaled for another robot by its torso height
         if scene.startswith("robot:"):
             size = max(0.5, float(_robot(scene).state0[3]) / NAO_TORSO_HEIGHT_M)

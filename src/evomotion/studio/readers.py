@@ -23,14 +23,13 @@ from pathlib import Path
 from typing import Any
 
 from evomotion.errors import InputError
+from evomotion.textio import kind_of
 
 #: the longest name or path a request may carry
 MAX_NAME_CHARS = 1024
 #: the largest robot spec (TOML) and MJCF file the studio loads for a run's 3D view
 MAX_SPEC_BYTES = 1 << 20
 MAX_MJCF_BYTES = 64 << 20
-_KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO"), (stat.S_ISSOCK, "a socket"),
-          (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"))
 
 
 def one_line(text: object, limit: int = 300) -> str:
@@ -60,14 +59,6 @@ def check_name(name: object, what: str = "run") -> str:
     return name
 
 
-def kind(mode: int) -> str | None:
-    """``"a FIFO"`` etc. for anything but a regular file; ``None`` for a regular file."""
-    for test, name in _KINDS:
-        if test(mode):
-            return name
-    return None if stat.S_ISREG(mode) else "not a regular file"
-
-
 def regular_size(path: Path, what: str, max_bytes: int) -> int:
     """The size of the regular file ``path`` (links followed), or one :class:`InputError`:
     missing, not a regular file (a FIFO, a device, ...), or larger than ``max_bytes``."""
@@ -77,7 +68,7 @@ def regular_size(path: Path, what: str, max_bytes: int) -> int:
         raise InputError(f"{one_line(path)}: no such {what}") from None
     except (OSError, ValueError) as e:
         raise InputError(f"{one_line(path)}: cannot read the {what} ({_why(e)})") from None
-    k = kind(st.st_mode)
+    k = kind_of(st.st_mode)
     if k is not None:
         raise InputError(f"{one_line(path)}: expected a regular file for the {what}, found {k}")
     if st.st_size > max_bytes:
@@ -125,7 +116,7 @@ def check_robot(robot: object) -> str:
     robot name, or a spec file that is a regular file of at most :data:`MAX_SPEC_BYTES`
     whose MJCF is a regular file of at most :data:`MAX_MJCF_BYTES`; else one
     :class:`InputError` line (nothing is loaded)."""
-    from evomotion.sim.robot import bundled_specs
+    from evomotion.sim.robots import bundled_specs
 
     names = bundled_specs()
     head = f"problem.robot = {one_line(repr(robot), 120)}"
@@ -139,8 +130,8 @@ def check_robot(robot: object) -> str:
         regular_size(Path(robot), "robot spec", MAX_SPEC_BYTES)
     except InputError as e:
         raise InputError(f"{head}: {expected}; {e}") from None
-    from evomotion.sim.robot.build import resolve_mjcf
-    from evomotion.sim.robot.spec import read_spec
+    from evomotion.sim.robots.build import resolve_mjcf
+    from evomotion.sim.robots.spec import read_spec
 
     try:
         mjcf = resolve_mjcf(read_spec(robot))

@@ -1,16 +1,15 @@
-"""The individual, per study, on a run's page.
+"""The individual, per study, on a run's page: what the study declares in its
+:class:`~evomotion.studies.view.StudyView`, drawn by the studio's generic views.
 
-- NAO studies (step, walk, kick, repertoire): any ``.motion`` of the run played in 3D (on
-  the run's robot when it is another one than the NAO)
-  (:mod:`.nao3d`); the kick in its scene with the ball, with its table of aimed kicks; the
-  repertoire's heat map, where a click plays that cell's motion.
-- arm-ik: the board with the population of a generation and the seed's statistics of that
-  generation (step through the generations recorded in ``population.bin``).
-- grid-path: the map with the best path of a generation.
-- quadruped-plan: the plan (or executed walk) state by state, with rule names and the support
-  polygon (seed 003's viewer).
+- ``motions``: any ``.motion`` of the run played in 3D on the run's robot (:mod:`.nao3d`), in
+  the study's ``scene`` (the kick's: with the ball);
+- ``table``: a JSON list of rows in the run folder (the kick's aimed kicks);
+- ``archive_map``: the repertoire's heat map, where a click plays that cell's motion;
+- ``frames``: the study's own matplotlib figures stepped through (a generation's population,
+  a plan's states), rendered on the server; the study reads the run's files through
+  :class:`StudioRunFiles`, which keeps the studio's size limits.
 
-Figures of the 2-D views are the studies' own matplotlib views, rendered on the server.
+The studio knows no study by name.
 """
 
 from __future__ import annotations
@@ -23,14 +22,14 @@ from typing import Any
 import numpy as np
 
 from evomotion.errors import InputError
+from evomotion.studies.view import NothingYetError
 from evomotion.studio.readers import bounded_files, check_robot, one_line, regular_size
 
-NAO_STUDIES = ("humanoid-step", "humanoid-walk", "biped-kick", "humanoid-repertoire")
 #: the largest files a view reads (the studio stays well below 1 GB for any run folder)
 MAX_HISTORY_BYTES = 256 << 20
 MAX_ARCHIVE_BYTES = 128 << 20
-MAX_PLAN_BYTES = 32 << 20
-MAX_KICKS_BYTES = 4 << 20
+MAX_JSON_BYTES = 32 << 20  # a study's JSON document (a plan)
+MAX_TABLE_BYTES = 4 << 20
 MAX_MAP_BINS = 4096  # bins per measure drawn in the repertoire's heat map
 
 
@@ -53,8 +52,9 @@ def _problem(study: str, run_dir: Path) -> Any:
 
 
 def scene_of(run_dir: Path, default: str = "nao") -> str:
-    """The 3D scene of a run's motions: ``"robot:<spec>"`` for a run of another robot than
-    the NAO (its config's ``problem.robot``), else ``default``. A robot the studio must not
+    """The 3D scene of a run's motions: ``default`` (the NAO's) for a robot whose motions are
+    Webots ``.motion`` files (the capability ``webots_names``), else ``"robot:<spec>"`` (its
+    config's ``problem.robot``). A robot the studio must not
     load (not a bundled name, nor a regular spec file of bounded size: ``/dev/zero``, a FIFO,
     a huge file) is one :class:`InputError` line, and nothing is loaded."""
     from evomotion.run.config import config_from_run_dir
@@ -65,10 +65,11 @@ def scene_of(run_dir: Path, default: str = "nao") -> str:
         return default
     problem = raw.get("problem")
     robot = problem.get("robot", "") if isinstance(problem, dict) else ""
-    from evomotion.sim.robot import is_nao
+    from evomotion.sim.robots import capabilities_of
 
     robot = check_robot(robot)
-    return f"robot:{robot}" if not is_nao(robot) else default
+    # the NAO scene plays Webots motions of the NAO's joints; any other robot its own scene
+    return default if "webots_names" in capabilities_of(robot) else f"robot:{robot}"
 
 
 def motions_of(run_dir: Path) -> list[str]:
@@ -80,20 +81,79 @@ def motions_of(run_dir: Path) -> list[str]:
 def render(study: str, root: Path, run_dir: Path) -> None:
     from nicegui import ui
 
-    fn = {"arm-ik": _arm_ik, "grid-path": _grid_path, "quadruped-plan": _quadruped,
-          "humanoid-repertoire": _repertoire, "biped-kick": _kick}.get(study)
+    from evomotion.studies import get_study
+
     try:
-        if fn is not None:
-            fn(ui, study, run_dir)
-        elif study in NAO_STUDIES:
-            _nao(ui, run_dir, motions_of(run_dir))
-        else:
+        view = get_study(study).view  # an unknown study (a damaged config) is one line
+        if view is None:
             ui.label("this study has no view of its own: its curves are above")
+            return
+        if view.table:
+            _table(ui, run_dir / view.table, view.table_title)
+        if view.archive_map:
+            _repertoire(ui, run_dir, view.scene)
+        elif view.motions:
+            _nao(ui, run_dir, motions_of(run_dir), scene=view.scene)
+        if view.frames is not None:
+            _frames(ui, view.frames, StudioRunFiles(study, run_dir))
+    except NothingYetError as e:
+        ui.label(one_line(e)).classes("view-empty")
     except InputError as e:  # a file of the run the studio refuses to read or load
         ui.label(f"error: {one_line(e)}").classes("text-red-700 view-error")
     except Exception as e:  # noqa: BLE001 - a view must not take the page down
         ui.label(f"the study view failed: {type(e).__name__}: {one_line(e)}") \
             .classes("text-red-700 view-error")
+
+
+class StudioRunFiles:
+    """A run folder as a study's ``frames`` reads it (:class:`~evomotion.studies.view.RunFiles`):
+    every file checked and bounded by the studio's limits."""
+
+    def __init__(self, study: str, run_dir: Path) -> None:
+        self.study, self.run_dir = study, run_dir
+
+    def history(self) -> list:
+        from evomotion.run.history import NAME, read_history
+
+        path = self.run_dir / NAME
+        if not path.exists():
+            raise NothingYetError("no population.bin in this run (set run.history_every = 1 "
+                                  "to record the populations)")
+        regular_size(path, "population history", MAX_HISTORY_BYTES)
+        hist = read_history(path)
+        if not hist:
+            raise NothingYetError("no generation recorded yet")
+        return hist
+
+    def stats(self) -> dict[str, list]:
+        from evomotion.studio.data import StatsTail
+
+        st = StatsTail(self.run_dir / "stats.csv")
+        st.update()
+        return {c: st.column(c) for c in st.columns}
+
+    def problem(self) -> Any:
+        return _problem(self.study, self.run_dir)
+
+    def json(self, name: str, what: str) -> Any:
+        from evomotion.textio import read_json
+
+        path = self.run_dir / name
+        if not path.exists():
+            raise NothingYetError(f"no {name} in this run yet")
+        return read_json(path, what, MAX_JSON_BYTES)
+
+
+def _frames(ui, frames_of: Any, files: StudioRunFiles) -> None:
+    frames = frames_of(files)
+    if frames.title:
+        ui.label(frames.title).classes("font-bold")
+    _stepper(ui, frames.count, lambda k: _figure_caption(frames.draw(k)), frames.label)
+
+
+def _figure_caption(drawn: tuple[Any, str]) -> tuple[str, str]:
+    fig, caption = drawn
+    return _png(fig), caption
 
 
 def _nao(ui, run_dir: Path, motions: list[str], scene: str | None = None,
@@ -118,23 +178,23 @@ def _nao(ui, run_dir: Path, motions: list[str], scene: str | None = None,
     return pick
 
 
-def _kick(ui, study: str, run_dir: Path) -> None:
+def _table(ui, path: Path, title: str) -> None:
     from evomotion.textio import read_json
 
-    path = run_dir / "best_kicks.json"
-    if path.exists():
-        rows = read_json(path, "kick plan", MAX_KICKS_BYTES)
-        if not (isinstance(rows, list) and all(isinstance(r, dict) for r in rows)):
-            raise InputError(f"{path}: expected a list of kicks (JSON objects)")
-        cols = [{"name": str(k), "label": str(k), "field": str(k)} for k in rows[0]] \
-            if rows else []
-        for r in rows:
-            for k, v in r.items():
-                if isinstance(v, float):
-                    r[k] = float(f"{v:.4g}")
-        ui.label("the kick plan: the best kick aimed at each angle").classes("font-bold")
-        ui.table(columns=cols, rows=rows).classes("w-full kick-table")
-    _nao(ui, run_dir, motions_of(run_dir), scene="kick")
+    if not path.exists():
+        return
+    rows = read_json(path, "table", MAX_TABLE_BYTES)
+    if not (isinstance(rows, list) and all(isinstance(r, dict) for r in rows)):
+        raise InputError(f"{path}: expected a list of rows (JSON objects)")
+    cols = [{"name": str(k), "label": str(k), "field": str(k)} for k in rows[0]] \
+        if rows else []
+    for r in rows:
+        for k, v in r.items():
+            if isinstance(v, float):
+                r[k] = float(f"{v:.4g}")
+    if title:
+        ui.label(title).classes("font-bold")
+    ui.table(columns=cols, rows=rows).classes("w-full kick-table")
 
 
 def heat_cells(a: Any, slice_k: int | None = None) -> list[list[float]]:
@@ -155,20 +215,20 @@ def heat_cells(a: Any, slice_k: int | None = None) -> list[list[float]]:
     return [best[k] for k in sorted(best)]
 
 
-def _repertoire(ui, study: str, run_dir: Path) -> None:
+def _repertoire(ui, run_dir: Path, scene: str | None = None) -> None:
     from evomotion.run.archive_file import read_archive
 
     motions = motions_of(run_dir)
     path = run_dir / "archive.npz"
     if not path.exists():
-        _nao(ui, run_dir, motions)
+        _nao(ui, run_dir, motions, scene=scene)
         return
     regular_size(path, "archive", MAX_ARCHIVE_BYTES)
     a = read_archive(path)
     if a.kind != "grid" or len(a.bins) < 2 or not all(0 < int(b) <= MAX_MAP_BINS
                                                          for b in a.bins):
         ui.label(f"{a.kind} archive: no heat map; its elites' motions:")
-        _nao(ui, run_dir, motions)
+        _nao(ui, run_dir, motions, scene=scene)
         return
     nx, ny = int(a.bins[0]), int(a.bins[1])
     xs = np.linspace(a.lower[0], a.upper[0], nx + 1)
@@ -213,23 +273,7 @@ def _repertoire(ui, study: str, run_dir: Path) -> None:
                                             "#fde725"]}},
         "series": [{"type": "heatmap", "data": shown["cells"]}]},
         on_point_click=clicked).classes("w-full h-96 repertoire-map")
-    shown["pick"] = _nao(ui, run_dir, motions)
-
-
-def _history(ui, run_dir: Path) -> list | None:
-    from evomotion.run.history import NAME, read_history
-
-    path = run_dir / NAME
-    if not path.exists():
-        ui.label("no population.bin in this run (set run.history_every = 1 to record the "
-                 "populations)")
-        return None
-    regular_size(path, "population history", MAX_HISTORY_BYTES)
-    hist = read_history(path)
-    if not hist:
-        ui.label("no generation recorded yet")
-        return None
-    return hist
+    shown["pick"] = _nao(ui, run_dir, motions, scene=scene)
 
 
 def _stepper(ui, n: int, draw, label: str = "generation") -> None:
@@ -249,67 +293,3 @@ def _stepper(ui, n: int, draw, label: str = "generation") -> None:
                   on_click=lambda: slider.set_value(min(n - 1, slider.value + 1)))
         ui.label(label)
     show(slider.value)
-
-
-def _arm_ik(ui, study: str, run_dir: Path) -> None:
-    from evomotion.studies.arm_ik.views import population_figure
-    from evomotion.studio.data import StatsTail
-
-    hist = _history(ui, run_dir)
-    if hist is None:
-        return
-    prob = _problem(study, run_dir)
-    st = StatsTail(run_dir / "stats.csv")
-    st.update()
-    keys = ("phase", "mean_objective", "var_objective", "mean_intersections",
-            "var_intersections", "originality", "feasible_fraction", "best_objective")
-    gens = st.column("generation")
-
-    def draw(k: int) -> tuple[str, str]:
-        g, pop, fit = hist[k]
-        best = pop[int(np.nanargmin(np.where(np.isfinite(fit), fit, np.inf)))]
-        fig = population_figure(prob, pop, best, f"generation {g}: {len(pop)} limbs")
-        row = gens.index(g) if g in gens else None
-        stats = ", ".join(f"{key} {st.column(key)[row]:.4g}" for key in keys
-                          if row is not None and key in st.columns
-                          and st.column(key)[row] is not None)
-        return _png(fig), f"generation {g}: {stats}"
-
-    _stepper(ui, len(hist), draw)
-
-
-def _grid_path(ui, study: str, run_dir: Path) -> None:
-    from evomotion.studies.grid_path.views import path_figure
-
-    hist = _history(ui, run_dir)
-    if hist is None:
-        return
-    prob = _problem(study, run_dir)
-    sign = -1.0 if getattr(prob, "sense", "min") == "max" else 1.0
-
-    def draw(k: int) -> tuple[str, str]:
-        g, pop, fit = hist[k]
-        i = int(np.nanargmin(np.where(np.isfinite(fit), sign * fit, np.inf)))
-        path = prob.decode(pop[i:i + 1])[0]
-        fig = path_figure(prob.map, np.asarray(path), {}, f"generation {g}: best path")
-        return _png(fig), f"generation {g}: best fitness {fit[i]:.6g}"
-
-    _stepper(ui, len(hist), draw)
-
-
-def _quadruped(ui, study: str, run_dir: Path) -> None:
-    from evomotion.studies.quadruped_plan.views import step_figure
-
-    path = next((run_dir / n for n in ("mission.json", "plan.json")
-                 if (run_dir / n).exists()), None)
-    if path is None:
-        ui.label("no plan.json or mission.json: the search found no plan (yet)")
-        return
-    from evomotion.textio import read_json
-
-    doc = read_json(path, "plan", MAX_PLAN_BYTES)
-    if not (isinstance(doc, dict) and isinstance(doc.get("states"), list) and doc["states"]):
-        raise InputError(f"{path}: expected a plan with a non-empty list of states")
-    ui.label(f"{path.name}: {len(doc['states']) - 1} transitions").classes("font-bold")
-    _stepper(ui, len(doc["states"]), lambda k: (_png(step_figure(doc, k)), f"state {k}"),
-             "transition")

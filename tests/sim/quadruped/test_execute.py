@@ -1,4 +1,4 @@
-"""Executing plans: standing still, short real seed-003 plans, bad input, the result format."""
+"""Executing plans: standing still, short real paper-003 plans, bad input, the result format."""
 
 import json
 import math
@@ -8,14 +8,14 @@ import pytest
 
 from evomotion.sim.quadruped import QuadrupedSpec, execute_plan, plan_qpos
 from evomotion.sim.quadruped.trajectory import build_timeline
-from evomotion.studies.quadruped_plan.plan import plan_document
-from evomotion.studies.quadruped_plan.planner import QuadrupedPlanConfig, make_problem, solve
+from evomotion.studies.quadruped_plan.plans.plan import plan_document
+from evomotion.studies.quadruped_plan.plans.planner import QuadrupedPlanConfig, make_problem, solve
 
 SPEC = QuadrupedSpec()
 #: rule set B, function 3: 13 states, margins >= 0.04 units
 SHORT_B = QuadrupedPlanConfig(start_phi=0.0, goal_x=0.0, goal_y=-3.0, rule_set="B",
                               function=3, max_seconds=20.0)
-#: rule set A, function 1 (the seed's): lifts with margin 0; the first 25 states
+#: rule set A, function 1 (the paper's): lifts with margin 0; the first 25 states
 SHORT_A = QuadrupedPlanConfig(start_phi=math.pi / 4, goal_x=-2.0, goal_y=2.0, rule_set="A",
                               function=1, max_seconds=20.0)
 POSITION_BOUND_M = 0.02  # final torso position error allowed on the short plans

@@ -17,12 +17,12 @@ cli = study_cli("arm-ik")
 
 @pytest.fixture()
 def no_runs(monkeypatch):
-    from evomotion.studies.arm_ik import success
+    from evomotion.studies.arm_ik import experiment
 
     def evolve(*a, **k):
         raise AssertionError("a run started before the input was checked")
 
-    monkeypatch.setattr(success, "evolve", evolve)
+    monkeypatch.setattr(experiment, "evolve", evolve)
 
 
 @pytest.mark.parametrize("args,needle", [

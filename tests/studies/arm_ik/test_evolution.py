@@ -1,4 +1,4 @@
-"""Seed 001's operators: beta crossover per mode, single-angle mutation, survival, IDEA."""
+"""Paper 001's operators: beta crossover per mode, single-angle mutation, survival, IDEA."""
 
 from __future__ import annotations
 
@@ -32,7 +32,7 @@ LIMITED = """10
 
 @pytest.fixture
 def lay():
-    return Layout.of(load_scenario("seed_example"))  # arm 2 genes, fingers 4 genes
+    return Layout.of(load_scenario("paper_example"))  # arm 2 genes, fingers 4 genes
 
 
 def test_modes_select_genes(lay):
@@ -41,7 +41,7 @@ def test_modes_select_genes(lay):
     assert active_genes(lay, "whole").all()
 
 
-def test_crossover_arm_mode_inherits_fingers_and_blends_by_seed_formula(lay):
+def test_crossover_arm_mode_inherits_fingers_and_blends_by_paper_formula(lay):
     rng = np.random.default_rng(0)
     a = np.full((50, 6), 100.0)
     b = np.full((50, 6), 140.0)
@@ -107,7 +107,7 @@ def test_survivors_keep_best_no_duplicates_and_idea_fraction():
             assert np.count_nonzero(hits[keep] > 0) >= round(frac * n)
 
 
-def test_seed_literal_survival_draws_with_replacement():
+def test_paper_literal_survival_draws_with_replacement():
     rng = np.random.default_rng(5)
     hits, obj = np.zeros(40, int), np.arange(40.0)
     keep = survivors(hits, obj, 20, rng, 0.1, pairwise=False)

@@ -75,7 +75,7 @@ def test_layout_bounds_and_keys():
 
 
 def test_wrist_map_marks_closed_obstacle_unreachable_and_candidates():
-    scn = load_scenario("seed_example")
+    scn = load_scenario("paper_example")
     wm = build_wrist_map(scn, cell=0.1)
     c = wm.centres()
     inside_diamond = np.abs(c[..., 0] - 3) + np.abs(c[..., 1] - 1) < 0.8
@@ -120,7 +120,7 @@ def test_reachable_cells_stay_inside_a_closed_box():
 @settings(max_examples=40, deadline=None)
 @given(st.lists(st.floats(0, 360), min_size=6, max_size=6))
 def test_fk_bone_lengths_and_reach(angles):
-    scn = load_scenario("seed_example")
+    scn = load_scenario("paper_example")
     lay = Layout.of(scn)
     p = forward(scn, lay, np.array([angles]))
     bones = np.linalg.norm(np.diff(p.arm_joints[0], axis=0), axis=1)

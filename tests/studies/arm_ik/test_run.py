@@ -11,7 +11,8 @@ from typer.testing import CliRunner
 from evomotion.run.config import resolve_config
 from evomotion.run.runner import run_study
 from evomotion.run.stats import COLUMNS
-from evomotion.studies.arm_ik.outcome import EXIT_UNSOLVED, evolve
+from evomotion.studies.arm_ik.artifacts import EXIT_UNSOLVED
+from evomotion.studies.arm_ik.experiment import evolve
 from evomotion.studies.arm_ik.problem import ArmIKConfig, ArmIKProblem
 from evomotion.studies.arm_ik.schedule import EXTRA_COLUMNS
 from evomotion.studies.arm_ik.study import STUDY, cli
@@ -32,8 +33,8 @@ def test_problem_protocol_deterministic_and_batch_independent():
     np.testing.assert_array_equal(a.distance, p.assess(x).distance)
 
 
-def test_schedule_solves_seed_example_and_is_reproducible():
-    cfg = ArmIKConfig(scenario="seed_example", pictures=False)
+def test_schedule_solves_paper_example_and_is_reproducible():
+    cfg = ArmIKConfig(scenario="paper_example", pictures=False)
     r1, r2 = evolve(cfg, 5, wall_seconds=20), evolve(cfg, 5, wall_seconds=20)
     assert r1.solved and r1.best_assessment.intersections[0] == 0
     assert r1.best_assessment.tip_error.max() <= 1e-3 * np.hypot(10, 5)
@@ -58,7 +59,7 @@ def test_run_folder_and_best_json(tmp_path):
     assert [r["phase"] for r in rows[:2]] == ["init", "arm"]
     assert {"arm", "fingers"} <= {r["phase"] for r in rows}
     log = (tmp_path / "log.txt").read_text()
-    assert "arm phase" in log and "fingers phase" in log and "solved seed_example" in log
+    assert "arm phase" in log and "fingers phase" in log and "solved paper_example" in log
 
 
 def test_unreachable_ends_with_no_solution_and_exit_code(tmp_path):
@@ -96,10 +97,10 @@ def test_cli_check(tmp_path):
 
 
 def test_cli_study_table():
-    r = CliRunner().invoke(cli, ["study", "--seeds", "1", "--scenario", "seed_example",
+    r = CliRunner().invoke(cli, ["study", "--seeds", "1", "--scenario", "paper_example",
                                  "--matching", "optimal"])
     assert r.exit_code == 0, r.output
-    assert "| seed_example | optimal | 1/1 (100%) |" in r.output
+    assert "| paper_example | optimal | 1/1 (100%) |" in r.output
 
 
 def test_unreachable_respects_wall_seconds(tmp_path):

@@ -1,4 +1,4 @@
-"""Scenario parser: the seed's example, bundled files and every malformed case."""
+"""Scenario parser: the paper's example, bundled files and every malformed case."""
 
 from __future__ import annotations
 
@@ -13,11 +13,11 @@ from evomotion.studies.arm_ik.scenario import (
     parse_scenario_text,
 )
 
-SEED = (SCENARIO_DIR / "seed_example.scen").read_text()
+PAPER = (SCENARIO_DIR / "paper_example.scen").read_text()
 
 
-def test_seed_example_parses_exactly():
-    s = parse_scenario_text(SEED, "seed.scen")
+def test_paper_example_parses_exactly():
+    s = parse_scenario_text(PAPER, "paper.scen")
     assert (s.width, s.height) == (10, 5)
     np.testing.assert_array_equal(s.start, [5, 4])
     np.testing.assert_array_equal(s.targets, [[1, 1], [9, 1]])
@@ -31,7 +31,7 @@ def test_seed_example_parses_exactly():
 
 def test_bundled_scenarios_load_and_extra_bone_pair_differs_only_in_arm():
     names = bundled_names()
-    assert {"seed_example", "three_fingers", "three_fingers_extra_bone", "corridor",
+    assert {"paper_example", "three_fingers", "three_fingers_extra_bone", "corridor",
             "four_fingers", "unreachable"} <= set(names)
     for n in names:
         assert load_scenario(n).summary().startswith(f"scenario {n}")
@@ -43,11 +43,11 @@ def test_bundled_scenarios_load_and_extra_bone_pair_differs_only_in_arm():
 
 
 def _lines() -> list[str]:
-    return [ln for ln in SEED.splitlines()]
+    return [ln for ln in PAPER.splitlines()]
 
 
 def _replace(old_line_no: int, new: str | None) -> str:
-    """The seed text with (1-based) line ``old_line_no`` replaced (or removed if None)."""
+    """The example text with (1-based) line ``old_line_no`` replaced (or removed if None)."""
     lines = _lines()
     if new is None:
         del lines[old_line_no - 1]
@@ -57,7 +57,7 @@ def _replace(old_line_no: int, new: str | None) -> str:
 
 
 def _line_of(text: str, occurrence: int = 1) -> int:
-    """1-based line number of the ``occurrence``-th line equal to ``text`` in the seed file."""
+    """1-based line number of the ``occurrence``-th line equal to ``text`` in the example."""
     hits = [i + 1 for i, ln in enumerate(_lines()) if ln == text]
     return hits[occurrence - 1]
 
@@ -101,11 +101,11 @@ def test_missing_obstacle_points_and_extra_lines():
     with pytest.raises(FileFormatError, match="obstacle 2 point 5"):
         parse_scenario_text("\n".join(lines[:-1]), "x.scen")
     with pytest.raises(FileFormatError, match="expected end of file"):
-        parse_scenario_text(SEED + "1 2\n", "x.scen")
+        parse_scenario_text(PAPER + "1 2\n", "x.scen")
 
 
 def test_comments_and_blank_lines_are_skipped():
-    text = "# c\n\n  # indented comment\n" + SEED.replace("\n5 4\n", "\n\n5 4   \n")
+    text = "# c\n\n  # indented comment\n" + PAPER.replace("\n5 4\n", "\n\n5 4   \n")
     s = parse_scenario_text(text)
     np.testing.assert_array_equal(s.start, [5, 4])
 
@@ -118,7 +118,14 @@ def test_unknown_file_lists_bundled(tmp_path):
         load_scenario(tmp_path / "bin.scen")
 
 
+def test_old_bundled_name_loads_the_paper_example():
+    """``seed_example`` is the old name of ``paper_example`` (configs from before issue 32)."""
+    old, new = load_scenario("seed_example"), load_scenario("paper_example")
+    assert old.summary() == new.summary()
+    np.testing.assert_array_equal(old.targets, new.targets)
+
+
 def test_reach_intervals():
-    s = load_scenario("seed_example")
+    s = load_scenario("paper_example")
     assert s.arm.reach() == (2.0, 4.0)
     assert s.fingers[0].reach() == (0.0, 6.0)

@@ -6,9 +6,9 @@ import mujoco
 import numpy as np
 
 from evomotion.core.constraints import feasibility_first
-from evomotion.sim import nao
-from evomotion.sim.nao.joint_limits import check_speeds
-from evomotion.sim.nao.motion import format_motion, parse_motion
+from evomotion.sim.motion import format_motion, parse_motion
+from evomotion.sim.robots import nao
+from evomotion.sim.robots.nao.joint_limits import check_speeds
 from evomotion.studies.biped_kick import scene
 from evomotion.studies.biped_kick.experiment import on_grid, run_experiment
 from evomotion.studies.biped_kick.keyframe import keyframe_kicks, kicking_foot, shoot_motion

@@ -10,7 +10,7 @@ import pytest
 from typer.testing import CliRunner
 
 from evomotion.cli import app
-from evomotion.sim.nao.motion import read_motion
+from evomotion.sim.motion import read_motion
 from evomotion.studies.biped_kick.artifacts import AIMS_DEG
 from evomotion.studies.biped_kick.motion import GENES, kick_motion
 

@@ -106,7 +106,7 @@ def test_play_json(tmp_path):
 
 def test_the_shipped_kick_alone_stays_up():
     """``evomotion replay`` of the shipped kick's motion (no ball): the robot does not fall."""
-    from evomotion.sim.nao.replay import simulate_motion
+    from evomotion.sim.robots.nao.replay import simulate_motion
     from evomotion.studies.biped_kick.motion import kick_motion
 
     g, _ = read_kick(None)
@@ -139,7 +139,7 @@ def test_play_walks_with_a_repertoire_in_the_same_simulation(tmp_path):
 
 
 def test_a_broken_repertoire_is_refused_before_walking(tmp_path):
-    from evomotion.sim.nao.repertoire import read_index
+    from evomotion.sim.repertoire import read_index
 
     rep = tmp_path / "repertoire"
     rep.mkdir()
@@ -187,7 +187,7 @@ def test_read_kick_accepts_or_one_line_error(data):
 def test_the_kick_does_not_depend_on_the_robots_heading_in_the_world():
     """Elliptic friction cones: the same kick from the robot turned 0 and 45 deg sends the ball
     in the same direction relative to the robot (pyramidal cones did not: +13.7 deg at 21)."""
-    from evomotion.sim import nao
+    from evomotion.sim.robots import nao
     from evomotion.sim.rollout import interpolate_controls
     from evomotion.studies.biped_kick import scene
     from evomotion.studies.biped_kick.motion import (

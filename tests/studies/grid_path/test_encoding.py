@@ -1,4 +1,4 @@
-"""The seed's perpendicular encoding, its operators and the fitness."""
+"""The paper's perpendicular encoding, its operators and the fitness."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Map readers, writer, endpoint checks, random maps and the seed's cell numbering."""
+"""Map readers, writer, endpoint checks, random maps and the paper's cell numbering."""
 
 from __future__ import annotations
 
@@ -76,7 +76,7 @@ def test_random_map_connected_and_density():
         random_map(1, 0.2, np.random.default_rng(0))
 
 
-def test_seed_cell_numbering_roundtrip():
+def test_paper_cell_numbering_roundtrip():
     x, y = np.array([0.5, 9.2, 3.0]), np.array([0.5, 0.1, 9.9])
     P = cell_number(x, y, 10)
     assert P.tolist() == [1, 10, 94]

@@ -1,4 +1,4 @@
-"""Exact solvers against brute-force references, and the bundled maps' seed optima."""
+"""Exact solvers against brute-force references, and the bundled maps' paper optima."""
 
 from __future__ import annotations
 
@@ -61,7 +61,7 @@ def test_three_models_match_bruteforce(m):
 
 @pytest.mark.parametrize(("name", "ns", "nd"), [("seed10a", 4, 7), ("seed10b", 4, 7),
                                                 ("seed15", 8, 10), ("seed20", 12, 13)])
-def test_bundled_maps_have_the_seed_optima(name, ns, nd):
+def test_bundled_maps_have_the_paper_optima(name, ns, nd):
     o = octile_astar(load_map(name))
     assert (o.n_straight, o.n_diagonal) == (ns, nd)
     assert round(o.length, 4) == {7: 13.8995, 10: 22.1421, 13: 30.3848}[nd]

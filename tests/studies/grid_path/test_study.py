@@ -14,9 +14,14 @@ from evomotion.core.ga import GAConfig
 from evomotion.run.config import resolve_config
 from evomotion.run.runner import run_study
 from evomotion.studies import get_study
-from evomotion.studies.grid_path.experiments import algorithm_for, beyond_table, seed_table
+from evomotion.studies.grid_path.experiments import (
+    algorithm_for,
+    beyond_config,
+    beyond_table,
+    evolve,
+    paper_table,
+)
 from evomotion.studies.grid_path.maps import read_map
-from evomotion.studies.grid_path.outcome import evolve
 from evomotion.studies.grid_path.problem import GridPathConfig, GridPathProblem
 from evomotion.studies.grid_path.solvers import all_optima
 
@@ -30,7 +35,7 @@ def test_run_folder_and_best_json(tmp_path):
     study = get_study("grid-path")
     cfg = resolve_config(study, overrides=["run.generations=6", "algorithm.pop_size=36",
                                            "algorithm.crossover_rate=0.9",
-                                           "algorithm.mutation_rate=0.3"], preset="seed")
+                                           "algorithm.mutation_rate=0.3"], preset="paper")
     assert isinstance(cfg.algorithm, CGAConfig) and cfg.algorithm.update == "line_sweep"
     assert run_study(study, cfg, tmp_path, quiet=True).exit_code == 0
     best = json.loads((tmp_path / "best.json").read_text())
@@ -68,12 +73,14 @@ def test_repair_reaches_free_optimum_on_easy_map():
 
 
 def test_tiny_tables():
-    rows = list(seed_table(1, ["seed10a"], ["cga-L5-line", "ga"], 0.9, 0.3, generations=3))
+    rows = list(paper_table(1, ["seed10a"], ["cga-L5-line", "ga"], 0.9, 0.3, generations=3))
     assert [r.config for r in rows] == ["cga-L5-line", "ga"]
     assert all(0 <= r.success <= 1 and r.mean_length >= r.best_length for r in rows)
     assert "| seed10a | ga |" in rows[1].line()
-    b = list(beyond_table(1, 1, ["seed-encoding"], 16, 2, 0.9, 0.3, update="sync"))
-    assert b[0].config == "seed-encoding"
+    b = list(beyond_table(1, 1, ["paper-encoding"], 16, 2, 0.9, 0.3, update="sync"))
+    assert b[0].config == "paper-encoding"
+    # "seed-encoding" is the old name of the row (benchmarks and old commands use it)
+    assert beyond_config("seed-encoding", "seed10a") == beyond_config("paper-encoding", "seed10a")
 
 
 def test_cli_make_map_and_study(tmp_path):
@@ -82,11 +89,12 @@ def test_cli_make_map_and_study(tmp_path):
     assert r.returncode == 0, r.stderr
     m = read_map(tmp_path / "m.map")
     assert m.width == 12 and m.blocked.sum() == round(0.3 * 144)
-    r = cli("grid-path", "study", "--seeds", "1", "--map", "seed10a", "--row", "cga-L5-sync",
-            "--generations", "2", cwd=tmp_path)
-    assert r.returncode == 0, r.stderr
+    r = cli("grid-path", "study", "--experiment", "seed", "--seeds", "1", "--map", "seed10a",
+            "--row", "cga-L5-sync", "--generations", "2", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr  # "seed": the old name of the paper experiment
+    assert "note: --experiment seed is the old name of --experiment paper" in r.stderr
     lines = r.stdout.splitlines()
-    assert lines[0].startswith("rows: --preset seed") and "literal rates" in lines[0]
+    assert lines[0].startswith("rows: --preset paper") and "literal rates" in lines[0]
     assert lines[1].startswith("| map |") and "cga-L5-sync" in r.stdout
 
 
@@ -96,8 +104,9 @@ def test_cli_make_map_and_study(tmp_path):
     (["run", "grid-path", "--set", "algorithm.neighbourhood=hex"], "unknown neighbourhood"),
     (["grid-path", "study", "--map", "x"], "unknown 'x'"),
     (["grid-path", "study", "--experiment", "beyond", "--update", "zig"], "--update: expected"),
-    (["grid-path", "study", "--experiment", "other"], "--experiment: expected one of seed, beyond"),
-    (["run", "grid-path", "--preset", "paper"], "unknown preset 'paper'"),
+    (["grid-path", "study", "--experiment", "other"],
+     "--experiment: expected one of paper, beyond"),
+    (["run", "grid-path", "--preset", "fast"], "unknown preset 'fast'"),
     (["run", "grid-path", "--set", "algorithm.name='cmaes'"], "available: cga, ga"),
 ])
 def test_bad_input_is_one_line_error(tmp_path, args, msg):

@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 
 from evomotion.errors import InputError
-from evomotion.sim import nao
-from evomotion.sim.nao.leg_ik import leg_fk
+from evomotion.sim.robots import nao
+from evomotion.sim.robots.nao.leg_ik import leg_fk
 from evomotion.studies.humanoid_repertoire import step
 from evomotion.studies.humanoid_repertoire.artifacts import chain, ready_motion
-from evomotion.studies.humanoid_repertoire.use import plan
+from evomotion.studies.humanoid_repertoire.step_planning import plan
 
 
 def test_every_step_starts_and_ends_in_the_ready_pose():
@@ -46,7 +46,7 @@ def test_turning_step_turns_the_feet_as_planned_through_the_shared_hip_motor():
 
 
 def test_measures_are_what_replay_measures():
-    from evomotion.sim.nao.replay import simulate_motion
+    from evomotion.sim.robots.nao.replay import simulate_motion
     from evomotion.studies.humanoid_repertoire.problem import (
         HumanoidRepertoireConfig,
         HumanoidRepertoireProblem,
@@ -91,7 +91,7 @@ def test_short_run_writes_a_repertoire_that_pick_and_walk_to_use(tmp_path):
     from evomotion.run.config import resolve_config
     from evomotion.run.runner import run_study
     from evomotion.studies import get_study
-    from evomotion.studies.humanoid_repertoire.use import pick, walk_to
+    from evomotion.studies.humanoid_repertoire.step_planning import pick, walk_to
 
     s = get_study("humanoid-repertoire")
     cfg = resolve_config(s, None, list(s.smoke) + ["run.generations=3"])

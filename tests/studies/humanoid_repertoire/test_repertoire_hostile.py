@@ -118,7 +118,7 @@ def test_a_hostile_index_is_one_line(run, index, needle):
 
 def test_huge_measured_steps_are_refused_not_overflowing(run):
     """Steps of 1e300 m used to overflow the planner (OverflowError)."""
-    from evomotion.studies.humanoid_repertoire.use import plan
+    from evomotion.studies.humanoid_repertoire.step_planning import plan
 
     doc = json.loads((run / "repertoire" / "index.json").read_text())
     for e in doc["entries"]:
@@ -143,7 +143,7 @@ def test_a_hostile_archive_is_one_line(run):
 # -- 2. writes: checked before the work, never through a link out of the run -------------
 
 def test_walk_to_outputs_are_checked_before_planning(run, tmp_path, monkeypatch):
-    import evomotion.sim.nao.replay as replay
+    import evomotion.sim.robots.nao.replay as replay
 
     def simulated(*a, **k):
         raise AssertionError("the walk was simulated before its outputs were checked")

@@ -51,7 +51,7 @@ def test_a_forward_step_moves_the_feet_forward(op3):
 
 
 def test_measures_are_what_a_replay_of_the_exported_motion_measures(op3):
-    from evomotion.sim.robot.play import play_motion
+    from evomotion.sim.play import play_motion
 
     g = op3.steps.default.copy()
     g[:3] = [0.04, 0.0, 0.15]
@@ -71,9 +71,9 @@ def test_measures_are_what_a_replay_of_the_exported_motion_measures(op3):
 def test_short_run_on_op3_writes_a_repertoire_that_pick_export_and_walk_to_use(tmp_path):
     from evomotion.run.config import resolve_config
     from evomotion.run.runner import run_study
-    from evomotion.sim.nao.motion import read_motion
+    from evomotion.sim.motion import read_motion
     from evomotion.studies import get_study
-    from evomotion.studies.humanoid_repertoire.use import pick, walk_to
+    from evomotion.studies.humanoid_repertoire.step_planning import pick, walk_to
 
     s = get_study("humanoid-repertoire")
     cfg = resolve_config(s, None, [*s.smoke, "problem.robot=op3", "run.generations=2",
@@ -135,24 +135,23 @@ def test_a_copy_of_the_nao_spec_is_another_robot(tmp_path):
     count as the NAO's."""
     import shutil
 
-    from evomotion.sim.nao.repertoire import is_nao_repertoire
-    from evomotion.sim.robot import SPECS_DIR
+    from evomotion.sim.repertoire import is_nao_repertoire
+    from evomotion.sim.robots import spec_path
 
     copy = tmp_path / "my_nao.toml"
-    shutil.copy(SPECS_DIR / "nao.toml", copy)
+    shutil.copy(spec_path("nao"), copy)
     p = make_problem(HumanoidRepertoireConfig(robot=str(copy), threads=1))
-    assert not p.is_nao and p.robot.name == "nao"
+    assert p.steps.name == "numerical" and p.robot.name == "nao"
     assert is_nao_repertoire({"robot": "nao"}) and not is_nao_repertoire({"robot": "op3"})
     assert not is_nao_repertoire({"robot": "nao", "is_nao": False})
-    with pytest.raises(InputError, match="make_problem"):
-        from evomotion.studies.humanoid_repertoire.problem import HumanoidRepertoireProblem
+    from evomotion.studies.humanoid_repertoire.problem import HumanoidRepertoireProblem
 
-        HumanoidRepertoireProblem(HumanoidRepertoireConfig(robot="op3"))
+    assert type(p) is HumanoidRepertoireProblem  # one problem class, the robot a parameter
 
 
 def test_the_nao_box_size_is_its_measure_spec():
     from evomotion.studies.humanoid_repertoire.problem import MEASURES
-    from evomotion.studies.humanoid_repertoire.use import NAO_BOX_SIZE, _box_size
+    from evomotion.studies.humanoid_repertoire.step_planning import NAO_BOX_SIZE, _box_size
 
     np.testing.assert_allclose(NAO_BOX_SIZE, MEASURES.upper - MEASURES.lower)
     np.testing.assert_allclose(_box_size({}), NAO_BOX_SIZE)

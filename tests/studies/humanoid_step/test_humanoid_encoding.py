@@ -3,10 +3,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from evomotion.sim import nao
+from evomotion.sim.robots import nao
 from evomotion.studies.humanoid_step.encoding import ServoEncoding
 from evomotion.studies.humanoid_step.problem import (
-    SEED_TABLE1,
+    PAPER_TABLE1,
     leg_initial_pose,
     servo_bounds,
 )
@@ -66,11 +66,11 @@ def test_harmonic_formula_and_pinned_ends():
     np.testing.assert_allclose(y[0, 1, 1:], Q0[1:], atol=1e-12)
 
 
-def test_bounds_are_seed_table1_within_model_ranges():
+def test_bounds_are_paper_table1_within_model_ranges():
     model = nao.load_model()
     rng = nao.joint_ranges(model, nao.LEG_SERVOS)
     for i, name in enumerate(nao.LEG_SERVOS):
-        t_lo, t_hi = SEED_TABLE1[name]
+        t_lo, t_hi = PAPER_TABLE1[name]
         assert LO[i] == pytest.approx(max(t_lo, rng[i, 0]))
         assert HI[i] == pytest.approx(min(t_hi, rng[i, 1]))
         assert LO[i] <= Q0[i] <= HI[i]

@@ -1,21 +1,21 @@
 import json
-from pathlib import Path
 
 import numpy as np
 
 from evomotion.run.config import resolve_config
 from evomotion.run.runner import run_study
-from evomotion.sim import nao
-from evomotion.sim.nao.motion import format_motion, read_motion
-from evomotion.sim.nao.replay import replay
+from evomotion.sim.motion import format_motion, read_motion
+from evomotion.sim.robots import nao
+from evomotion.sim.robots.nao.replay import replay
 from evomotion.studies import get_study
 from evomotion.studies.humanoid_step.artifacts import genome_motion
 from evomotion.studies.humanoid_step.study import cli
+from fixture_files import WEBOTS_MOTIONS
 
-FIXTURES = Path(__file__).resolve().parents[4] / "shared" / "fixtures" / "webots-motions"
+FIXTURES = WEBOTS_MOTIONS
 
 
-def test_defaults_follow_the_seed():
+def test_defaults_follow_the_paper():
     study = get_study("humanoid-step")
     cfg = resolve_config(study, None, [])
     a = cfg.algorithm

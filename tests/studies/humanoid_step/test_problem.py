@@ -1,3 +1,5 @@
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -6,7 +8,7 @@ from evomotion.studies.humanoid_step.problem import HumanoidStepConfig, Humanoid
 
 @pytest.fixture(scope="module")
 def problem():
-    cfg = HumanoidStepConfig(intervals=4, motion_s=0.6, hold_s=0.4, threads=2, fitness="seed")
+    cfg = HumanoidStepConfig(intervals=4, motion_s=0.6, hold_s=0.4, threads=2, fitness="paper")
     return HumanoidStepProblem(cfg)
 
 
@@ -29,6 +31,13 @@ def test_standing_still_survives_with_no_distance(problem):
     assert ev.fitness[0] == pytest.approx(1.0 + 10.0 * ev.metrics["forward_m"][0])
     assert ev.metrics["stepped"][0] == 0.0
     assert set(ev.metrics) == set(problem.metric_names)
+
+
+def test_old_fitness_name_is_the_paper_fitness(problem):
+    """``fitness = "seed"`` (run folders from before issue 32) is the old name of "paper"."""
+    old = HumanoidStepProblem(dataclasses.replace(problem.cfg, fitness="seed"))
+    g = _still(problem)
+    assert old.evaluate(g).fitness.tolist() == problem.evaluate(g).fitness.tolist()
 
 
 def test_folding_the_legs_falls_early(problem):

@@ -59,18 +59,18 @@ def test_robot_nao_is_the_default_nao():
     the walk and the repertoire; a copy of its spec elsewhere runs the generic robot code."""
     import shutil
 
-    from evomotion.sim.robot import SPECS_DIR
+    from evomotion.sim.robots import spec_path
 
     for name in ("humanoid-step", "humanoid-walk", "humanoid-repertoire"):
         s = get_study(name)
         base = s.make_problem(resolve_config(s, None, [*s.smoke, "problem.worlds=1"]
                                              if name != "humanoid-repertoire" else
                                              list(s.smoke)).problem)
-        assert base.is_nao and base.robot.name == "nao"
+        assert base.robot.has("leg_ik") and base.robot.name == "nao"
         over = ["problem.robot=nao", *(["problem.worlds=1"]
                                        if name != "humanoid-repertoire" else [])]
         named = s.make_problem(resolve_config(s, None, [*s.smoke, *over]).problem)
-        assert type(named) is type(base) and named.is_nao
+        assert type(named) is type(base) and named.robot.has("leg_ik")
         g = np.tile((base.genome.lower + base.genome.upper) / 2, (2, 1))
         np.testing.assert_array_equal(base.evaluate(g).fitness, named.evaluate(g).fitness)
     s = get_study("humanoid-step")
@@ -78,22 +78,23 @@ def test_robot_nao_is_the_default_nao():
 
     with tempfile.TemporaryDirectory() as d:
         copy = Path(d) / "my_nao.toml"
-        shutil.copy(SPECS_DIR / "nao.toml", copy)
+        shutil.copy(spec_path("nao"), copy)
         p = s.make_problem(resolve_config(s, None, [*s.smoke, f"problem.robot={copy}"]).problem)
-        assert not p.is_nao and p.robot.name == "nao"
-        with pytest.raises(InputError, match="for the NAO only"):
-            s.make_problem(resolve_config(s, None, [f"problem.robot={copy}",
+        assert not p.robot.capabilities and p.robot.name == "nao"
+        # perturbed worlds for any robot, pushes scaled by its mass (the copy's: the NAO's)
+        w = s.make_problem(resolve_config(s, None, [*s.smoke, f"problem.robot={copy}",
                                                     "problem.worlds=3"]).problem)
+        assert len(w.worlds) == 3
 
 
 def test_physics_json_pins_the_robot_and_a_changed_spec_is_noted(tmp_path):
     import shutil
 
     from evomotion.run.faults import fault_at
-    from evomotion.sim.robot import SPECS_DIR
+    from evomotion.sim.robots import spec_path
 
     spec = tmp_path / "op3.toml"
-    shutil.copy(SPECS_DIR / "op3.toml", spec)
+    shutil.copy(spec_path("op3"), spec)
     s = get_study("humanoid-step")
     over = [*s.smoke, f"problem.robot={spec}", "run.generations=1", "run.checkpoint_every=1",
             "run.wall_seconds=0"]
@@ -111,14 +112,14 @@ def test_cli_records_a_spec_path_absolute(tmp_path):
     """``--robot rel/spec.toml`` is recorded absolute: the run resumes from another folder."""
     import shutil
 
-    from evomotion.sim.robot import SPECS_DIR
+    from evomotion.sim.robots import spec_path
 
     (tmp_path / "specs").mkdir()
-    shutil.copy(SPECS_DIR / "op3.toml", tmp_path / "specs" / "op3.toml")
+    shutil.copy(spec_path("op3"), tmp_path / "specs" / "op3.toml")
     text = (tmp_path / "specs" / "op3.toml").read_text()
     (tmp_path / "specs" / "op3.toml").write_text(
-        text.replace('mjcf = "evomotion:sim/models/op3/op3.xml"',
-                     'mjcf = "evomotion:sim/models/op3/op3.xml"  # a copy'))
+        text.replace('mjcf = "evomotion:sim/robots/op3/op3.xml"',
+                     'mjcf = "evomotion:sim/robots/op3/op3.xml"  # a copy'))
     args = [sys.executable, "-m", "evomotion.cli", "run", "humanoid-step", "--robot",
             "specs/op3.toml", "--out", "r", "-q", "--set", "run.generations=0",
             *[a for kv in get_study("humanoid-step").smoke for a in ("--set", kv)],

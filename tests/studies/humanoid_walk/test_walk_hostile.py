@@ -10,7 +10,8 @@ import pytest
 from hostile_cli import one_error, study_cli  # tests/studies/conftest.py
 
 from evomotion.errors import InputError
-from evomotion.sim.nao.motion import format_motion, shipped_motion
+from evomotion.sim.motion import format_motion
+from evomotion.sim.robots.nao.webots_motions import shipped_motion
 from evomotion.studies.humanoid_walk.problem import HumanoidWalkConfig
 
 cli = study_cli("humanoid-walk")

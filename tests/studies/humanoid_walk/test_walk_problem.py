@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from evomotion.errors import InputError
-from evomotion.sim.nao.replay import simulate_motion
-from evomotion.studies.humanoid_walk import gait
+from evomotion.sim.robots.nao.replay import simulate_motion
+from evomotion.studies.humanoid_walk import foot_gait
 from evomotion.studies.humanoid_walk.problem import (
     HumanoidWalkConfig,
     HumanoidWalkProblem,
@@ -21,7 +21,7 @@ def problem():
 
 
 def test_evaluation_is_the_replay_of_the_motion(problem):
-    g = gait.DEFAULT
+    g = foot_gait.DEFAULT
     ev = problem.evaluate(g[None])
     motion = problem.motion(g)
     hold = problem.horizon_s - motion.duration_s
@@ -34,16 +34,16 @@ def test_evaluation_is_the_replay_of_the_motion(problem):
 
 
 def test_fitness_orders_fallen_too_fast_and_good_walks(problem):
-    fast = gait.DEFAULT.copy()
-    fast[gait.INDEX["period_s"]] = gait.LOWER[gait.INDEX["period_s"]]
-    fast[gait.INDEX["step_length_m"]] = gait.UPPER[gait.INDEX["step_length_m"]]
-    fast[gait.INDEX["step_height_m"]] = gait.UPPER[gait.INDEX["step_height_m"]]
-    wild = gait.DEFAULT.copy()
-    wild[gait.INDEX["lean_rad"]] = gait.UPPER[gait.INDEX["lean_rad"]]
-    wild[gait.INDEX["sway_m"]] = gait.UPPER[gait.INDEX["sway_m"]]
-    wild[gait.INDEX["sway_phase_rad"]] = gait.UPPER[gait.INDEX["sway_phase_rad"]]
-    wild[gait.INDEX["x_offset_m"]] = gait.UPPER[gait.INDEX["x_offset_m"]]
-    ev = problem.evaluate(np.stack([gait.DEFAULT, fast, wild]))
+    fast = foot_gait.DEFAULT.copy()
+    fast[foot_gait.INDEX["period_s"]] = foot_gait.LOWER[foot_gait.INDEX["period_s"]]
+    fast[foot_gait.INDEX["step_length_m"]] = foot_gait.UPPER[foot_gait.INDEX["step_length_m"]]
+    fast[foot_gait.INDEX["step_height_m"]] = foot_gait.UPPER[foot_gait.INDEX["step_height_m"]]
+    wild = foot_gait.DEFAULT.copy()
+    wild[foot_gait.INDEX["lean_rad"]] = foot_gait.UPPER[foot_gait.INDEX["lean_rad"]]
+    wild[foot_gait.INDEX["sway_m"]] = foot_gait.UPPER[foot_gait.INDEX["sway_m"]]
+    wild[foot_gait.INDEX["sway_phase_rad"]] = foot_gait.UPPER[foot_gait.INDEX["sway_phase_rad"]]
+    wild[foot_gait.INDEX["x_offset_m"]] = foot_gait.UPPER[foot_gait.INDEX["x_offset_m"]]
+    ev = problem.evaluate(np.stack([foot_gait.DEFAULT, fast, wild]))
     f, m = ev.fitness, ev.metrics
     h = problem.horizon_s
     assert m["fell"][0] == 0 and m["speed_ratio"][0] <= 1 and f[0] > h + 0.01
@@ -64,15 +64,15 @@ def test_soft_floor_is_increasing_and_bounded():
 
 def test_initial_population_starts_at_the_default(problem):
     x = problem.initial_population(5, np.random.default_rng(0))
-    assert x.shape == (5, gait.LOWER.size)
-    np.testing.assert_array_equal(x[0], gait.DEFAULT)
+    assert x.shape == (5, foot_gait.LOWER.size)
+    np.testing.assert_array_equal(x[0], foot_gait.DEFAULT)
     assert problem.initial_population(0, np.random.default_rng(0)).shape == (1, 14)
 
 
 def test_worlds_evaluate_every_world_and_aggregate():
     p = HumanoidWalkProblem(HumanoidWalkConfig(walk_s=0.5, hold_s=0.2, threads=1, worlds=3,
                                                world_seed=1))
-    ev = p.evaluate(np.stack([gait.DEFAULT, gait.DEFAULT]))
+    ev = p.evaluate(np.stack([foot_gait.DEFAULT, foot_gait.DEFAULT]))
     assert ev.fitness.shape == (2,) and ev.fitness[0] == ev.fitness[1]
     assert 0.0 <= ev.metrics["fall_rate"][0] <= 1.0
 

@@ -10,8 +10,8 @@ from typer.testing import CliRunner
 
 from evomotion.cli import app
 from evomotion.errors import InputError
-from evomotion.sim.nao.motion import read_motion
-from evomotion.studies.humanoid_walk import compare, gait
+from evomotion.sim.motion import read_motion
+from evomotion.studies.humanoid_walk import compare, foot_gait
 from evomotion.studies.humanoid_walk.walk_motion import whole_walk
 
 runner = CliRunner()
@@ -35,7 +35,7 @@ def walk_run(tmp_path_factory):
 
 def test_run_writes_the_walk_and_its_parts(walk_run):
     best = json.loads((walk_run / "best.json").read_text())
-    assert best["study"] == "humanoid-walk" and set(gait.NAMES) <= set(best["gait"])
+    assert best["study"] == "humanoid-walk" and set(foot_gait.NAMES) <= set(best["gait"])
     m = read_motion(walk_run / "best.motion")
     parts = [read_motion(walk_run / n) for n in ("walk_start.motion", "walk_cycle.motion",
                                                  "walk_stop.motion")]

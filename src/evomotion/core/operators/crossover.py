@@ -10,7 +10,7 @@ Sources: one/two-point and uniform crossover (Goldberg 1989; Syswerda 1989); ari
 crossover (Michalewicz 1996, *Genetic Algorithms + Data Structures*); geometric crossover
 (Michalewicz et al. 1996); linear crossover (Wright 1991, "Genetic algorithms for real
 parameter optimization"); BLX-alpha (Eshelman & Schaffer 1993); SBX (Deb & Agrawal 1995);
-beta-blend from seed 001 (section 3.2: ``(a1+a2+beta(a1-a2))/2``, ``(a1+a2+beta(a2-a1))/2``).
+beta-blend from paper 001 (section 3.2: ``(a1+a2+beta(a1-a2))/2``, ``(a1+a2+beta(a2-a1))/2``).
 """
 
 from __future__ import annotations
@@ -151,7 +151,7 @@ def sbx(a, b, rng: np.random.Generator, eta: float = 15.0) -> np.ndarray:
 
 @_reg("beta_blend")
 def beta_blend(a, b, rng: np.random.Generator, beta_max: float = 1.0) -> np.ndarray:
-    """Seed 001's crossover: ``(a+b+beta(a-b))/2`` and ``(a+b+beta(b-a))/2``, beta ~ U(0, beta_max).
+    """Paper 001's crossover: ``(a+b+beta(a-b))/2``, ``(a+b+beta(b-a))/2``, beta ~ U(0, beta_max).
 
     With ``beta_max <= 1`` both children lie on the segment between the parents.
     """

@@ -1,13 +1,13 @@
 """Mutations, vectorized over the population.
 
 Signature: ``fn(x[n, d], lower[d], upper[d], rng, rate, **params) -> x'``. ``rate`` is the
-probability that an *individual* is mutated (the seeds' "mutation probability"); within a
+probability that an *individual* is mutated (the papers' "mutation probability"); within a
 mutated individual, ``gene_rate`` (default ``1/d``) or ``k`` chooses the genes. Results are
 **clipped** into ``[lower, upper]`` (clipping keeps a gene on the bound it crossed, which
 suits servo limits; see :func:`clip_to_bounds`).
 
 Sources: uniform reset and Gaussian mutation (Michalewicz 1996; Eiben & Smith 2015, ch. 4);
-``perturb_k`` is seed 000's mutation (Java appendix, ``mutate``: k random knots are shifted
+``perturb_k`` is paper 000's mutation (Java appendix, ``mutate``: k random knots are shifted
 by a uniform amount in ``[-delta, delta]``).
 """
 
@@ -110,7 +110,7 @@ def gaussian(x, lower, upper, rng: np.random.Generator, rate: float,
 @_reg("perturb_k")
 def perturb_k(x, lower, upper, rng: np.random.Generator, rate: float,
               k: int = 1, delta: float = 0.1) -> np.ndarray:
-    """Seed 000: shift ``k`` distinct random genes by ``U(-delta, delta)`` (``delta`` as a
+    """Paper 000: shift ``k`` distinct random genes by ``U(-delta, delta)`` (``delta`` as a
     fraction of each gene's range)."""
     x = np.array(x, dtype=float)
     n, d = x.shape

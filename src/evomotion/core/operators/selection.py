@@ -32,7 +32,7 @@ def roulette(cost, n: int, rng: np.random.Generator) -> np.ndarray:
     """Fitness-proportional selection that is safe for any sign and for ties.
 
     Weights are ``worst - cost + eps * spread`` (so the worst individual keeps a small
-    chance, as with the seed's shifted fitness) and failed (``inf``) ones get weight 0.
+    chance, as with the paper's shifted fitness) and failed (``inf``) ones get weight 0.
     Equal costs give a uniform draw. Sampling is stochastic universal sampling free
     (independent draws via ``searchsorted``).
     """

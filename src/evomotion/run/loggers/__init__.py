@@ -8,6 +8,10 @@ talks to the run's loggers through :class:`Loggers`:
 - ``close()`` when the loop ends, however it ends (Ctrl-C, a crash);
 - ``finish(ctx)`` at the end of the run, after the study's artifacts (``best.motion``) exist.
 
+A logger class is built as ``Logger(out_dir, replay)``: ``replay`` is the study's hook that
+plays its best motion on its own robot (:class:`~evomotion.run.contracts.Replay`, ``None``
+when the study has none); a logger never simulates anything itself.
+
 A logger writes only inside the run folder and never changes the results, so ``run.loggers``
 may change on resume. Runs without a folder have no loggers.
 """
@@ -15,12 +19,14 @@ may change on resume. Runs without a folder have no loggers.
 from __future__ import annotations
 
 import importlib
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 from evomotion.core.registry import lookup
 from evomotion.errors import InputError
+from evomotion.run.context import RunContext
+from evomotion.run.contracts import ReplayHook
 
 #: name -> (module with a ``Logger`` class, the module it imports, its pip package, the extra)
 LOGGERS: dict[str, tuple[str, str, str, str]] = {
@@ -40,10 +46,25 @@ def check_names(names: Iterable[str]) -> None:
         seen.add(name)
 
 
-def _load(name: str) -> type:
+class Logger(Protocol):
+    """One logger of ``run.loggers`` (see the module doc)."""
+
+    def row(self, row: dict[str, Any]) -> None: ...
+
+    def close(self) -> None: ...
+
+    def finish(self, ctx: RunContext) -> None: ...
+
+
+#: a logger class: ``Logger(out_dir, replay)``
+LoggerClass = Callable[[Path, ReplayHook | None], Logger]
+
+
+def _load(name: str) -> LoggerClass:
     module, import_name, package, extra = lookup(LOGGERS, "logger", name)
     try:
-        return importlib.import_module(module).Logger
+        cls: LoggerClass = importlib.import_module(module).Logger
+        return cls
     except ImportError as e:
         if (e.name or "").split(".")[0] == import_name:
             raise InputError(f"run.loggers: {name!r} needs the {package} package: "
@@ -56,7 +77,7 @@ class Loggers:
     """The run's loggers as one; a logger's failure at the end is a warning in the run log
     (it must not lose the run)."""
 
-    def __init__(self, items: list[tuple[str, Any]]) -> None:
+    def __init__(self, items: list[tuple[str, Logger]]) -> None:
         self.items = items
         self.notes: list[str] = []
 
@@ -72,7 +93,7 @@ class Loggers:
                 self.notes.append(f"warning: logger {name!r} failed to close: "
                                   f"{type(e).__name__}: {e}")
 
-    def finish(self, ctx: Any) -> None:
+    def finish(self, ctx: RunContext) -> None:
         """``finish(ctx)`` of each logger, unless the run was interrupted (it ends at once;
         the resumed run finishes them)."""
         for line in self.notes:
@@ -87,9 +108,11 @@ class Loggers:
                 ctx.log(f"warning: logger {name!r} failed: {type(e).__name__}: {e}")
 
 
-def make_loggers(names: Iterable[str], out_dir: Path | None) -> Loggers:
-    """The loggers ``names`` for the run folder ``out_dir`` (their packages imported now)."""
+def make_loggers(names: Iterable[str], out_dir: Path,
+                 replay: ReplayHook | None = None) -> Loggers:
+    """The loggers ``names`` for the run folder ``out_dir`` (their packages imported now);
+    ``replay``: the study's replay of its best motion (see the module doc)."""
     names = tuple(names)
     check_names(names)
     classes = [(name, _load(name)) for name in names]  # every import error before any file
-    return Loggers([(name, cls(Path(out_dir))) for name, cls in classes])
+    return Loggers([(name, cls(Path(out_dir), replay)) for name, cls in classes])

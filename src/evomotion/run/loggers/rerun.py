@@ -2,16 +2,16 @@
 
 Open it with the rerun viewer (``rerun best.rrd``); nothing is spawned or sent over a network
 while the run writes it. It is written once, at the end of the run, from ``stats.csv`` (so a
-resumed run's recording is whole) and ``best.motion``:
+resumed run's recording is whole) and the study's replay of its best motion:
 
 - ``fitness/best``, ``fitness/mean``, ``fitness/best_so_far``: scalar series on the
   ``generation`` and ``evaluations`` timelines;
-- for studies that write ``best.motion`` (the NAO studies), the best motion replayed as
-  ``evomotion replay`` does (:func:`~evomotion.sim.nao.replay.simulate_motion`, with the study's
-  ``hold_s``), at :data:`FRAME_HZ` on the ``sim_time`` timeline: each body's pose
-  (``robot/bodies/<body>``, a :class:`rerun.Transform3D`) with its shapes logged once under it
-  (``boxes``, ``capsules``, ``ellipsoids``, ``cylinders``: the geoms MuJoCo shows by default),
-  the torso's position (``robot/torso``) and its whole path (``robot/torso_path``).
+- for studies whose ``replay`` hook plays their best motion (:class:`~evomotion.run.contracts.
+  Replay`: the humanoid studies replay ``best.motion`` on the problem's own robot), that motion
+  at :data:`FRAME_HZ` on the ``sim_time`` timeline: each body's pose (``robot/bodies/<body>``,
+  a :class:`rerun.Transform3D`) with its shapes logged once under it (``boxes``, ``capsules``,
+  ``ellipsoids``, ``cylinders``: the geoms MuJoCo shows by default), the root body's position
+  (``robot/torso``) and its whole path (``robot/torso_path``).
 
 An interrupted run writes no recording; its resumed run does.
 """
@@ -25,6 +25,9 @@ from typing import Any
 import numpy as np
 import rerun as rr
 
+from evomotion.run.context import RunContext
+from evomotion.run.contracts import Replay, ReplayHook
+
 NAME = "best.rrd"
 FRAME_HZ = 50.0
 SERIES = ("best", "mean", "best_so_far")
@@ -34,8 +37,9 @@ KINDS = {"boxes": "Boxes3D", "capsules": "Capsules3D", "ellipsoids": "Ellipsoids
 
 
 class Logger:
-    def __init__(self, out_dir: Path) -> None:
+    def __init__(self, out_dir: Path, replay: ReplayHook | None = None) -> None:
         self.out_dir = Path(out_dir)
+        self.replay = replay
 
     def row(self, row: dict[str, Any]) -> None:
         """Nothing: the series are read back from stats.csv at the end."""
@@ -43,7 +47,7 @@ class Logger:
     def close(self) -> None:
         pass
 
-    def finish(self, ctx: Any) -> None:
+    def finish(self, ctx: RunContext) -> None:
         from evomotion.run.stats import read_stats
 
         tmp = self.out_dir / f".{NAME}.tmp"  # then renamed: best.rrd is whole or absent
@@ -53,10 +57,9 @@ class Logger:
             rec.send_recording_name(f"{ctx.study} {self.out_dir.name}")
             stats = self.out_dir / "stats.csv"
             log_series(rec, read_stats(stats) if stats.exists() else {})
-            motion = self.out_dir / "best.motion"
-            if motion.exists():
-                hold = getattr(getattr(ctx.problem, "cfg", None), "hold_s", 1.0)
-                log_motion(rec, motion, float(hold))
+            replay = self.replay(ctx) if self.replay is not None else None
+            if replay is not None:
+                log_motion(rec, replay)
         except BaseException:
             rec.disconnect()
             tmp.unlink(missing_ok=True)
@@ -78,18 +81,13 @@ def log_series(rec: Any, stats: dict[str, np.ndarray]) -> None:
                              columns=rr.Scalars.columns(scalars=stats[name]))
 
 
-def log_motion(rec: Any, path: Path, hold_s: float) -> None:
-    """The replay of the ``.motion`` at ``path`` on the NAO model (see the module doc)."""
+def log_motion(rec: Any, replay: Replay) -> None:
+    """The motion ``replay`` (see the module doc)."""
     import mujoco
 
-    from evomotion.sim import nao
-    from evomotion.sim.nao.motion import read_motion
-    from evomotion.sim.nao.replay import simulate_motion
-
-    result = simulate_motion(read_motion(path), hold_s=hold_s)
-    model, dt = result["model"], result["dt"]
+    model, dt = replay.model, replay.dt
     stride = max(1, int(round(1.0 / (FRAME_HZ * dt))))
-    qpos = np.asarray(result["qpos"])[::stride]
+    qpos = np.asarray(replay.qpos)[::stride]
     data = mujoco.MjData(model)
     xpos = np.empty((len(qpos), model.nbody, 3))
     xquat = np.empty((len(qpos), model.nbody, 4))
@@ -105,7 +103,7 @@ def log_motion(rec: Any, path: Path, hold_s: float) -> None:
             translation=xpos[:, b], quaternion=xquat[:, b][:, [1, 2, 3, 0]]))  # wxyz -> xyzw
         for part, shapes in body_shapes(model, b).items():
             rec.log(f"{entity}/{part}", shapes, static=True)
-    torso = int(model.jnt_bodyid[model.joint(nao.ROOT_JOINT).id])
+    torso = replay.root_body
     rec.log("robot/torso_path", rr.LineStrips3D([xpos[:, torso]]), static=True)
     rec.send_columns("robot/torso", indexes=times, columns=rr.Points3D.columns(
         positions=xpos[:, torso]).partition(np.ones(len(qpos), dtype=np.int64)))
@@ -117,7 +115,7 @@ def body_shapes(model: Any, body: int) -> dict[str, Any]:
     import mujoco
 
     G = mujoco.mjtGeom
-    found: dict[str, dict[str, list]] = {}
+    found: dict[str, dict[str, list[Any]]] = {}
     for g in np.flatnonzero(model.geom_bodyid == body):
         kind, size = int(model.geom_type[g]), model.geom_size[g]
         if model.geom_group[g] > 2 or kind not in (G.mjGEOM_BOX, G.mjGEOM_CAPSULE,
@@ -144,14 +142,14 @@ def body_shapes(model: Any, body: int) -> dict[str, Any]:
         for k, v in {**shape, "quaternions": wxyz[[1, 2, 3, 0]], "colors": rgba}.items():
             rows.setdefault(k, []).append(v)
     out = {}
-    for part, rows in found.items():
-        kind = getattr(rr, KINDS[part], None)
-        rows = {k: np.asarray(v) for k, v in rows.items()}
-        if kind is None:  # an older SDK: the shapes' centres
-            out[part] = rr.Points3D(rows.get("centers", rows.get("translations")),
-                                    colors=rows["colors"])
+    for part, lists in found.items():
+        archetype: Any = getattr(rr, KINDS[part], None)
+        arrays: dict[str, Any] = {k: np.asarray(v) for k, v in lists.items()}
+        if archetype is None:  # an older SDK: the shapes' centres
+            centres = arrays["centers"] if "centers" in arrays else arrays["translations"]
+            out[part] = rr.Points3D(centres, colors=arrays["colors"])
             continue
-        if "fill_mode" in inspect.signature(kind.__init__).parameters:  # not in every SDK
-            rows["fill_mode"] = "solid"
-        out[part] = kind(**rows)
+        if "fill_mode" in inspect.signature(archetype.__init__).parameters:  # not every SDK
+            arrays["fill_mode"] = "solid"
+        out[part] = archetype(**arrays)
     return out

@@ -22,6 +22,9 @@ from typing import Any
 
 from tensorboardX import SummaryWriter
 
+from evomotion.run.context import RunContext
+from evomotion.run.contracts import ReplayHook
+
 FOLDER = "tensorboard"
 FLUSH_S = 5
 FITNESS = ("best", "mean", "median", "best_so_far")
@@ -50,7 +53,7 @@ def scalars(row: dict[str, Any]) -> dict[str, float]:
 
 
 class Logger:
-    def __init__(self, out_dir: Path) -> None:
+    def __init__(self, out_dir: Path, replay: ReplayHook | None = None) -> None:
         self.dir = Path(out_dir) / FOLDER
         self.writer: SummaryWriter | None = None
 
@@ -68,5 +71,5 @@ class Logger:
             self.writer.close()
             self.writer = None
 
-    def finish(self, ctx: Any) -> None:
+    def finish(self, ctx: RunContext) -> None:
         """Nothing left to write: the rows went out live."""

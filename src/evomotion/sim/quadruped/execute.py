@@ -1,4 +1,4 @@
-"""Execute a seed-003 walking plan on the MuJoCo quadruped and measure what happens.
+"""Execute a paper-003 walking plan on the MuJoCo quadruped and measure what happens.
 
 The joint targets of :mod:`.trajectory` are precomputed and simulated open loop with
 ``mujoco.rollout`` (chunks of ``CHUNK_STEPS`` steps). From the recorded states and contact
@@ -30,6 +30,7 @@ from evomotion.sim.quadruped.trajectory import (
     plan_seconds,
     wrap,
 )
+from evomotion.sim.state import STATE_SPEC
 
 BODY_UP_FRACTION = 0.75  # body_up needs the torso centre above this part of body_height_m
 CONTACT_FRACTION = 0.01  # a foot carrying less than 1 % of the weight is not in contact
@@ -43,7 +44,6 @@ RADIANS_PER_SECOND = 0.5
 LIFT_M = 0.012
 SETTLE_SECONDS = 0.5
 FINAL_SECONDS = 0.5
-STATE_SPEC = mujoco.mjtState.mjSTATE_FULLPHYSICS
 _Q0 = 1  # the state vector starts with time, then qpos
 
 
@@ -208,7 +208,7 @@ def execute_plan(states: list[dict], spec: QuadrupedSpec = QuadrupedSpec(), *,
                  radians_per_second: float = RADIANS_PER_SECOND,
                  lift_m: float = LIFT_M, settle_seconds: float = SETTLE_SECONDS,
                  final_seconds: float = FINAL_SECONDS) -> ExecutionResult:
-    """Simulate ``states`` (plan.json ``states``: body ``[x, y, phi]`` and world feet in seed
+    """Simulate ``states`` (plan.json ``states``: body ``[x, y, phi]`` and world feet in paper
     units) quasi-statically: a settle of ``settle_seconds`` [s], each foot swing in
     ``leg_seconds`` [s] with a ``lift_m`` [m] lift, body moves at ``metres_per_second`` and
     ``radians_per_second``, a final hold of ``final_seconds`` [s]."""

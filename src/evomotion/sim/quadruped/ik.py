@@ -19,7 +19,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from evomotion.sim.quadruped.model import NOMINAL_ANGLES, QuadrupedSpec
+from evomotion.sim.quadruped.geometry import NOMINAL_ANGLES
+from evomotion.sim.quadruped.model import QuadrupedSpec
 
 _EPS = 1e-9
 
@@ -89,7 +90,7 @@ def legs_fk(spec: QuadrupedSpec, q: np.ndarray) -> np.ndarray:
 
 def sector_point_m(spec: QuadrupedSpec, leg: int, length: float | np.ndarray,
                    offset: float | np.ndarray, lift_m: float | np.ndarray = 0.0) -> np.ndarray:
-    """Torso-frame foot centre [m] at sector coordinates: ``length`` [seed units] from the
+    """Torso-frame foot centre [m] at sector coordinates: ``length`` [paper units] from the
     hip, ``offset`` [rad] from the nominal angle, ``lift_m`` above the floor."""
     length, offset, lift = np.broadcast_arrays(np.asarray(length, dtype=float) * spec.unit_m,
                                                np.asarray(offset, dtype=float),

@@ -1,11 +1,11 @@
-"""The MuJoCo quadruped for seed-003 walking plans (Ondroušek & Březina), built with MjSpec.
+"""The MuJoCo quadruped for paper-003 walking plans (Ondroušek & Březina), built with MjSpec.
 
-Planning model (seed 003, section 3.1, Tab. 1), in seed units: a rectangular body ``a x b``
+Planning model (paper 003, section 3.1, Tab. 1), in paper units: a rectangular body ``a x b``
 (``a`` along body X, ``b`` along body Y, the walking axis), hips at the corners (leg 0
 front-left (-a/2, +b/2), 1 rear-left (-a/2, -b/2), 2 rear-right (+a/2, -b/2), 3 front-right
 (+a/2, +b/2)); each foot within an annular sector about its hip (distance in
 [l_min, l_max], angle within ``sector_half_width`` of pi for legs 0, 1 and of 0 for legs 2, 3).
-One seed unit is ``unit_m`` metres in the simulation; everything else here is SI (m, kg, s,
+One paper unit is ``unit_m`` metres in the simulation; everything else here is SI (m, kg, s,
 rad, N m).
 
 Each leg: hip yaw (about the body's vertical), hip pitch, knee pitch (both about the leg's
@@ -23,11 +23,20 @@ from dataclasses import dataclass, fields
 import mujoco
 import numpy as np
 
+from evomotion.sim.quadruped.geometry import (
+    BODY_A,
+    BODY_B,
+    L_MAX,
+    L_MIN,
+    NOMINAL_ANGLES,
+    SECTOR_HALF_WIDTH,
+    hip_positions,
+)
+
 TORSO = "torso"
 FLOOR = "floor"
 LEG_NAMES = ("front_left", "rear_left", "rear_right", "front_right")
 JOINT_KINDS = ("yaw", "pitch", "knee")
-NOMINAL_ANGLES = (math.pi, math.pi, 0.0, 0.0)  # [rad] sector centres against body X
 FOOT_SENSOR_DIM = 7  # contact sensor: found, force[3] (floor on foot, world), pos[3]
 REACH_SLACK = 0.1  # keep the hip-foot distance within 10 % of the links' reach limits
 YAW_LIMIT_SLACK = 0.35  # [rad] hip yaw range beyond the sector's half width
@@ -36,7 +45,7 @@ MAX_BODY_M = 5.0  # [m] the longest torso side (the legs reach 0.3 m)
 
 @dataclass(frozen=True)
 class QuadrupedSpec:
-    """Geometry (seed units for the planning model, SI for the rest) and actuation.
+    """Geometry (paper units for the planning model, SI for the rest) and actuation.
 
     The torso (2 kg) outweighs the four legs together (0.2 kg) 10 to 1, and most of a leg's
     mass sits in its hip housing (fixed to the torso), so a swinging leg (0.02 kg moving)
@@ -46,11 +55,11 @@ class QuadrupedSpec:
     ``max_lift_m``: the highest swing lift checked for reach in :meth:`check`.
     """
 
-    a: float = 2.5
-    b: float = 3.0
-    l_min: float = 1.0
-    l_max: float = 2.0
-    sector_half_width: float = math.pi / 4
+    a: float = BODY_A
+    b: float = BODY_B
+    l_min: float = L_MIN
+    l_max: float = L_MAX
+    sector_half_width: float = SECTOR_HALF_WIDTH
     unit_m: float = 0.1
     body_height_m: float = 0.14
     torso_thickness_m: float = 0.04
@@ -75,8 +84,8 @@ class QuadrupedSpec:
 
     def hips_m(self) -> np.ndarray:
         """Hip joint positions in the torso frame, ``[4, 3]`` metres (z = 0)."""
-        a2, b2 = 0.5 * self.a * self.unit_m, 0.5 * self.b * self.unit_m
-        return np.array([[-a2, b2, 0.0], [-a2, -b2, 0.0], [a2, -b2, 0.0], [a2, b2, 0.0]])
+        u = self.unit_m  # (a / 2) * u: the same floats as 0.5 * a * u
+        return np.array([[x * u, y * u, 0.0] for x, y in hip_positions(self.a, self.b)])
 
     @property
     def foot_drop_m(self) -> float:
@@ -171,7 +180,7 @@ def _add_leg(spec: mujoco.MjSpec, torso: mujoco.MjsBody, s: QuadrupedSpec, i: in
 def build_spec(s: QuadrupedSpec = QuadrupedSpec()) -> mujoco.MjSpec:
     """The model as an editable :class:`mujoco.MjSpec`."""
     spec = mujoco.MjSpec()
-    spec.modelname = "seed003_quadruped"
+    spec.modelname = "paper003_quadruped"
     spec.compiler.degree = False
     spec.option.timestep = s.timestep
     spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC

@@ -1,6 +1,6 @@
-"""Joint-target trajectories for a seed-003 plan (quasi-static; SI units, one row per step).
+"""Joint-target trajectories for a paper-003 plan (quasi-static; SI units, one row per step).
 
-A plan is a list of states ``{"body": [x, y, phi], "feet": [[x, y] x 4], ...}`` in seed
+A plan is a list of states ``{"body": [x, y, phi], "feet": [[x, y] x 4], ...}`` in paper
 units, feet in world coordinates (the ``states`` of ``plan.json``). Each transition becomes
 segments: first every foot that moved swings, one at a time in leg order, with the body at
 its old pose (normally exactly one foot, or none); then, if the body pose changed, the body
@@ -32,7 +32,7 @@ from evomotion.sim.quadruped.model import QuadrupedSpec
 MIN_BODY_SECONDS = 0.2
 RISE = 0.3  # fraction of a swing spent lifting (and lowering) the foot
 HOLD = 0.15  # fraction of a swing before the horizontal motion starts (and after it ends)
-POSE_TOL = 1e-9  # [seed units, rad]: smaller changes are no motion
+POSE_TOL = 1e-9  # [paper units, rad]: smaller changes are no motion
 
 
 @dataclass
@@ -60,7 +60,7 @@ def wrap(angle: np.ndarray | float) -> np.ndarray | float:
 
 
 def plan_arrays(states: list[dict]) -> tuple[np.ndarray, np.ndarray]:
-    """``(body[n, 3], feet[n, 4, 2])`` of plan states, in seed units (NaN kept)."""
+    """``(body[n, 3], feet[n, 4, 2])`` of plan states, in paper units (NaN kept)."""
     body = np.array([s["body"] for s in states], dtype=float).reshape(len(states), 3)
     feet = np.array([s["feet"] for s in states], dtype=float).reshape(len(states), 4, 2)
     return body, feet

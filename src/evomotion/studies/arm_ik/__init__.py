@@ -1,1 +1,1 @@
-"""Arm + fingers inverse kinematics among obstacles (seed 001)."""
+"""Arm + fingers inverse kinematics among obstacles (paper 001)."""

@@ -1,4 +1,4 @@
-"""Seed 001's evolutionary operators and one generation step (Januszkiewicz & Kowalski 2011,
+"""Paper 001's evolutionary operators and one generation step (Januszkiewicz & Kowalski 2011,
 sections 3.2-3.3; infeasible-individual retention after IDEA, Singh, Isaacs & Ray 2008).
 
 - Crossover: a pair of parents gives a pair of children. Each active angle is inherited (with a
@@ -49,7 +49,7 @@ def wrap(x: np.ndarray, layout: Layout) -> np.ndarray:
 
 def crossover(a: np.ndarray, b: np.ndarray, layout: Layout, mode: str, rng: np.random.Generator,
               blend_prob: float = 0.5, circular: bool = True) -> np.ndarray:
-    """Children ``(2n, d)`` of parent pairs ``a[n, d]``, ``b[n, d]`` (seed's beta crossover)."""
+    """Children ``(2n, d)`` of parent pairs ``a[n, d]``, ``b[n, d]`` (paper's beta crossover)."""
     act = active_genes(layout, mode)
     circ = layout.full_circle if circular else np.zeros(layout.dim, dtype=bool)
     b_near = np.where(circ, a + np.mod(b - a + 180.0, 360.0) - 180.0, b)
@@ -96,7 +96,7 @@ def survivors(hits: np.ndarray, objective: np.ndarray, n: int, rng: np.random.Ge
               infeasible_fraction: float, pairwise: bool = True) -> np.ndarray:
     """Indices of ``n`` survivors out of the pool ``2n`` = parents + children.
 
-    ``pairwise=False`` is the literal reading of the seed: ``n`` binary tournaments drawn with
+    ``pairwise=False`` is the literal reading of the paper: ``n`` binary tournaments drawn with
     replacement from the pool (copies possible, the best may be lost; no IDEA step).
     """
     rank = rank_order(hits, objective)

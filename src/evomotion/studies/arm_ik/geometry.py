@@ -1,4 +1,4 @@
-"""Vectorized 2-D segment geometry for seed 001's collision count and visibility tests.
+"""Vectorized 2-D segment geometry for paper 001's collision count and visibility tests.
 
 Segments are arrays ``[..., 2, 2]`` = (endpoint, xy). Orientation ``orient(a, b, c) =
 cross(b - a, c - a)`` is positive when ``c`` lies left of ``a -> b``. Two *closed* segments

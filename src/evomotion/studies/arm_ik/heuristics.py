@@ -1,4 +1,4 @@
-"""Wrist heuristics of seed 001 (section 3.1): board cells, reachability and wrist candidates.
+"""Wrist heuristics of paper 001 (section 3.1): board cells, reachability and wrist candidates.
 
 The board is cut into square cells of side ``cell`` (default: diagonal / 150). A cell is
 *reachable* when its centre connects to the start's cell through 4-neighbour steps whose
@@ -90,7 +90,7 @@ def _gap(d: np.ndarray, lo: float, hi: float) -> np.ndarray:
 
 
 def build_wrist_map(scn: Scenario, cell: float = 0.0) -> WristMap:
-    """Seed 001's heuristic map; ``cell <= 0`` picks diagonal / 150."""
+    """Paper 001's heuristic map; ``cell <= 0`` picks diagonal / 150."""
     cell = cell if cell > 0 else scn.diagonal / 150.0
     reach = reachable_cells(scn, cell)
     ny, nx = reach.shape

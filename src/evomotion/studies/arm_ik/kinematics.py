@@ -1,4 +1,4 @@
-"""Forward kinematics of an arm + fingers limb, vectorized over the population (seed 001).
+"""Forward kinematics of an arm + fingers limb, vectorized over the population (paper 001).
 
 Genome layout (degrees): the arm's joint angles in file order, then every finger's joint
 angles, finger by finger, then (optionally) one random key per finger that encodes the

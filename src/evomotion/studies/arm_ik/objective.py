@@ -1,14 +1,14 @@
-"""Finger -> target matching and tip distances of seed 001 (section 3.3) and its proposed fix.
+"""Finger -> target matching and tip distances of paper 001 (section 3.3) and its proposed fix.
 
 ``D[n, F, T]`` holds the distance of finger ``f``'s tip to target ``t`` (straight line, or the
 way around the obstacles from :mod:`.visibility`). An assignment ``a[n, F]`` gives each finger a
 distinct target; the objective is ``sum_f D[f, a_f]``.
 
-- ``greedy``: the seed's matching, repeatedly taking the closest remaining (finger, target) pair.
+- ``greedy``: the paper's matching, repeatedly taking the closest remaining (finger, target) pair.
 - ``optimal``: the minimum-sum assignment (Hungarian method, ``scipy.optimize.
   linear_sum_assignment``); for up to 6 fingers the same optimum is found by scoring all
   ``F!`` permutations at once, vectorized over the population.
-- ``chromosome``: the seed's suggested fix (section 5), one random key per finger in the genome;
+- ``chromosome``: the paper's suggested fix (section 5), one random key per finger in the genome;
   finger ``f`` gets target ``argsort(keys)[f]``, so crossover and mutation carry the matching.
 """
 
@@ -30,7 +30,7 @@ def straight_distances(tips: np.ndarray, targets: np.ndarray) -> np.ndarray:
 
 
 def greedy_match(D: np.ndarray) -> np.ndarray:
-    """Seed's greedy matching: ``F`` rounds of taking the globally closest free pair."""
+    """Paper's greedy matching: ``F`` rounds of taking the globally closest free pair."""
     n, F, T = D.shape
     work = np.where(np.isfinite(D), D, 1e300)  # free pairs stay finite, taken ones become inf
     assign = np.zeros((n, F), dtype=int)

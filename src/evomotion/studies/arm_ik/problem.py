@@ -1,4 +1,4 @@
-"""Arm-IK problem of seed 001: configuration, batch assessment and the Problem protocol."""
+"""Arm-IK problem of paper 001: configuration, batch assessment and the Problem protocol."""
 
 from __future__ import annotations
 
@@ -38,7 +38,7 @@ class ArmIKConfig:
     The GA and its schedule are the ``[algorithm]`` section
     (:class:`evomotion.studies.arm_ik.schedule.ScheduleConfig`)."""
 
-    scenario: str = "seed_example"  # bundled name or path to a scenario file
+    scenario: str = "paper_example"  # bundled name or path to a scenario file
     matching: str = "optimal"  # greedy | optimal | chromosome
     distance: str = "straight"  # straight | obstacle (way around the obstacles)
     board_walls: bool = True  # a joint outside the board counts as one intersection

@@ -1,4 +1,4 @@
-"""Scenario files of seed 001 (Januszkiewicz & Kowalski 2011, section 1.1).
+"""Scenario files of paper 001 (Januszkiewicz & Kowalski 2011, section 1.1).
 
 One value group per line; lines starting with ``#`` are comments and blank lines are
 skipped. In order: board width, board height, start point ``X Y``, the number of targets
@@ -221,15 +221,21 @@ def parse_scenario_text(text: str, path: str = "<text>", name: str | None = None
                     tuple(obstacles))
 
 
+#: Old names of bundled scenarios, still accepted (run folders and commands from before
+#: issue 32): ``seed_example`` is the old name of ``paper_example``.
+OLD_SCENARIO_NAMES = {"seed_example": "paper_example"}
+
+
 def load_scenario(name_or_path: str | Path) -> Scenario:
-    """A bundled scenario by name (``seed_example``) or a scenario file by path."""
+    """A bundled scenario by name (``paper_example``; old names in
+    :data:`OLD_SCENARIO_NAMES`) or a scenario file by path."""
     p = Path(name_or_path)
     try:
         exists = p.exists()
     except (OSError, ValueError):  # e.g. a NUL in the name
         exists = False
     if not exists:
-        bundled = SCENARIO_DIR / f"{name_or_path}.scen"
+        bundled = SCENARIO_DIR / f"{OLD_SCENARIO_NAMES.get(str(name_or_path), name_or_path)}.scen"
         if bundled.is_file():
             p = bundled
         else:

@@ -1,4 +1,4 @@
-"""Seed 001's schedule (section 2) as a driver: N arm generations, then M finger generations,
+"""Paper 001's schedule (section 2) as a driver: N arm generations, then M finger generations,
 then whole-limb generations until a solution is found or the budget ends, with restarts.
 
 In the arm phase the objective is the wrist's distance to the nearest wrist-candidate cell
@@ -36,11 +36,11 @@ EXTRA_COLUMNS = (
 
 @dataclass(frozen=True)
 class ScheduleConfig:
-    """``[algorithm]`` of arm-ik (``name = "schedule"``): the seed's GA and its phases."""
+    """``[algorithm]`` of arm-ik (``name = "schedule"``): the paper's GA and its phases."""
 
     name: str = "schedule"
     pop_size: int = 60
-    arm_generations: int = 15  # seed schedule: N arm generations,
+    arm_generations: int = 15  # the paper's schedule: N arm generations,
     finger_generations: int = 15  # then M finger generations,
     whole_generations: int = 3000  # then whole-limb generations (until solved)
     restart_after: int = 60  # whole-limb generations without a 1% gain -> restart (0 = never)
@@ -51,7 +51,7 @@ class ScheduleConfig:
     mutation_min_deg: float = 1e-3  # perturbation magnitude is log-uniform in [min, max]
     mutation_max_deg: float = 60.0
     infeasible_fraction: float = 0.1  # IDEA: share of survivors kept infeasible
-    survival: str = "pairwise"  # pairwise | tournament (seed's literal: with replacement)
+    survival: str = "pairwise"  # pairwise | tournament (paper's literal: with replacement)
     stop_when_solved: bool = True
 
     def validate(self) -> None:
@@ -291,3 +291,8 @@ def distinct_rows(x: np.ndarray) -> int:
 
 def make_driver(problem: ArmIKProblem, config) -> ScheduleDriver:
     return ScheduleDriver(problem, config.algorithm)
+
+
+#: the study's own method (``[algorithm]`` name ``schedule``), for its descriptor and its
+#: in-memory runs
+OWN_ALGORITHMS = {"schedule": (ScheduleConfig, make_driver)}

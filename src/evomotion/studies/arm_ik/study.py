@@ -1,7 +1,7 @@
-"""The arm-ik study (seed 001): descriptor and the ``evomotion arm-ik`` commands.
+"""The arm-ik study (paper 001): descriptor and the ``evomotion arm-ik`` commands.
 
-``evomotion run arm-ik`` runs the seed's schedule (``[algorithm]`` name ``schedule``) through
-the run loop: stats.csv (core columns, then the seed's GUI statistics), best.json, board.png,
+``evomotion run arm-ik`` runs the paper's schedule (``[algorithm]`` name ``schedule``) through
+the run loop: stats.csv (core columns, then the paper's GUI statistics), best.json, board.png,
 best.gif; exit code 3 when no solution was found.
 """
 
@@ -11,14 +11,15 @@ from typing import Annotated
 
 import typer
 
-from evomotion.studies.arm_ik.outcome import best_record, finalize
+from evomotion.studies.arm_ik.artifacts import best_record, finalize
 from evomotion.studies.arm_ik.problem import ArmIKConfig, make_problem
 from evomotion.studies.arm_ik.scenario import bundled_names, load_scenario
-from evomotion.studies.arm_ik.schedule import ScheduleConfig, make_driver
+from evomotion.studies.arm_ik.schedule import OWN_ALGORITHMS
 from evomotion.studies.base import Study
+from evomotion.studies.view import StudyView, lazy
 
 cli = typer.Typer(add_completion=False, no_args_is_help=True,
-                  help="Arm + fingers inverse kinematics among obstacles (seed 001).")
+                  help="Arm + fingers inverse kinematics among obstacles (paper 001).")
 
 
 @cli.command("check")
@@ -42,8 +43,8 @@ def study(
 ) -> None:
     """Success rate and median time to the first solution per scenario (markdown table)."""
     from evomotion.core.checks import check_choice, check_number
+    from evomotion.studies.arm_ik.experiment import HEADER, success_table
     from evomotion.studies.arm_ik.objective import MATCHINGS
-    from evomotion.studies.arm_ik.success import HEADER, success_table
 
     names = scenario or [n for n in bundled_names() if n != "unreachable"]
     check_number("--seeds", seeds, lo=1, hi=MAX_SEEDS, integer=True)
@@ -60,24 +61,25 @@ def study(
 
 STUDY = Study(
     name="arm-ik",
-    description="Arm + fingers inverse kinematics among obstacles (seed 001)",
+    description="Arm + fingers inverse kinematics among obstacles (paper 001)",
     problem_config=ArmIKConfig,
     make_problem=make_problem,
-    # generations are counted by the schedule (algorithm.whole_generations); the seed gives
+    # generations are counted by the schedule (algorithm.whole_generations); the paper gives
     # a run 30 s of wall time
     defaults={"run": {"generations": 1_000_000, "wall_seconds": 30.0,
                       "checkpoint_every": 50, "history_every": 5}},
-    presets={"seed": {"problem": {"matching": "greedy"},
-                      "algorithm": {"survival": "tournament", "restart_after": 0,
-                                    "circular_blend": False, "mutation_min_deg": 5.0,
-                                    "mutation_max_deg": 5.0}}},
-    preset_notes={"seed": "the seed's literal choices: greedy matching, fixed 5 deg mutation, "
-                          "linear angle blend, no restarts, survival with replacement"},
+    presets={"paper": {"problem": {"matching": "greedy"},
+                       "algorithm": {"survival": "tournament", "restart_after": 0,
+                                     "circular_blend": False, "mutation_min_deg": 5.0,
+                                     "mutation_max_deg": 5.0}}},
+    preset_notes={"paper": "the paper's literal choices: greedy matching, fixed 5 deg mutation, "
+                           "linear angle blend, no restarts, survival with replacement"},
     core_algorithms=(),
-    algorithms={"schedule": (ScheduleConfig, make_driver)},
+    algorithms=OWN_ALGORITHMS,
     finalize=finalize,
     best_record=best_record,
     cli=cli,
+    view=StudyView(frames=lazy("evomotion.studies.arm_ik.views", "studio_frames")),
     smoke=(
         "algorithm.pop_size=8",
         "algorithm.arm_generations=2",

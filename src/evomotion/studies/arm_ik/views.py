@@ -1,10 +1,11 @@
-"""Pictures after seed 001's figure 2: obstacles red, start green, targets orange, cells not
+"""Pictures after paper 001's figure 2: obstacles red, start green, targets orange, cells not
 reachable from the start black, wrist-candidate cells light blue; the best limb blue and the
 best feasible one green. ``best.gif`` animates the best limb over the generations."""
 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import matplotlib
 
@@ -17,6 +18,7 @@ from matplotlib.colors import ListedColormap  # noqa: E402
 from evomotion.outfile import atomic_output, save_figure  # noqa: E402
 from evomotion.studies.arm_ik.kinematics import forward  # noqa: E402
 from evomotion.studies.arm_ik.problem import ArmIKProblem  # noqa: E402
+from evomotion.studies.view import Frames, RunFiles  # noqa: E402
 
 
 def _draw_board(ax, prob: ArmIKProblem) -> None:
@@ -69,7 +71,7 @@ def save_board(prob: ArmIKProblem, best: np.ndarray, best_feasible: np.ndarray |
 
 
 def population_figure(prob: ArmIKProblem, pop: np.ndarray, best: np.ndarray, title: str = ""):
-    """The board with every limb of a population (grey) and its best (blue), as seed 001's GUI
+    """The board with every limb of a population (grey) and its best (blue), as paper 001's GUI
     showed a generation."""
     fig, ax = _figure(prob)
     _draw_board(ax, prob)
@@ -100,3 +102,28 @@ def save_gif(prob: ArmIKProblem, history: np.ndarray, path: Path, frames: int = 
     plt.close(fig)
     with atomic_output(path, "animation", suffix=".tmp.gif") as tmp:
         imageio.mimsave(tmp, images, duration=1.0 / fps, loop=0)
+
+
+#: the stats.csv columns printed under a generation's picture in the studio
+FRAME_STATS = ("phase", "mean_objective", "var_objective", "mean_intersections",
+               "var_intersections", "originality", "feasible_fraction", "best_objective")
+
+
+def studio_frames(files: RunFiles) -> Frames:
+    """The studio's view of an arm-ik run: the board with each recorded generation's
+    population and best limb, and the paper's statistics of that generation."""
+    hist = files.history()
+    prob = files.problem()
+    stats = files.stats()
+    gens = stats.get("generation", [])
+
+    def draw(k: int) -> tuple[Any, str]:
+        g, pop, fit = hist[k]
+        best = pop[int(np.nanargmin(np.where(np.isfinite(fit), fit, np.inf)))]
+        fig = population_figure(prob, pop, best, f"generation {g}: {len(pop)} limbs")
+        row = gens.index(g) if g in gens else None
+        shown = [f"{key} {stats[key][row]:.4g}" for key in FRAME_STATS
+                 if row is not None and key in stats and stats[key][row] is not None]
+        return fig, f"generation {g}: {', '.join(shown)}"
+
+    return Frames(len(hist), draw)

@@ -1,6 +1,6 @@
 """Obstacle-aware distance via a precomputed visibility graph.
 
-Seed 001 (section 3.3) measured the finger-to-target distance also as the length of the way
+Paper 001 (section 3.3) measured the finger-to-target distance also as the length of the way
 around the obstacles but found it too slow. Here the graph over obstacle vertices and targets
 is built once: an edge joins two nodes that see each other (no proper crossing of an obstacle
 edge and the midpoint outside every closed obstacle), and Dijkstra gives ``node_to_target``.

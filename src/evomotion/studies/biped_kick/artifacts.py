@@ -20,10 +20,10 @@ from typing import Any
 
 import numpy as np
 
+from evomotion.outfile import atomic_write_text, write_json
 from evomotion.run.context import RunContext
-from evomotion.run.folder import atomic_write_text, write_json
-from evomotion.sim.nao.motion import format_motion
-from evomotion.studies.biped_kick.motion import ball_offset, kick_motion, named
+from evomotion.sim.motion import format_motion
+from evomotion.studies.biped_kick.motion import ball_offset, named
 
 AIMS_DEG = (-30, -20, -10, 0, 10, 20, 30)
 
@@ -42,6 +42,7 @@ def best_record(ctx: RunContext) -> dict[str, Any]:
 def write_motions(ctx: RunContext) -> None:
     if not _ok(ctx.best_genome):
         return
+    kick_motion = ctx.problem.kicker.kick_motion  # the robot's joints
     atomic_write_text(ctx.out_dir / "best.motion", format_motion(kick_motion(ctx.best_genome)))
     for a in AIMS_DEG:  # kicks/ is the run's own folder
         motion = kick_motion(ctx.best_genome, np.radians(a))
@@ -69,9 +70,8 @@ def aim_table(problem: Any, genome: np.ndarray) -> list[dict[str, float]]:
 
 def finalize(ctx: RunContext) -> None:
     """Motions, exports, the per-aim table, the plots and the video of the best kick."""
-    from evomotion.sim.nao.export import write_run_exports
     from evomotion.sim.render import RenderUnavailableError, render_video
-    from evomotion.studies.biped_kick import scene
+    from evomotion.sim.state import state_qpos_all
     from evomotion.studies.biped_kick.kick_plots import plot_foot, plot_progress, plot_zmp
     from evomotion.studies.biped_kick.problem import FLOOR_M, support_analysis
 
@@ -79,29 +79,30 @@ def finalize(ctx: RunContext) -> None:
         return
     write_motions(ctx)
     g = np.asarray(ctx.best_genome, dtype=float)
-    if not ctx.best_metrics.get("feasible", 0.0):
-        ctx.log("best kick is not feasible (ZMP, fall or NAO limits violated); "
-                "give the search more evaluations")
-    write_run_exports(kick_motion(g), ctx.out_dir, ctx.log)
     p = ctx.problem
+    if not ctx.best_metrics.get("feasible", 0.0):
+        ctx.log(f"best kick is not feasible (ZMP, fall or {p.robot.name.upper()} limits "
+                "violated); give the search more evaluations")
+    if p.robot.has("naoqi_export"):
+        p.robot.capability("naoqi_export", "biped-kick's export").write_run_exports(
+            p.kicker.kick_motion(g), ctx.out_dir, ctx.log)
     rows = aim_table(p, g)
     write_json(ctx.out_dir / "best_kicks.json", rows)
     k = p.kicks(g[None], np.zeros(1), p.ball_xy(g[None], np.zeros(1)), keep=True)
     end = int(k["end"][0])
     times = k["times"][:end]
     sens = k["sensors"][0, :end]
-    margin, cop, corners = support_analysis(sens, p.sl)
-    plot_foot(g, 0.0, times, sens[:, p.sl["r_sole"]], ctx.plots_dir / "kick_foot")
+    margin, cop, corners = support_analysis(sens, p.sl, p.kicker.sole_half)
+    plot_foot(g, 0.0, times, sens[:, p.sl["r_sole"]], ctx.plots_dir / "kick_foot",
+              feet=p.kicker.foot_trajectories(g[None], times, 0.0))
     plot_zmp(g, times, margin, cop, corners, p.cfg.zmp_margin_m, ctx.plots_dir / "kick_zmp")
     if (ctx.out_dir / "stats.csv").exists():
         plot_progress(ctx.out_dir / "stats.csv", FLOOR_M, ctx.plots_dir / "kick_progress")
-    from evomotion.sim import nao
-
-    qpos = nao.state_qpos_all(p.model, k["states"][0, :end])
+    qpos = state_qpos_all(p.model, k["states"][0, :end])
     video = ctx.out_dir / "best.mp4"
     try:
-        render_video(qpos, p.dt, video, model_xml=scene.kick_scene_xml(rolling_m=p.cfg.rolling_m),
-                     camera="kick")
+        render_video(qpos, p.dt, video, model_xml=p.kicker.scene_xml,
+                     assets=p.robot.assets or None, camera="kick")
     except RenderUnavailableError as exc:
         ctx.log(f"best.mp4 skipped: {exc}")
         video = None

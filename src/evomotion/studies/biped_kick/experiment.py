@@ -1,8 +1,8 @@
-"""The seed's experiment (``evomotion biped-kick study``): its Table 1, complete.
+"""The paper's experiment (``evomotion biped-kick study``): its Table 1, complete.
 
-1. Each optimiser (the seed's improved CMA-ES = CMA-ES + Tent + Lévy, plain CMA-ES, the engine's
+1. Each optimiser (the paper's improved CMA-ES = CMA-ES + Tent + Lévy, plain CMA-ES, the engine's
    GA with BLX-alpha) runs ``seeds`` times on the kick problem (``problem`` config: the default
-   trains aims -30, -15, 0, +15, +30 deg; ``--aim 0`` straight kicks as the seed) with
+   trains aims -30, -15, 0, +15, +30 deg; ``--aim 0`` straight kicks as the paper) with
    ``budget`` evaluations, through the run loop: best fitness against evaluations (median and
    interquartile band) -> ``convergence.png``, ``curves.npz``.
 2. The best genome of each optimiser kicks ``kicks`` times straight (aim 0) from ball positions
@@ -24,6 +24,8 @@ import numpy as np
 from evomotion.core.cmaes import CMAESConfig
 from evomotion.core.ga import GAConfig
 from evomotion.errors import InputError
+from evomotion.run.config import Config, RunSection
+from evomotion.run.in_memory import run_in_memory
 from evomotion.studies.biped_kick.keyframe import keyframe_kicks
 from evomotion.studies.biped_kick.motion import named
 from evomotion.studies.biped_kick.problem import KickConfig, KickProblem
@@ -41,7 +43,7 @@ VARIANTS: dict[str, object] = {
     "cmaes+tent": CMAESConfig(sigma0=SIGMA0, chaos=True),
     "cmaes+levy": CMAESConfig(sigma0=SIGMA0, levy=True),
 }
-LABELS = {"cmaes+tent+levy": "optimised: improved CMA-ES (Tent + Lévy, the seed's)",
+LABELS = {"cmaes+tent+levy": "optimised: improved CMA-ES (Tent + Lévy, the paper's)",
           "cmaes": "plain CMA-ES (the default optimiser)", "ga-blx": "GA (BLX-alpha, pop 20)",
           "cmaes+tent": "CMA-ES + Tent", "cmaes+levy": "CMA-ES + Lévy"}
 DEFAULT_VARIANTS = ("cmaes+tent+levy", "cmaes", "ga-blx")
@@ -51,13 +53,10 @@ ACCURACY_AIMS_DEG = (-20.0, 0.0, 20.0)
 def optimise(problem: KickProblem, cfg: object, seed: int,
              budget: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
     """(evaluations after each generation, best fitness so far, best genome, best fitness):
-    one run through the run loop (no folder) stopped after ``budget`` evaluations."""
-    from evomotion.run.config import Config, RunSection
-    from evomotion.run.runner import run_study
-    from evomotion.studies.biped_kick.study import STUDY
-
+    one run in memory (:func:`~evomotion.run.in_memory.run_in_memory`) stopped after
+    ``budget`` evaluations."""
     run = RunSection(seed=seed, generations=10**9, max_evaluations=budget, checkpoint_every=0)
-    res = run_study(STUDY, Config("biped-kick", run, cfg, problem.cfg), None, problem=problem)
+    res = run_in_memory(Config("biped-kick", run, cfg, problem.cfg), problem)
     if res.stop_reason == "interrupted":  # Ctrl-C or SIGTERM stops the whole experiment
         raise ExperimentInterruptedError("biped-kick study: interrupted; nothing written")
     evals = np.array([r["evaluations"] for r in res.rows])
@@ -163,20 +162,9 @@ def run_experiment(out_dir: Path, seeds: int = 1, budget: int = 1500, kicks: int
                               "q25": float(np.percentile(v[:, -1], 25)),
                               "q75": float(np.percentile(v[:, -1], 75))}
                           for k, v in curves.items()}}
-    write_json(out_dir / "results.json", _finite(res), "study results")
+    write_json(out_dir / "results.json", res, "study results")
     atomic_write_text(out_dir / "table.md", table_md(res), "study table")
     return res
-
-
-def _finite(obj):
-    """``obj`` with every non-finite float as ``None`` (JSON has no NaN)."""
-    if isinstance(obj, dict):
-        return {k: _finite(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [_finite(v) for v in obj]
-    if isinstance(obj, float) and not np.isfinite(obj):
-        return None
-    return obj
 
 
 def table_md(res: dict) -> str:

@@ -1,9 +1,11 @@
-"""Keyframe-kick baseline (the approach seed 002 attributes to HTWK): Webots' ``Shoot.motion``
+"""Keyframe-kick baseline (the approach paper 002 attributes to HTWK): Webots' ``Shoot.motion``
 replayed open loop in the kick scene, measured like the optimised kick.
 
-The motion ships with evomotion (:func:`evomotion.sim.nao.motion.shipped_motion`; Webots,
+The motion ships with evomotion
+(:func:`evomotion.sim.robots.nao.webots_motions.shipped_motion`; Webots,
 Apache-2.0) and is played as Webots' motion player does (linear interpolation of the key poses,
-:func:`evomotion.sim.nao.replay.motion_targets`). The kicking foot is the one whose ankle (leg FK
+:func:`evomotion.sim.robots.nao.replay.motion_targets`). The kicking foot is the one whose
+ankle (leg FK
 in the torso frame) reaches furthest forward during the motion; the ball is placed ``gap_m`` in
 front of that foot's toe in the motion's first pose, plus the given offsets. Execution time is
 the motion's duration; the minimum ZMP margin is taken over it.
@@ -15,10 +17,11 @@ from pathlib import Path
 
 import numpy as np
 
-from evomotion.sim import nao
-from evomotion.sim.nao.leg_ik import leg_fk
-from evomotion.sim.nao.motion import Motion, read_motion, shipped_motion
-from evomotion.sim.nao.replay import motion_targets
+from evomotion.sim.motion import Motion, read_motion
+from evomotion.sim.robots import nao
+from evomotion.sim.robots.nao.leg_ik import leg_fk
+from evomotion.sim.robots.nao.replay import motion_targets
+from evomotion.sim.robots.nao.webots_motions import shipped_motion
 from evomotion.sim.rollout import BatchSimulator, fall_step, torso_track
 from evomotion.studies.biped_kick import scene
 from evomotion.studies.biped_kick.problem import KickConfig, support_margin_batch

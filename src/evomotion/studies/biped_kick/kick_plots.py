@@ -33,13 +33,15 @@ def _shade(ax, genome: np.ndarray, label: bool = False) -> None:
 
 
 def plot_foot(genome: np.ndarray, aim_rad: float, times: np.ndarray, sole_xyz: np.ndarray,
-              out_stem: Path) -> list[Path]:
+              out_stem: Path, feet: dict[str, np.ndarray] | None = None) -> list[Path]:
     """The commanded kicking ankle relative to the stance ankle (the stance foot stays put, so
     this is its path over the floor) and the simulated right sole (world), both from rest, in
-    x, y, z against time; and the x-z side view."""
+    x, y, z against time; and the x-z side view. ``feet``: the commanded paths of
+    ``times`` (default the NAO's, :func:`.motion.foot_trajectories`)."""
     import matplotlib.pyplot as plt
 
-    feet = foot_trajectories(np.atleast_2d(genome), times, aim_rad)
+    if feet is None:
+        feet = foot_trajectories(np.atleast_2d(genome), times, aim_rad)
     rel = feet["right"][0] - feet["left"][0]
     r = rel - rel[0]
     s = sole_xyz - sole_xyz[0]

@@ -1,9 +1,9 @@
 """Kick motion: genome + aim -> kicking-foot Cartesian trajectory -> joint key poses
-(seed 002, sections 3.2.2-3.3).
+(paper 002, sections 3.2.2-3.3).
 
-The right foot kicks, the left foot supports; the torso stays upright (seed: torso pitch within
+The right foot kicks, the left foot supports; the torso stays upright (paper: torso pitch within
 3 degrees). Phases after ``SETTLE_S`` of standing (lengths m, angles rad, times s; ankle
-positions in the torso frame, from the Webots crouch of :mod:`evomotion.sim.nao`):
+positions in the torso frame, from the Webots crouch of :mod:`evomotion.sim.robots.nao`):
 
 0. weight shift (``t_shift_s``): both ankles move by ``-shift_y_m`` in y (torso over the left
    foot), smoothstep ``3u^2 - 2u^3``;
@@ -25,7 +25,7 @@ its hip yaw-pitch joints, which are one motor: the torso turns by ``tau`` about 
 the stance foot stays put, and ``tau`` is solved per key pose (secant steps from ``psi / 2``)
 until both legs' IK need the same hip yaw-pitch.
 
-Each phase is a cubic Bézier (seed eq. 13) ``P0, P0 + c/3 + b n, P0 + 2c/3 + b n, P3`` with
+Each phase is a cubic Bézier (the paper's eq. 13) ``P0, P0 + c/3 + b n, P0 + 2c/3 + b n, P3`` with
 chord ``c = P3 - P0``, ``n`` the upward normal of the chord in its vertical plane and ``b`` the
 phase's bulge gene; lift and retract use the smoothstep in time. Foot pitch is interpolated
 ``0 -> lift_pitch -> kick_pitch -> 0``. Both legs go through :func:`leg_ik`, vectorised over
@@ -38,10 +38,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from evomotion.sim import nao
-from evomotion.sim.nao.joint_limits import JOINT_RANGES, SPEED_LIMITS
-from evomotion.sim.nao.leg_ik import leg_fk, leg_ik, rot_y, rot_z
-from evomotion.sim.nao.motion import Motion
+from evomotion.sim.motion import Motion
+from evomotion.sim.robots import nao
+from evomotion.sim.robots.nao.joint_limits import JOINT_RANGES, SPEED_LIMITS
+from evomotion.sim.robots.nao.leg_ik import leg_fk, leg_ik, rot_y, rot_z
 
 #: (name, lower, upper) of the 19 genes. Issue 15 widened the bounds the earlier optimum
 #: pressed (shift_y 0.07 -> 0.10, t_shift 1.2 -> 2.0, t_retract 0.8 -> 1.5, kick_bulge -0.04 ->
@@ -136,11 +136,15 @@ def _bezier_phase(p0: np.ndarray, p3: np.ndarray, bulge: np.ndarray,
 
 
 def foot_trajectories(genomes: np.ndarray, times_s: np.ndarray,
-                      aims_rad: np.ndarray | float = 0.0) -> dict[str, np.ndarray]:
-    """Ankle targets ``left``, ``right`` ``[B, T, 3]`` and right-foot ``pitch`` ``[B, T]``."""
+                      aims_rad: np.ndarray | float = 0.0,
+                      rest: tuple[np.ndarray, np.ndarray] | None = None,
+                      retract_bulge_m: float = 0.0) -> dict[str, np.ndarray]:
+    """Ankle targets ``left``, ``right`` ``[B, T, 3]``, right-foot ``pitch`` and ``yaw``
+    ``[B, T]``, from the feet at ``rest`` (left, right; torso frame; default: the NAO's ankles
+    in its crouch, :func:`rest_pose`; another robot's soles for :mod:`.robot_motion`)."""
     g = np.atleast_2d(genomes)
     aims = np.broadcast_to(np.asarray(aims_rad, dtype=float), (len(g),))
-    _, l0, r0 = rest_pose()
+    l0, r0 = rest_pose()[1:] if rest is None else rest
     t = times_s[None, :] - SETTLE_S
     ts, tl, tk, tr = (gene(g, k)[:, None] for k in ("t_shift_s", "t_lift_s", "t_kick_s",
                                                      "t_retract_s"))
@@ -162,7 +166,7 @@ def foot_trajectories(genomes: np.ndarray, times_s: np.ndarray,
     lift = _bezier_phase(rest, L, gene(g, "lift_bulge_m"), _smooth((t - ts) / tl))
     u_k = _smooth(np.clip((t - e1) / tk, 0.0, 1.0) ** gene(g, "kick_ease")[:, None])
     kick = _bezier_phase(L, K, gene(g, "kick_bulge_m"), u_k)
-    back = _bezier_phase(K, rest, np.zeros(len(g)), _smooth((t - e2) / tr))
+    back = _bezier_phase(K, rest, np.full(len(g), retract_bulge_m), _smooth((t - e2) / tr))
     right = np.broadcast_to(r0, (len(g), t.shape[1], 3)).copy()
     right[..., 1] += dy
     for lo, hi, curve in ((ts, e1, lift), (e1, e2, kick), (e2, e3, back)):
@@ -209,7 +213,7 @@ def leg_joints(feet: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
 
 def joint_targets(genomes: np.ndarray, times_s: np.ndarray,
                   aims_rad: np.ndarray | float = 0.0) -> np.ndarray:
-    """Actuator targets ``[B, T, 22]`` (order :data:`evomotion.sim.nao.JOINTS`)."""
+    """Actuator targets ``[B, T, 22]`` (order :data:`evomotion.sim.robots.nao.JOINTS`)."""
     g = np.atleast_2d(genomes)
     q_rest, _, _ = rest_pose()
     feet = foot_trajectories(g, times_s, aims_rad)
@@ -222,14 +226,17 @@ def joint_targets(genomes: np.ndarray, times_s: np.ndarray,
     return ctrl
 
 
-def limit_excess(keys: np.ndarray, speed_margin: float = 1.0
+def limit_excess(keys: np.ndarray, speed_margin: float = 1.0,
+                 limits: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Per kick of ``keys[B, K, 22]`` (20 ms poses): the joint-range excess (rad, summed over
+    """Per kick of ``keys[B, K, nu]`` (20 ms poses): the joint-range excess (rad, summed over
     joints and poses), the speed excess (``sum max(0, |dq/dt| / v - 1) KEY_S``, s) and the
-    largest ``|dq/dt| / v``, with ``v = speed_margin x`` the NAO's no-load speed
-    (:mod:`evomotion.sim.nao.joint_limits`)."""
-    out = (np.maximum(keys - _HI, 0.0) + np.maximum(_LO - keys, 0.0)).sum(axis=2)
-    ratio = np.abs(np.diff(keys, axis=1)) / KEY_S / (speed_margin * _VMAX)
+    largest ``|dq/dt| / v``, with ``v = speed_margin x`` the no-load speed; ``limits``:
+    (lower, upper, speed) per actuator, default the NAO's 22
+    (:mod:`evomotion.sim.robots.nao.joint_limits`)."""
+    lo, hi, vmax = (_LO, _HI, _VMAX) if limits is None else limits
+    out = (np.maximum(keys - hi, 0.0) + np.maximum(lo - keys, 0.0)).sum(axis=2)
+    ratio = np.abs(np.diff(keys, axis=1)) / KEY_S / (speed_margin * vmax)
     over = np.maximum(ratio - 1.0, 0.0).sum(axis=2)
     # sequential sums over the poses (cumsum), so that the held poses that pad a short kick
     # in a batch of longer ones add exact zeros: a kick's result never depends on its batch

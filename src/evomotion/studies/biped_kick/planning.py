@@ -1,19 +1,19 @@
-"""Kick-point choice and approach path (seed 002, sections 3.1 and 3.2.1).
+"""Kick-point choice and approach path (paper 002, sections 3.1 and 3.2.1).
 
 Geometry (field frame, metres, radians; robot pose ``(x, y, theta)``, ball ``b``, goal ``g``).
-The seed's formulas were lost in extraction; this is our reconstruction from its text and Fig. 4:
+The paper's formulas were lost in extraction; this is our reconstruction from its text and Fig. 4:
 
 * The ball is inflated to a circle of radius ``R`` (so the robot does not touch it on the way).
   Candidate kick points ``K_j = b - R (cos phi_j, sin phi_j)`` lie on the arc within
   ``max_offset`` of the ideal point ``b - R u_g`` behind the ball (``u_g`` = ball->goal unit
   vector); from ``K_j`` the robot kicks towards the ball, heading ``psi_K = phi_j``.
 * ``C_turn``: the turning the robot needs, ``|wrap(psi_d - theta)| + |wrap(psi_K - psi_d)|``
-  with ``psi_d`` the direction of the walking vector ``d = K - robot`` (the seed's angles
+  with ``psi_d`` the direction of the walking vector ``d = K - robot`` (the paper's angles
   alpha (heading vs. robot->ball vector r) and beta (d vs. r) combine into these two turns),
   plus ``|wrap(psi_K - psi_goal)|``, the aiming error of a kick from ``K_j``.
 * ``C_dist = |d|``.  ``C_kick = w_t C_turn + w_d C_dist``; the best kick point minimises it.
 
-Approach path: the cubic Bézier ``B(t) = sum_k binom(3,k) (1-t)^(3-k) t^k P_k`` (seed eq. 13)
+Approach path: the cubic Bézier ``B(t) = sum_k binom(3,k) (1-t)^(3-k) t^k P_k`` (the paper's eq. 13)
 with ``P0`` the robot, ``P1 = P0 + a h`` on the robot's heading ``h``, ``P2 = K - a u_K`` on the
 kick line (ball->goal line through the ball, extended behind the kick point) and ``P3 = K``;
 ``a = |d| / 3`` by default. The robot arrives facing the kick direction.
@@ -84,7 +84,7 @@ def plan_kick(robot: np.ndarray, ball: np.ndarray, goal: np.ndarray, radius_m: f
 
 
 def bezier(ctrl: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """Cubic Bézier points ``[len(t), dim]`` (seed eq. 13)."""
+    """Cubic Bézier points ``[len(t), dim]`` (the paper's eq. 13)."""
     t = np.asarray(t, dtype=float)[:, None]
     c = np.asarray(ctrl, dtype=float)
     return ((1 - t) ** 3 * c[0] + 3 * (1 - t) ** 2 * t * c[1] + 3 * (1 - t) * t**2 * c[2]
@@ -142,7 +142,7 @@ def plan_aimed_kick(robot: np.ndarray, ball: np.ndarray, target: np.ndarray,
                     ball_local: Callable[[np.ndarray], np.ndarray], max_aim_rad: float,
                     n: int = 61, w_turn: float = 1.0, w_dist: float = 1.0,
                     w_aim: float = 0.5) -> AimedPlan:
-    """Where to stand for an aimed kick (the seed's kick-point choice with the kick's aim as
+    """Where to stand for an aimed kick (the paper's kick-point choice with the kick's aim as
     the free variable): for aim ``a`` the robot faces ``psi = psi_T - a`` (``psi_T`` the
     ball->target direction) and stands so that the ball lies at ``ball_local(a)`` (``[n, 2]``,
     robot frame: x forward, y left). ``C_turn = |wrap(psi_d - theta)| + |wrap(psi - psi_d)|

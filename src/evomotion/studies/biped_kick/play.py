@@ -1,5 +1,5 @@
 """``evomotion biped-kick play``: plan the kick point, approach, kick, and follow the ball until
-it rests (seed 002's whole chain for one ball and target, field frame, metres, radians).
+it rests (paper 002's whole chain for one ball and target, field frame, metres, radians).
 
 1. **Plan** (:func:`planning.plan_aimed_kick`): the aim ``a`` in [-30, +30] deg and the stand
    pose that puts the ball where the evolved kick wants it for that aim; the cubic Bézier
@@ -79,7 +79,7 @@ def field_state(problem: Any, pose: np.ndarray, ball: np.ndarray) -> np.ndarray:
     and the ball resting at ``ball``."""
     import mujoco
 
-    from evomotion.sim import nao
+    from evomotion.sim.robots import nao
     from evomotion.studies.biped_kick import scene
 
     m = problem.model
@@ -101,7 +101,7 @@ def play(problem: Any, genome: np.ndarray, robot: np.ndarray, ball: np.ndarray,
          target: np.ndarray, video: Path | None = None,
          repertoire: Path | None = None) -> dict[str, Any]:
     """Plan, walk, kick and roll; the report (and ``video`` of the whole simulation)."""
-    from evomotion.sim import nao
+    from evomotion.sim.robots import nao
     from evomotion.studies.biped_kick import scene
     from evomotion.studies.biped_kick.walk_play import SceneRun, walk
 
@@ -144,7 +144,7 @@ def play(problem: Any, genome: np.ndarray, robot: np.ndarray, ball: np.ndarray,
     d = ball_now - pose[:2]
     local = np.array([c * d[0] + s * d[1], -s * d[0] + c * d[1]])
     placement = float(np.linalg.norm(local - ball_local(np.array([aim]))[0]))
-    _, ctrl, end = problem.controls(g[None], np.array([aim]))
+    _, ctrl, end, _ = problem.controls(g[None], np.array([aim]))
     nstep = int(end[0])
     states = run.play(ctrl[0])
     rest, roll = problem.ball_rest(states[-1])

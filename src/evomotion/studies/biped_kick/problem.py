@@ -9,7 +9,7 @@ Every genome kicks once per training aim ``a`` in ``problem.aims_deg`` (from the
 Objective (m, maximised) = mean over aims of [travel along ``a`` - ``w_angle_m_per_rad`` |angle
 error|] - ``w_time_m_per_s`` x execution time.
 
-Constraints (seed step 5: an unstable kick is rejected and the search goes on): during the
+Constraints (the paper's step 5: an unstable kick is rejected and the search goes on): during the
 kick, the centre of pressure of the soles' contact forces (MuJoCo ``contact`` sensors) stays at
 least ``zmp_margin_m`` inside the support polygon (the sole rectangles in contact; margin by the
 support function over 32 directions), at every physics step; the robot does not fall; every
@@ -21,6 +21,11 @@ margin_t), zmp_margin_m + 5 cm) dt`` (a step without sole contact counts as
 ``zmp_margin_m + 5 cm`` short). Selection is feasibility-first
 (:mod:`evomotion.core.constraints`, Deb 2000): fitness is the objective for feasible kicks and
 ``FLOOR_M - 1 - violation`` otherwise.
+
+The robot is ``problem.robot`` (default the NAO, as above); another biped kicks through the
+numerical leg IK in its own scene (:mod:`.kickers`, :mod:`.robot_motion`,
+:mod:`.robot_scene`): its sole rectangle, its actuators' ranges, motor speeds only where its
+spec has them, its ``[fall]`` thresholds unless ``fall_height_m``/``fall_tilt_rad`` are set.
 """
 
 from __future__ import annotations
@@ -31,22 +36,20 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from evomotion.core.checks import check_fields, check_number
+from evomotion.core.checks import check_fields, check_number, check_text
 from evomotion.core.constraints import feasibility_first
 from evomotion.core.problem import Evaluation, GenomeSpec
 from evomotion.errors import InputError
-from evomotion.sim import nao
+from evomotion.sim.robots import nao
 from evomotion.sim.rollout import BatchSimulator, fall_step, interpolate_controls, torso_track
 from evomotion.studies.biped_kick import scene
+from evomotion.studies.biped_kick.kickers import kicker_for
 from evomotion.studies.biped_kick.motion import (
-    BALL_GAP_M,
     GENES,
     MAX_AIM_DEG,
     SETTLE_S,
-    START,
     ball_offset,
     execution_time_s,
-    joint_targets,
     key_times,
     limit_excess,
 )
@@ -96,6 +99,11 @@ class KickConfig:
     fall_height_m: float = nao.FALL_HEIGHT_M
     fall_tilt_rad: float = nao.FALL_TILT_RAD
     nthread: int = 0  # mujoco.rollout threads; 0 = all cores
+    #: the robot: "" or "nao" (the NAO, its closed-form leg IK), another bundled biped (op3)
+    #: or a spec .toml (sim/robots): the same kick, scaled to its size, through the numerical
+    #: leg IK (robot_motion.py); its [fall] thresholds apply unless fall_height_m /
+    #: fall_tilt_rad are set
+    robot: str = ""
 
     def for_worker(self) -> KickConfig:
         """The config of a one-core evaluator worker: ``nthread`` 0 (all cores) becomes 1."""
@@ -123,6 +131,7 @@ class KickConfig:
         check_number("problem.fall_tilt_rad", self.fall_tilt_rad, lo=0.0, hi=math.pi,
                      lo_open=True)
         check_number("problem.nthread", self.nthread, lo=0, hi=MAX_THREADS, integer=True)
+        check_text("problem.robot", self.robot)
 
     def genome_dim(self) -> int:
         return len(GENES)
@@ -136,15 +145,18 @@ class KickConfig:
         return 2 * 8 * pop_size * len(self.aims_deg) * steps * ROLLOUT_DOUBLES_PER_STEP
 
 
-def support_margin_batch(sensors: np.ndarray, sl: dict[str, slice]) -> np.ndarray:
+def support_margin_batch(sensors: np.ndarray, sl: dict[str, slice],
+                         sole_half: tuple[float, float] = scene.SOLE_HALF_M) -> np.ndarray:
     """CoP margin (m) inside the support polygon per step, ``[..., T]`` (-inf: no support)."""
-    return support_analysis(sensors, sl)[0]
+    return support_analysis(sensors, sl, sole_half)[0]
 
 
-def support_analysis(sensors: np.ndarray, sl: dict[str, slice]
+def support_analysis(sensors: np.ndarray, sl: dict[str, slice],
+                     sole_half: tuple[float, float] = scene.SOLE_HALF_M
                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(margin ``[..., T]`` (m, -inf: no support), CoP ``[..., T, 2]`` (world, m), sole
-    corners ``[..., T, 8, 2]`` (NaN for a sole not in contact))."""
+    corners ``[..., T, 8, 2]`` (NaN for a sole not in contact)); ``sole_half``: the sole
+    rectangle's half length and width (m; default the NAO's)."""
     corners, weights, points = [], [], []
     for side in ("l", "r"):
         c = sensors[..., sl[f"{side}_contact"]]
@@ -154,7 +166,7 @@ def support_analysis(sensors: np.ndarray, sl: dict[str, slice]
         ax = sensors[..., sl[f"{side}_xaxis"]][..., :2]
         ax = ax / np.maximum(np.linalg.norm(ax, axis=-1, keepdims=True), 1e-9)
         ay = np.stack([-ax[..., 1], ax[..., 0]], axis=-1)
-        hx, hy = scene.SOLE_HALF_M
+        hx, hy = sole_half
         for sx, sy in ((1, 1), (1, -1), (-1, 1), (-1, -1)):
             corner = centre + sx * hx * ax + sy * hy * ay
             corners.append(np.where(found[..., None], corner, np.nan))
@@ -170,29 +182,41 @@ def support_analysis(sensors: np.ndarray, sl: dict[str, slice]
 
 
 class KickProblem:
-    """Maximise the ball's travel along the requested aims with a stable, feasible kick."""
+    """Maximise the ball's travel along the requested aims with a stable, feasible kick, on
+    ``cfg.robot`` (the NAO by default; a biped with feet ``left`` and ``right``): the robot's
+    kicker (:func:`.kickers.kicker_for`) gives its genome bounds, scene and joint targets."""
 
     sense = "max"
-    metric_names = METRICS
+    metric_names = METRICS  # the instance's: with ``ik_error_m`` for the numerical IK
 
     def __init__(self, cfg: KickConfig = KickConfig()) -> None:
+        from evomotion.sim.robots import load_robot
+
         self.cfg = cfg
-        self.genome = GenomeSpec(np.array([g[1] for g in GENES]), np.array([g[2] for g in GENES]),
-                                 names=tuple(g[0] for g in GENES))
-        self.model = scene.load_scene(cfg.rolling_m)
+        r = self.robot = load_robot(cfg.robot or "nao")
+        if set(r.feet) != {"left", "right"}:
+            raise InputError(f"problem.robot: {r.name} has feet {', '.join(r.feet)}; a kick "
+                             "needs a biped with feet 'left' and 'right'")
+        k = self.kicker = kicker_for(r, cfg)
+        if k.name == "numerical":
+            self.metric_names = (*METRICS, "ik_error_m")
+        self.genome = GenomeSpec(k.lower, k.upper, names=tuple(g[0] for g in GENES))
+        self.model = k.model
         self.dt = float(self.model.opt.timestep)
         self.sl = scene.sensor_slices(self.model)
-        self.decel = scene.measured_deceleration(cfg.rolling_m)
+        self.decel = k.decel
         self.sim = BatchSimulator(self.model, cfg.nthread)
         self.aims_rad = np.radians(np.asarray(cfg.aims_deg, dtype=float))
-        self._toe = scene.default_ball_xy(self.model, gap_m=0.0) - [scene.BALL_RADIUS_M, 0.0]
+        self._toe = k.toe
+        self.fall_height_m, self.fall_tilt_rad = r.fall_thresholds(cfg.fall_height_m,
+                                                                   cfg.fall_tilt_rad)
 
     def initial_population(self, n: int, rng: np.random.Generator) -> np.ndarray:
         """The hand-set kick :data:`.motion.START` (CMA-ES starts its mean there) and ``n - 1``
         copies jittered by 5 % of each gene's range (for the GA)."""
         n = max(int(n), 1)
         span = self.genome.upper - self.genome.lower
-        start = np.array([START[g[0]] for g in GENES])
+        start = self.kicker.start
         x = start + 0.05 * span * rng.standard_normal((n, span.size))
         x[0] = start
         return np.clip(x, self.genome.lower, self.genome.upper)
@@ -200,20 +224,21 @@ class KickProblem:
     def ball_xy(self, genomes: np.ndarray, aims_rad: np.ndarray) -> np.ndarray:
         """Where each kick wants the ball (world, m) plus the configured offset ``[B, 2]``."""
         y = ball_offset(genomes, aims_rad)
-        x = np.full_like(y, self._toe[0] + scene.BALL_RADIUS_M + BALL_GAP_M)
+        x = np.full_like(y, self._toe[0] + scene.BALL_RADIUS_M + self.kicker.gap_m)
         return np.stack([x + self.cfg.ball_dx_m, self._toe[1] + y + self.cfg.ball_dy_m], axis=1)
 
     def controls(self, genomes: np.ndarray, aims_rad: np.ndarray
-                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(20 ms key poses ``[n, K, 22]``, physics-step targets ``[n, nstep, 22]``, each kick's
-        end step ``[n]``: the motion plus ``roll_after_s``). Each kick is measured at its own
-        end step, so its result does not depend on the other members of the batch (which only
-        set how long the batch runs)."""
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
+        """(20 ms key poses ``[n, K, nu]``, physics-step targets ``[n, nstep, nu]``, each
+        kick's end step ``[n]``: the motion plus ``roll_after_s``, each kick's IK error ``[n]``
+        (m; ``None`` for the closed-form IK)). Each kick is measured at its own end step, so
+        its result does not depend on the other members of the batch (which only set how long
+        the batch runs)."""
         end = np.ceil((SETTLE_S + execution_time_s(genomes) + self.cfg.roll_after_s)
                       / self.dt).astype(int)
         kt = key_times(genomes)
-        keys = joint_targets(genomes, kt, aims_rad)
-        return keys, interpolate_controls(kt, keys, self.dt, int(end.max())), end
+        keys, ik_error = self.kicker.joint_targets(genomes, kt, aims_rad)
+        return keys, interpolate_controls(kt, keys, self.dt, int(end.max())), end, ik_error
 
     def ball_rest(self, states: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Where the ball of recorded ``states[..., nstate]`` comes to rest (``[..., 2]``, m:
@@ -232,9 +257,9 @@ class KickProblem:
         aims = np.broadcast_to(np.asarray(aims_rad, dtype=float), (len(g),))
         ball0 = np.asarray(ball_xy, dtype=float).reshape(len(g), 2)
         exec_t = execution_time_s(g)
-        keys, ctrl, end = self.controls(g, aims)
+        keys, ctrl, end, ik_error = self.controls(g, aims)
         nstep = ctrl.shape[1]
-        state0 = np.stack([scene.initial_scene_state(self.model, b) for b in ball0])
+        state0 = np.stack([self.kicker.initial_state(b) for b in ball0])
         states, sensors = self.sim.run_with_sensors(state0, ctrl)
         rest, roll_s = self.ball_rest(states[np.arange(len(g)), end - 1])
         travel = rest - ball0
@@ -242,22 +267,24 @@ class KickProblem:
         along = (travel * u).sum(1)
         lateral = u[:, 0] * travel[:, 1] - u[:, 1] * travel[:, 0]
         angle_err = wrap(np.arctan2(travel[:, 1], travel[:, 0]) - aims)
-        fell = fall_step(torso_track(states), self.cfg.fall_height_m,
-                         self.cfg.fall_tilt_rad) < end
-        margin = support_margin_batch(sensors, self.sl)
+        fell = fall_step(torso_track(states), self.fall_height_m, self.fall_tilt_rad) < end
+        margin = support_margin_batch(sensors, self.sl, self.kicker.sole_half)
         times = self.dt * np.arange(1, nstep + 1)
         in_kick = (times[None, :] >= SETTLE_S) & (times[None, :] <= SETTLE_S + exec_t[:, None])
         short = np.minimum(np.maximum(self.cfg.zmp_margin_m - margin, 0.0),
                            self.cfg.zmp_margin_m + NO_SUPPORT_DEFICIT_M)
         # a sequential sum: the steps after a kick's end add exact zeros (batch-independent)
         deficit = np.cumsum(np.where(in_kick, short, 0.0), axis=1)[:, -1] * self.dt
-        range_x, speed_x, speed_ratio = limit_excess(keys, self.cfg.speed_margin)
+        range_x, speed_x, speed_ratio = limit_excess(keys, self.cfg.speed_margin,
+                                                     self.kicker.limits)
         out = {"travel": travel, "along_m": along, "lateral_m": lateral,
                "angle_error_rad": angle_err, "fell": fell, "zmp_deficit_m_s": deficit,
                "min_margin_m": np.min(np.where(in_kick, margin, np.inf), axis=1),
                "range_excess_rad": range_x, "speed_excess_s": speed_x,
                "speed_ratio": speed_ratio, "exec_time_s": exec_t, "ball0": ball0,
                "rest_xy": rest, "roll_s": roll_s}
+        if ik_error is not None:
+            out["ik_error_m"] = ik_error
         if keep:
             out.update(states=states, sensors=sensors, margin=margin, end=end, times=times)
         return out
@@ -287,7 +314,8 @@ class KickProblem:
             "fell": per("fell").max(1), "feasible": (violation <= 0).astype(float),
             "violation": violation, "zmp_deficit_mm_s": per("zmp_deficit_m_s").mean(1) * 1e3,
             "min_margin_m": per("min_margin_m").min(1), "speed_ratio": per("speed_ratio").max(1),
-            "exec_time_s": exec_t})
+            "exec_time_s": exec_t,
+            **({"ik_error_m": per("ik_error_m").max(1)} if "ik_error_m" in k else {})})
 
 
 def make_problem(cfg: KickConfig) -> KickProblem:

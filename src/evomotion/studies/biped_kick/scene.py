@@ -7,8 +7,8 @@ Rolling friction ``rolling_m`` (a length: rolling torque = rolling_m * normal fo
 carpet; for a solid ball the rolling deceleration is ``a = rolling_m g / (1.4 r)``: 0.005 m gives
 0.70 m/s^2, so a 3 m/s kick rolls about 6.4 m (a plausible SPL carpet; our assumption).
 
-The scene is built with :func:`evomotion.sim.nao.scene.scene_xml` (without editing the NAO
-files): the ball body and the sole sensors :data:`evomotion.sim.nao.scene.SOLE_SENSORS`.
+The scene is built with :func:`evomotion.sim.robots.nao.scene.scene_xml` (without editing the NAO
+files): the ball body and the sole sensors :data:`evomotion.sim.robots.nao.scene.SOLE_SENSORS`.
 """
 
 from __future__ import annotations
@@ -18,8 +18,8 @@ from functools import lru_cache
 import mujoco
 import numpy as np
 
-from evomotion.sim import nao
-from evomotion.sim.nao.scene import SOLE_SENSORS, scene_xml, sensor_slices
+from evomotion.sim.robots import nao
+from evomotion.sim.robots.nao.scene import SOLE_SENSORS, scene_xml, sensor_slices
 
 __all__ = ["BALL_MASS_KG", "BALL_RADIUS_M", "SOLE_HALF_M", "ball_qpos_index", "ball_qvel_index",
            "default_ball_xy", "initial_scene_state", "kick_scene_xml", "load_scene",
@@ -81,6 +81,12 @@ def default_ball_xy(model: mujoco.MjModel, gap_m: float = 0.02, pose: np.ndarray
     return np.array([sole[0] + SOLE_HALF_M[0] + BALL_RADIUS_M + gap_m, sole[1]])
 
 
+def studio_state(model: mujoco.MjModel, pose: np.ndarray) -> np.ndarray:
+    """The studio's kick scene: the NAO at rest in ``pose``, the ball in front of its right
+    foot (:func:`default_ball_xy`)."""
+    return initial_scene_state(model, default_ball_xy(model, pose=pose), pose)
+
+
 def rolling_deceleration(rolling_m: float, g: float = 9.81) -> float:
     """Deceleration (m/s^2) of a solid ball rolling without slipping under rolling friction."""
     return rolling_m * g / (1.4 * BALL_RADIUS_M)
@@ -92,9 +98,15 @@ def measured_deceleration(rolling_m: float = 0.005, v0_m_s: float = 1.5) -> floa
     robot) from ``v0_m_s`` for 1 s; slope of its speed (a 10 % lower value than
     :func:`rolling_deceleration`, from MuJoCo's soft contact)."""
     model = load_scene(rolling_m)
+    return rolling_slope(model, initial_scene_state(model, np.array([1.0, 0.5])), v0_m_s)
+
+
+def rolling_slope(model: mujoco.MjModel, state: np.ndarray, v0_m_s: float = 1.5) -> float:
+    """The ball's rolling deceleration (m/s^2) in any kick scene ``model`` from ``state`` (the
+    ball far from the robot): rolled from ``v0_m_s`` along x for 1 s, slope of its speed
+    after the first tenth (a line fitted by least squares)."""
     data = mujoco.MjData(model)
-    mujoco.mj_setState(model, data, initial_scene_state(model, np.array([1.0, 0.5])),
-                       nao.STATE_SPEC)
+    mujoco.mj_setState(model, data, state, nao.STATE_SPEC)
     iv = ball_qvel_index(model)
     data.qvel[iv:iv + 6] = [v0_m_s, 0, 0, 0, v0_m_s / BALL_RADIUS_M, 0]
     n = int(round(1.0 / model.opt.timestep))

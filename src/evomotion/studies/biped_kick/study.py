@@ -1,4 +1,4 @@
-"""The biped-kick study (seed 002): descriptor and the ``evomotion biped-kick`` commands."""
+"""The biped-kick study (paper 002): descriptor and the ``evomotion biped-kick`` commands."""
 
 from __future__ import annotations
 
@@ -13,9 +13,10 @@ from evomotion.core.checks import check_number
 from evomotion.errors import InputError
 from evomotion.studies.base import Study, lazy_hook
 from evomotion.studies.biped_kick.problem import KickConfig, make_problem
+from evomotion.studies.view import Scene, StudyView, lazy
 
 cli = typer.Typer(add_completion=False, no_args_is_help=True,
-                  help="NAO kick optimised with an improved CMA-ES (seed 002).")
+                  help="NAO kick optimised with an improved CMA-ES (paper 002).")
 
 
 #: field coordinates (m) within +-this; headings (rad) within +-2 pi; the inflation radius
@@ -142,9 +143,9 @@ def study(
     variant: Annotated[list[str] | None, typer.Option(help="optimiser (repeatable)")] = None,
     aim: Annotated[list[float] | None, typer.Option(
         help="training aim in degrees (repeatable, within +-30); default: the problem's -30 "
-             "-15 0 15 30; --aim 0 trains straight kicks as the seed does")] = None,
+             "-15 0 15 30; --aim 0 trains straight kicks as the paper does")] = None,
 ) -> None:
-    """The seed's Table 1: optimisers, 100 perturbed kicks, keyframe baseline, aimed accuracy."""
+    """The paper's Table 1: optimisers, 100 perturbed kicks, keyframe baseline, aimed accuracy."""
     from evomotion.studies.biped_kick.experiment import (
         VARIANTS,
         check_outputs,
@@ -175,22 +176,28 @@ ARTIFACTS = "evomotion.studies.biped_kick.artifacts"
 
 STUDY = Study(
     name="biped-kick",
-    description="NAO kick: Bézier foot trajectory + leg IK, improved CMA-ES (seed 002)",
+    description="biped kick (NAO; --robot op3: numerical leg IK): Bézier foot trajectory + "
+                "leg IK, improved CMA-ES (paper 002)",
     problem_config=KickConfig,
     make_problem=make_problem,
-    # plain CMA-ES: the seed's Tent-map and Levy additions did not beat it on the kick
-    # (docs/biped-kick.md, 10 seeds x 360 evaluations); they are the seed preset
+    # plain CMA-ES: the paper's Tent-map and Levy additions did not beat it on the kick
+    # (docs/biped-kick.md, 10 seeds x 360 evaluations); they are the paper preset
     defaults={"algorithm": {"name": "cmaes", "sigma0": 0.15},
               "run": {"max_evaluations": 2000, "generations": 1000}},
-    presets={"seed": {"algorithm": {"name": "cmaes", "chaos": True, "levy": True},
-                      "problem": {"aims_deg": [0.0]}}},
-    preset_notes={"seed": "the seed's improved CMA-ES (Tent-map jumps and Levy flights) on "
-                          "straight kicks only"},
+    presets={"paper": {"algorithm": {"name": "cmaes", "chaos": True, "levy": True},
+                       "problem": {"aims_deg": [0.0]}}},
+    preset_notes={"paper": "the paper's improved CMA-ES (Tent-map jumps and Levy flights) on "
+                           "straight kicks only"},
     core_algorithms=("cmaes", "ga"),
     on_checkpoint=lazy_hook(ARTIFACTS, "on_checkpoint"),
     finalize=lazy_hook(ARTIFACTS, "finalize"),
     best_record=lazy_hook(ARTIFACTS, "best_record"),
     cli=cli,
+    view=StudyView(motions=True, table="best_kicks.json",
+                   scene=Scene("kick", lazy("evomotion.studies.biped_kick.scene", "load_scene"),
+                               lazy("evomotion.studies.biped_kick.scene", "studio_state"),
+                               look_x_m=0.1),
+                   table_title="the kick plan: the best kick aimed at each angle"),
     smoke=(
         "algorithm.pop_size=4",
         "run.max_evaluations=0",

@@ -1,6 +1,6 @@
 """Walking to the kick's stand pose with a NAO step repertoire, in the kick's own simulation.
 
-The repertoire (``humanoid-repertoire`` run folder, format :mod:`evomotion.sim.nao.repertoire`)
+The repertoire (``humanoid-repertoire`` run folder, format :mod:`evomotion.sim.repertoire`)
 holds steps from the ready pose to the ready pose, each with its measured (dx, dy, dtheta). The
 robot first goes from its crouch to the ready pose (``ready.motion``), then walks **closed
 loop**: before every step it reads its torso pose from the simulation and plays the step whose
@@ -29,10 +29,10 @@ import numpy as np
 
 from evomotion.errors import InputError
 from evomotion.run.config import run_of_study
-from evomotion.sim import nao
-from evomotion.sim.nao.motion import Motion
-from evomotion.sim.nao.repertoire import is_nao_repertoire, read_cell, read_index
-from evomotion.sim.nao.replay import motion_targets
+from evomotion.sim.motion import Motion
+from evomotion.sim.repertoire import is_nao_repertoire, read_cell, read_index
+from evomotion.sim.robots import nao
+from evomotion.sim.robots.nao.replay import motion_targets
 from evomotion.sim.rollout import fall_step, torso_track
 from evomotion.studies.biped_kick.planning import bezier, wrap
 

@@ -1,4 +1,4 @@
-"""ZMP stability check from simulated contact forces (seed 002, step 5).
+"""ZMP stability check from simulated contact forces (paper 002, step 5).
 
 On flat ground the zero-moment point equals the centre of pressure (CoP) of the vertical
 ground-reaction forces (Vukobratović & Borovac, "Zero-Moment Point — Thirty Five Years of its

@@ -1,4 +1,4 @@
-"""The seed's fixed-length real path encoding in a frame rotated onto start -> goal.
+"""The paper's fixed-length real path encoding in a frame rotated onto start -> goal.
 
 Zhang et al. (2014, sec. 3.1, after Yan & Xiao 2012): the X' axis runs from the start S to
 the goal G; the segment SG is divided into ``n`` equal parts and a perpendicular L_i is
@@ -7,13 +7,13 @@ vector of the ``n - 1`` coordinates y'_i, one on each perpendicular, and decodes
 polyline S, P_1, ..., P_{n-1}, G with P_i = S + x'_i e + y'_i n (e along SG, n its left
 normal; we put the frame's origin at S, which only shifts y' by a constant).
 
-Reading of the seed's ``m`` (formula (2) is lost from the text; its explanation survives):
+Reading of the paper's ``m`` (formula (2) is lost from the text; its explanation survives):
 "m > 1 ensures the robot does not pass the same cell on different perpendiculars", i.e.
 the spacing of the perpendiculars is at least ``m`` cell diagonals L' = sqrt(2):
-``n = floor(|SG| / (m * sqrt(2)))``. On the seed's maps (S, G at opposite corner cells)
+``n = floor(|SG| / (m * sqrt(2)))``. On the paper's maps (S, G at opposite corner cells)
 this gives 6, 11 and 17 genes for 10x10 (m = 1.2), 15x15 (m = 1.1) and 20x20 (m = 1.05).
 
-Modes: ``discrete`` (the seed) snaps each P_i to the centre of the cell containing it;
+Modes: ``discrete`` (the paper) snaps each P_i to the centre of the cell containing it;
 ``continuous`` keeps P_i as is. Gene bounds are the part of L_i inside the map.
 """
 
@@ -33,7 +33,7 @@ _INSET = 1e-6  # keep perpendicular ends strictly inside the map
 
 
 def parts_from_m(length: float, m: float) -> int:
-    """Number of equal parts of SG for the seed's ``m`` (at least 2)."""
+    """Number of equal parts of SG for the paper's ``m`` (at least 2)."""
     if m <= 0:
         raise ValueError(f"m must be > 0, got {m}")
     return max(2, int(math.floor(length / (m * math.sqrt(2.0)) + 1e-9)))

@@ -1,37 +1,61 @@
-"""The experiment tables of ``evomotion grid-path study`` (seed 004 and beyond it).
+"""The experiment tables of ``evomotion grid-path study`` (paper 004 and beyond it).
 
-``seed``: the seed's maps and parameters (population 100 / 50 generations / m = 1.2 on
-10x10, 225 / 50 / 1.1 on 15x15, 400 / 100 / 1.05 on 20x20), rows comparing cGA
-neighbourhoods, update policies and the panmictic GA. ``beyond``: random 20x20 maps at 25%
-density, success measured against the exact *free* optimum, comparing the seed's encoding
-with the continuous mode, more perpendiculars and the repair step.
+``paper`` (old name ``seed``): the paper's maps and parameters (population 100 / 50
+generations / m = 1.2 on 10x10, 225 / 50 / 1.1 on 15x15, 400 / 100 / 1.05 on 20x20), rows
+comparing cGA neighbourhoods, update policies and the panmictic GA. ``beyond``: random 20x20
+maps at 25% density, success measured against the exact *free* optimum, comparing the paper's
+encoding with the continuous mode, more perpendiculars and the repair step.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import time
 from collections.abc import Iterator
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from evomotion.core.cellular_ga import CGAConfig
 from evomotion.core.ga import GAConfig
-from evomotion.studies.grid_path.outcome import evolve
+from evomotion.run.config import Config, RunSection
+from evomotion.run.in_memory import run_in_memory
+from evomotion.studies.grid_path.path_result import PathResult, outcome
 from evomotion.studies.grid_path.problem import GridPathConfig, GridPathProblem
 from evomotion.studies.grid_path.solvers import Solution, all_optima
 
-SEED_MAPS = {"seed10a": (100, 50, 1.2), "seed10b": (100, 50, 1.2), "seed15": (225, 50, 1.1),
-             "seed20": (400, 100, 1.05)}
-SEED_ROWS = ("cga-L5-line", "cga-C9-line", "cga-L9-line", "cga-C13-line", "cga-Margolus-line",
+#: The bundled maps after the paper's figures (their names are data names and stay) with the
+#: paper's population, generations and ``m`` for each.
+PAPER_MAPS = {"seed10a": (100, 50, 1.2), "seed10b": (100, 50, 1.2), "seed15": (225, 50, 1.1),
+              "seed20": (400, 100, 1.05)}
+PAPER_ROWS = ("cga-L5-line", "cga-C9-line", "cga-L9-line", "cga-C13-line", "cga-Margolus-line",
              "cga-L5-sync", "cga-L5-fixed", "cga-L5-new", "cga-L5-uniform", "ga")
-BEYOND_ROWS = ("seed-encoding", "continuous", "continuous-2x", "continuous+repair-r2",
+BEYOND_ROWS = ("paper-encoding", "continuous", "continuous-2x", "continuous+repair-r2",
                "continuous+repair-r3", "continuous+repair-r5")
 HEADER = ("| map | configuration | success | success (centres) | mean length | best length "
           "| mean conv. gen | s/run |\n|---|---|---|---|---|---|---|---|")
 _POLICY = {"line": "line_sweep", "sync": "synchronous", "fixed": "fixed_random_sweep",
            "new": "new_random_sweep", "uniform": "uniform_choice"}
 POLICY_SHORT = tuple(_POLICY)
+#: ``--experiment`` choices, and old names still accepted (``seed`` became ``paper``)
+EXPERIMENTS = ("paper", "beyond")
+OLD_EXPERIMENT_NAMES = {"seed": "paper"}
+#: Old names of table rows still accepted (``seed-encoding`` became ``paper-encoding``)
+OLD_ROW_NAMES = {"seed-encoding": "paper-encoding"}
+
+
+def evolve(problem: GridPathProblem, alg: Any, seed: int, generations: int,
+           evaluator: Any = None) -> PathResult:
+    """One run of ``generations`` generations in memory (the tables' many short runs, through
+    :func:`~evomotion.run.in_memory.run_in_memory`); ``evaluator`` (default: this process)
+    evaluates every fitness batch."""
+    cfg = Config("grid-path", RunSection(seed=seed, generations=generations, checkpoint_every=0),
+                 alg, problem.cfg)
+    t0 = time.perf_counter()
+    res = run_in_memory(cfg, problem, evaluator=evaluator)
+    return outcome(problem, res.driver, res.state, res.rows, res.generation, res.evaluations,
+                   time.perf_counter() - t0)
 
 
 def algorithm_for(row: str, pop: int, pc: float, pm: float) -> CGAConfig | GAConfig:
@@ -73,11 +97,11 @@ def map_row(map_name: str, config: str, problem: GridPathProblem, alg, gens: int
                float(np.mean([r.seconds for r in res])))
 
 
-def seed_table(seeds: int, maps: list[str], rows: list[str], pc: float, pm: float,
-               generations: int = 0) -> Iterator[Row]:
-    """Rows of the seed experiment; success is within 1% of the octile optimum."""
+def paper_table(seeds: int, maps: list[str], rows: list[str], pc: float, pm: float,
+                generations: int = 0) -> Iterator[Row]:
+    """Rows of the paper experiment; success is within 1% of the octile optimum."""
     for name in maps:
-        pop, gens, m = SEED_MAPS[name]
+        pop, gens, m = PAPER_MAPS[name]
         problem = GridPathProblem(GridPathConfig(map=name, m=m))
         optima = all_optima(problem.map)
         for row in rows:
@@ -87,7 +111,7 @@ def seed_table(seeds: int, maps: list[str], rows: list[str], pc: float, pm: floa
 
 def beyond_config(row: str, map_spec: str) -> GridPathConfig:
     base = GridPathConfig(map=map_spec, m=1.05)
-    if row == "seed-encoding":
+    if OLD_ROW_NAMES.get(row, row) == "paper-encoding":
         return base
     n = 2 * GridPathProblem(base).enc.n_parts if "2x" in row else 0
     radius = float(row.split("repair-r")[1]) if "repair-r" in row else 2.0

@@ -13,7 +13,7 @@ Moving AI format (Sturtevant 2012, movingai.com/benchmarks/formats.html)::
     map
     <H rows of W characters>    '.', 'G', 'S' passable; '@', 'O', 'T', 'W' blocked
 
-The seed's cell numbering (Zhang et al. 2014, sec. 3.1.2) counts cells from 1, starting at
+The paper's cell numbering (Zhang et al. 2014, sec. 3.1.2) counts cells from 1, starting at
 the bottom-left cell, left to right, then row by row upwards: see :func:`cell_number`.
 """
 
@@ -77,7 +77,7 @@ class GridMap:
 
 
 def cell_number(x: np.ndarray, y: np.ndarray, width: int) -> np.ndarray:
-    """Seed's cell number ``P = W * floor(y) + floor(x) + 1`` of points ``(x, y)``."""
+    """Paper's cell number ``P = W * floor(y) + floor(x) + 1`` of points ``(x, y)``."""
     return width * np.floor(y).astype(int) + np.floor(x).astype(int) + 1
 
 

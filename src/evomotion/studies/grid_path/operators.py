@@ -1,4 +1,4 @@
-"""The seed's validity-keeping path operators on the perpendicular encoding.
+"""The paper's validity-keeping path operators on the perpendicular encoding.
 
 Zhang et al. (2014, sec. 3.1 and 3.2.3):
 
@@ -73,7 +73,7 @@ def _stages(total: int) -> list[int]:
 
 @dataclass
 class PathOperators:
-    """Seed initialisation and mutation for one map, encoding and validity rule."""
+    """The paper's initialisation and mutation for one map, encoding and validity rule."""
 
     enc: PerpendicularEncoding
     blocked: np.ndarray
@@ -210,7 +210,7 @@ class PathOperators:
         return y_out, found
 
     def initial_population(self, n: int, rng: np.random.Generator) -> np.ndarray:
-        """``n`` chromosomes built point by point as in the seed (see module doc)."""
+        """``n`` chromosomes built point by point as in the paper (see module doc)."""
         d = self.enc.dim
         x = np.zeros((n, d))
         todo = np.arange(n)
@@ -229,7 +229,7 @@ class PathOperators:
         return x
 
     def mutate(self, x: np.ndarray, rng: np.random.Generator, rate: float) -> np.ndarray:
-        """Seed mutation on each row with probability ``rate`` (see module doc)."""
+        """The paper's mutation on each row with probability ``rate`` (see module doc)."""
         n, d = x.shape
         u = rng.random(n)  # u < rate picks the row; u / rate (uniform) picks the point
         rows = (u < rate).nonzero()[0]

@@ -6,7 +6,7 @@ Fitness (minimised), for the decoded polyline S, P_1..P_{n-1}, G::
 
 with ``penalty = width + height`` cells unless set (longer than any detour a valid path
 makes on the map, so every valid path beats every invalid one of similar shape). The
-seed's ``m`` sets the number of perpendiculars, ``n = floor(|SG| / (m sqrt 2))`` (see
+paper's ``m`` sets the number of perpendiculars, ``n = floor(|SG| / (m sqrt 2))`` (see
 :mod:`.encoding`); ``n_parts > 0`` overrides it (the "more perpendiculars" variant).
 
 Validity uses the ``"closed"`` rule (centres model) in ``discrete`` mode and the ``"open"``
@@ -54,8 +54,8 @@ class GridPathConfig:
     map: str = "seed10a"  # bundled name, a .map / 0-1 file, or "random:SIZE:DENSITY:SEED"
     start: str = ""  # "x,y" cell indices; default bottom-left cell
     goal: str = ""  # default top-right cell
-    mode: str = "discrete"  # "discrete" (seed) or "continuous"
-    m: float = 1.2  # seed's perpendicular spacing factor
+    mode: str = "discrete"  # "discrete" (the paper's) or "continuous"
+    m: float = 1.2  # paper's perpendicular spacing factor
     n_parts: int = 0  # > 0 overrides m
     rule: str = ""  # "" = closed for discrete, open for continuous
     penalty: float = 0.0  # per invalid segment; 0 = width + height
@@ -169,11 +169,11 @@ class GridPathProblem:
         return self.enc.decode(genomes)
 
     def initial_population(self, n: int, rng: np.random.Generator) -> np.ndarray:
-        """The seed's valid initial paths (the run loop passes them to the optimizer)."""
+        """The paper's valid initial paths (the run loop passes them to the optimizer)."""
         return self.operators.initial_population(n, rng)
 
     def mutate(self, x: np.ndarray, rng: np.random.Generator, rate: float) -> np.ndarray:
-        """The seed's validity-keeping path mutation, replacing the registry mutation."""
+        """The paper's validity-keeping path mutation, replacing the registry mutation."""
         return self.operators.mutate(x, rng, rate)
 
     def evaluate(self, genomes: np.ndarray) -> Evaluation:

@@ -1,6 +1,6 @@
 """Repair that closes the gap between an evolved path and the free-space optimum.
 
-The seed's encoding puts exactly one waypoint on each perpendicular, so its paths cannot
+The paper's encoding puts exactly one waypoint on each perpendicular, so its paths cannot
 bend exactly at obstacle corners, where free-space shortest paths bend (Lozano-Perez &
 Wesley 1979). The repair keeps the path's corridor and makes it taut:
 

@@ -18,17 +18,20 @@ optimum: free <= centres <= octile) are tested, in one vectorised batch.
 
 from __future__ import annotations
 
-import heapq
 import math
+from collections.abc import Hashable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
+from evomotion.core.search import best_first
 from evomotion.studies.grid_path.geometry import segments_valid
 from evomotion.studies.grid_path.maps import GridMap, octile_moves
 
 SQRT2 = math.sqrt(2.0)
 MODELS = ("octile", "centres", "free")
+UNBOUNDED = 1 << 62  # no expansion budget: the exact searches run to the goal
 
 
 @dataclass(frozen=True)
@@ -42,76 +45,113 @@ class Solution:
     n_diagonal: int = -1
 
 
+class _OctileGrid:
+    """The 8-connected grid for the core search: a state is ``(x, y, n_straight, n_diagonal)``
+    (the length kept exact), its duplicate key the cell ``(x, y)``."""
+
+    def __init__(self, m: GridMap) -> None:
+        self.m = m
+
+    def start(self) -> tuple[int, int, int, int]:
+        return (*self.m.start, 0, 0)
+
+    def is_goal(self, s: tuple) -> bool:
+        return (s[0], s[1]) == self.m.goal
+
+    def key(self, s: tuple) -> tuple[int, int]:
+        return s[0], s[1]
+
+    def successors(self, s: tuple) -> list[tuple[bool, tuple, float]]:
+        x0, y0, ns, nd = s
+        return [(diag, (x, y, ns, nd + 1) if diag else (x, y, ns + 1, nd), SQRT2 if diag else 1.0)
+                for x, y, diag in octile_moves(self.m.blocked, x0, y0)]
+
+
+def _exact_g_then_cell(goal: bool, g: float, key: Hashable, s: Any) -> tuple:
+    """Ties of f: the shorter exact length, then the cell (the search's order before the core
+    search took it over)."""
+    return s[2] + s[3] * SQRT2, key
+
+
 def octile_astar(m: GridMap) -> Solution:
-    """Exact octile shortest path between the start and goal cell centres."""
+    """Exact octile shortest path between the start and goal cell centres (A* of the core
+    search; f = exact length + octile distance, a consistent heuristic, so nothing re-opens)."""
     gx, gy = m.goal
 
-    def h(x: int, y: int) -> float:
-        dx, dy = abs(x - gx), abs(y - gy)
-        return (SQRT2 - 1.0) * min(dx, dy) + max(dx, dy)
+    def evaluate(pf: Any, pg: Any, ps: Any, s: tuple, rule: Any, step_cost: float) -> float:
+        dx, dy = abs(s[0] - gx), abs(s[1] - gy)
+        return (s[2] + s[3] * SQRT2) + ((SQRT2 - 1.0) * min(dx, dy) + max(dx, dy))
 
-    best: dict[tuple[int, int], tuple[int, int]] = {m.start: (0, 0)}  # (straight, diagonal)
-    parent: dict[tuple[int, int], tuple[int, int]] = {}
-    heap = [(h(*m.start), 0.0, m.start)]
-    closed: set[tuple[int, int]] = set()
-    while heap:
-        _, g, node = heapq.heappop(heap)
-        if node in closed:
-            continue
-        closed.add(node)
-        if node == m.goal:
-            break
-        ns, nd = best[node]
-        for x, y, diag in octile_moves(m.blocked, *node):
-            cand = (ns, nd + 1) if diag else (ns + 1, nd)
-            cg = cand[0] + cand[1] * SQRT2
-            old = best.get((x, y))
-            if old is None or cg < old[0] + old[1] * SQRT2 - 1e-12:
-                best[(x, y)], parent[(x, y)] = cand, node
-                heapq.heappush(heap, (cg + h(x, y), cg, (x, y)))
-    if m.goal not in closed:
+    res = best_first(_OctileGrid(m), evaluate, max_expansions=UNBOUNDED,
+                     min_improvement=1e-12, tie_break=_exact_g_then_cell)
+    if not res.found:
         raise ValueError(f"{m.name}: goal unreachable")
-    path = [m.goal]
-    while path[-1] != m.start:
-        path.append(parent[path[-1]])
-    ns, nd = best[m.goal]
-    pts = np.array(path[::-1], dtype=float) + 0.5
+    _, _, ns, nd = res.states[-1]
+    pts = np.array([s[:2] for s in res.states], dtype=float) + 0.5
     return Solution("octile", ns + nd * SQRT2, pts, ns, nd)
+
+
+class _Visibility:
+    """Straight valid segments between ``nodes`` for the core search, tested lazily: when
+    ``u`` is expanded, only the segments that improve a tentative distance and can still beat
+    ``ub`` and the goal's tentative distance are tested, in one vectorised batch. It keeps its
+    own copy of the tentative distances ``g`` (the search accepts every edge it returns)."""
+
+    def __init__(self, blocked: np.ndarray, nodes: np.ndarray, s: int, t: int, rule: str,
+                 ub: float) -> None:
+        self.blocked, self.nodes, self.s, self.t, self.rule = blocked, nodes, s, t, rule
+        n = nodes.shape[0]
+        self.h = np.hypot(*(nodes - nodes[t]).T)
+        self.g = np.full(n, np.inf)
+        self.g[s] = 0.0
+        self.done = np.zeros(n, dtype=bool)
+        self.ub = ub + 1e-9
+
+    def start(self) -> int:
+        return self.s
+
+    def is_goal(self, u: int) -> bool:
+        return u == self.t
+
+    def key(self, u: int) -> int:
+        return u
+
+    def successors(self, u: int) -> list[tuple[None, int, float]]:
+        nodes, g, h, done = self.nodes, self.g, self.h, self.done
+        done[u] = True
+        d = np.hypot(*(nodes - nodes[u]).T)
+        cand = ~done & (g[u] + d < g - 1e-12) & (g[u] + d + h <= min(self.ub, g[self.t]))
+        idx = np.flatnonzero(cand)
+        if idx.size == 0:
+            return []
+        ok = segments_valid(self.blocked, np.repeat(nodes[u:u + 1], idx.size, 0), nodes[idx],
+                            self.rule)
+        out = []
+        for v in idx[ok].tolist():
+            g[v] = g[u] + d[v]
+            out.append((None, v, d[v]))
+        return out
 
 
 def visibility_astar(blocked: np.ndarray, nodes: np.ndarray, s: int, t: int, rule: str,
                      ub: float = math.inf) -> tuple[float, list[int]]:
-    """Exact shortest path from node ``s`` to node ``t`` over straight valid segments."""
-    n = nodes.shape[0]
-    h = np.hypot(*(nodes - nodes[t]).T)
-    g = np.full(n, np.inf)
-    g[s] = 0.0
-    parent = np.full(n, -1)
-    done = np.zeros(n, dtype=bool)
-    ub = ub + 1e-9
-    heap = [(h[s], s)]
-    while heap:
-        _, u = heapq.heappop(heap)
-        if done[u]:
-            continue
-        done[u] = True
-        if u == t:
-            break
-        d = np.hypot(*(nodes - nodes[u]).T)
-        cand = ~done & (g[u] + d < g - 1e-12) & (g[u] + d + h <= min(ub, g[t]))
-        idx = np.flatnonzero(cand)
-        if idx.size == 0:
-            continue
-        ok = segments_valid(blocked, np.repeat(nodes[u:u + 1], idx.size, 0), nodes[idx], rule)
-        for v in idx[ok].tolist():
-            g[v], parent[v] = g[u] + d[v], u
-            heapq.heappush(heap, (g[v] + h[v], v))
-    if not np.isfinite(g[t]):
+    """Exact shortest path from node ``s`` to node ``t`` over straight valid segments (A* of
+    the core search, h = straight-line distance; ties of f go to the lower node index)."""
+    space = _Visibility(blocked, nodes, s, t, rule, ub)
+    h = space.h
+
+    def evaluate(pf: Any, pg: Any, ps: Any, v: int, rule: Any, step_cost: float) -> float:
+        return (0.0 if pg is None else pg + step_cost) + h[v]
+
+    res = best_first(space, evaluate, max_expansions=UNBOUNDED,
+                     min_improvement=-math.inf, tie_break=_node_index)
+    if not res.found:
         raise ValueError("goal unreachable")
-    path = [t]
-    while path[-1] != s:
-        path.append(int(parent[path[-1]]))
-    return float(g[t]), path[::-1]
+    return float(space.g[t]), res.states
+
+
+def _node_index(goal: bool, g: float, key: Hashable, s: Any) -> Hashable:
+    return key
 
 
 def centres_optimum(m: GridMap, ub: float = math.inf) -> Solution:

@@ -1,12 +1,12 @@
-"""The grid-path study (seed 004): descriptor, artifacts and ``evomotion grid-path`` commands.
+"""The grid-path study (paper 004): descriptor, artifacts and ``evomotion grid-path`` commands.
 
 ``evomotion run grid-path --out DIR`` is an ordinary run of the engine (resume, evaluators, stop
-rules, stats): the problem supplies the seed's valid initial paths and validity-keeping
+rules, stats): the problem supplies the paper's valid initial paths and validity-keeping
 mutation, the cellular GA (or the panmictic GA) is stepped one generation (one sweep) at a time.
 Besides the engine's files it writes ``path.png`` and the path keys of ``best.json``
 (``waypoints``, ``length``, ``valid``, ``optima``, ``gap_percent``). The default is the best
 known setting (continuous encoding + repair, synchronous cGA: the exact free optimum on every
-bundled map); ``--preset seed`` is the seed's literal one (discrete encoding, line sweep,
+bundled map); ``--preset paper`` is the paper's literal one (discrete encoding, line sweep,
 pc 0.05, pm 0.01). Exit code 3 when the final path is not valid.
 """
 
@@ -21,10 +21,11 @@ import typer
 from evomotion.errors import InputError
 from evomotion.studies.base import Study
 from evomotion.studies.grid_path.maps import random_map, write_map
-from evomotion.studies.grid_path.outcome import best_record as path_record
-from evomotion.studies.grid_path.outcome import outcome
+from evomotion.studies.grid_path.path_result import best_record as path_record
+from evomotion.studies.grid_path.path_result import outcome
 from evomotion.studies.grid_path.problem import GridPathConfig, GridPathProblem
 from evomotion.studies.grid_path.solvers import all_optima
+from evomotion.studies.view import StudyView, lazy
 
 NOT_VALID = 3
 
@@ -66,7 +67,7 @@ def finalize(ctx: Any) -> int:
 
 
 cli = typer.Typer(add_completion=False, no_args_is_help=True,
-                  help="Grid path planning with a cellular GA (seed 004).")
+                  help="Grid path planning with a cellular GA (paper 004).")
 
 
 #: ``study``: runs per row, random maps, population and generations at most
@@ -100,15 +101,17 @@ def make_map(
 
 @cli.command("study")
 def study(
-    experiment: Annotated[str, typer.Option(help="seed or beyond")] = "seed",
+    experiment: Annotated[str, typer.Option(
+        help="paper or beyond ('seed' is the old name of 'paper')")] = "paper",
     seeds: Annotated[int, typer.Option(help="Runs per row (1 to 1000)")] = 30,
-    maps: Annotated[list[str] | None, typer.Option("--map", help="Seed map (repeatable)")] = None,
+    maps: Annotated[list[str] | None, typer.Option(
+        "--map", help="Map of the paper experiment (repeatable)")] = None,
     rows: Annotated[list[str] | None, typer.Option("--row", help="Row (repeatable)")] = None,
-    pc: Annotated[float, typer.Option(help="Crossover rate in [0, 1] (seed: 0.05)")] = 0.05,
+    pc: Annotated[float, typer.Option(help="Crossover rate in [0, 1] (paper: 0.05)")] = 0.05,
     pm: Annotated[float, typer.Option(
-        help="Mutation rate per individual in [0, 1] (seed: 0.01)")] = 0.01,
+        help="Mutation rate per individual in [0, 1] (paper: 0.01)")] = 0.01,
     generations: Annotated[int, typer.Option(
-        help="0: the seed's per map (at most 100000)")] = 0,
+        help="0: the paper's per map (at most 100000)")] = 0,
     n_maps: Annotated[int, typer.Option(help="beyond: random maps (1 to 1000)")] = 10,
     pop: Annotated[int, typer.Option(help="beyond: population (at most 100000)")] = 100,
     update: Annotated[str, typer.Option(help="beyond: line, sync, fixed, new, uniform")] = "line",
@@ -118,7 +121,15 @@ def study(
     from evomotion.core.checks import check_choice, check_number
     from evomotion.studies.grid_path import experiments as ex
 
-    check_choice("--experiment", experiment, ("seed", "beyond"))
+    if experiment in ex.OLD_EXPERIMENT_NAMES:
+        typer.echo(f"note: --experiment {experiment} is the old name of --experiment "
+                   f"{ex.OLD_EXPERIMENT_NAMES[experiment]}", err=True)
+        experiment = ex.OLD_EXPERIMENT_NAMES[experiment]
+    for old in set(rows or []) & set(ex.OLD_ROW_NAMES):
+        typer.echo(f"note: --row {old} is the old name of --row {ex.OLD_ROW_NAMES[old]}",
+                   err=True)
+    rows = [ex.OLD_ROW_NAMES.get(r, r) for r in rows] if rows else rows
+    check_choice("--experiment", experiment, ex.EXPERIMENTS)
     check_number("--seeds", seeds, lo=1, hi=MAX_SEEDS, integer=True)
     check_number("--pc", pc, lo=0.0, hi=1.0)
     check_number("--pm", pm, lo=0.0, hi=1.0)
@@ -127,31 +138,31 @@ def study(
     check_number("--pop", pop, lo=1, hi=MAX_POP, integer=True)
     check_choice("--update", update, ex.POLICY_SHORT)
     for name in maps or []:
-        if name not in ex.SEED_MAPS:
-            raise InputError(f"--map: unknown {name!r}; available: {', '.join(ex.SEED_MAPS)}")
-    known = ex.SEED_ROWS if experiment == "seed" else ex.BEYOND_ROWS
+        if name not in ex.PAPER_MAPS:
+            raise InputError(f"--map: unknown {name!r}; available: {', '.join(ex.PAPER_MAPS)}")
+    known = ex.PAPER_ROWS if experiment == "paper" else ex.BEYOND_ROWS
     for row in rows or []:
         check_choice("--row", row, known)
     # every optimizer setting checked before the first run
-    for row in (rows or ex.SEED_ROWS) if experiment == "seed" else ():
-        for name in maps or list(ex.SEED_MAPS):
-            ex.algorithm_for(row, ex.SEED_MAPS[name][0], pc, pm).validate()
+    for row in (rows or ex.PAPER_ROWS) if experiment == "paper" else ():
+        for name in maps or list(ex.PAPER_MAPS):
+            ex.algorithm_for(row, ex.PAPER_MAPS[name][0], pc, pm).validate()
     if experiment == "beyond":
         ex.algorithm_for(f"cga-L5-{update}", pop, pc, pm).validate()
-    literal = " (the seed's literal rates)" if (pc, pm) == (0.05, 0.01) else ""
-    if experiment == "seed":
-        typer.echo(f"rows: --preset seed (discrete encoding, the seed's m, population and "
+    literal = " (the paper's literal rates)" if (pc, pm) == (0.05, 0.01) else ""
+    if experiment == "paper":
+        typer.echo(f"rows: --preset paper (discrete encoding, the paper's m, population and "
                    f"generations per map) with pc {pc:g}, pm {pm:g}{literal}; each row sets "
                    "the neighbourhood and update policy (ga: the panmictic GA)")
     else:
         typer.echo(f"rows: cGA L5 {update}, population {pop}, pc {pc:g}, pm {pm:g}{literal}; "
-                   "'seed-encoding' is --preset seed's discrete encoding, the others the "
+                   "'paper-encoding' is --preset paper's discrete encoding, the others the "
                    "default's continuous encoding (the default setting is "
                    "'continuous+repair-r5' with --update sync)")
     typer.echo(ex.HEADER)
-    if experiment == "seed":
-        table = ex.seed_table(seeds, maps or list(ex.SEED_MAPS), rows or list(ex.SEED_ROWS),
-                              pc, pm, generations)
+    if experiment == "paper":
+        table = ex.paper_table(seeds, maps or list(ex.PAPER_MAPS), rows or list(ex.PAPER_ROWS),
+                               pc, pm, generations)
     else:
         table = ex.beyond_table(seeds, n_maps, rows or list(ex.BEYOND_ROWS), pop,
                                 generations or 50, pc, pm, update)
@@ -159,7 +170,7 @@ def study(
         typer.echo(row.line())
 
 
-SEED_PRESET = {
+PAPER_PRESET = {
     "problem": {"mode": "discrete", "m": 1.2, "repair": False},
     "algorithm": {"name": "cga", "pop_size": 100, "neighbourhood": "L5", "update": "line_sweep",
                   "crossover": "one_point", "crossover_rate": 0.05, "mutation_rate": 0.01},
@@ -168,10 +179,10 @@ SEED_PRESET = {
 
 STUDY = Study(
     name="grid-path",
-    description="Grid path planning with a cellular GA (seed 004)",
+    description="Grid path planning with a cellular GA (paper 004)",
     problem_config=GridPathConfig,
     make_problem=make_problem,
-    # best known (docs/grid-path.md, "beyond the seed"): continuous encoding + repair r5 with
+    # best known (docs/grid-path.md, "beyond the paper"): continuous encoding + repair r5 with
     # a synchronous cGA at pc 0.9 / pm 0.2 reaches the exact free optimum (299/300 runs)
     defaults={"algorithm": {"name": "cga", "pop_size": 100, "update": "synchronous",
                             "crossover": "one_point", "crossover_rate": 0.9,
@@ -179,13 +190,14 @@ STUDY = Study(
               "problem": {"mode": "continuous", "m": 1.05, "repair": True,
                           "repair_radius": 5.0},
               "run": {"generations": 50, "history_every": 1}},
-    presets={"seed": SEED_PRESET},
-    preset_notes={"seed": "the seed's literal setting: discrete encoding, cGA L5 line sweep, "
-                          "pc 0.05, pm 0.01, 100 x 50"},
+    presets={"paper": PAPER_PRESET},
+    preset_notes={"paper": "the paper's literal setting: discrete encoding, cGA L5 line sweep, "
+                           "pc 0.05, pm 0.01, 100 x 50"},
     core_algorithms=("cga", "ga"),
     finalize=finalize,
     best_record=best_record,
     cli=cli,
+    view=StudyView(frames=lazy("evomotion.studies.grid_path.views", "studio_frames")),
     smoke=(
         "algorithm.pop_size=16",
     ),

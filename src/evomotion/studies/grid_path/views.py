@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import matplotlib
 
@@ -13,6 +14,7 @@ import numpy as np  # noqa: E402
 from evomotion.outfile import save_figure  # noqa: E402
 from evomotion.studies.grid_path.maps import GridMap  # noqa: E402
 from evomotion.studies.grid_path.solvers import Solution  # noqa: E402
+from evomotion.studies.view import Frames, RunFiles  # noqa: E402
 
 STYLES = {"octile": ("tab:orange", (0, (5, 2))), "centres": ("tab:green", (0, (3, 2))),
           "free": ("tab:purple", (0, (1, 1.5)))}
@@ -58,3 +60,20 @@ def path_figure(m: GridMap, best: np.ndarray, optima: dict[str, Solution], title
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.06), ncol=2, fontsize=8)
     fig.tight_layout()
     return fig
+
+
+def studio_frames(files: RunFiles) -> Frames:
+    """The studio's view of a grid-path run: the map with each recorded generation's best
+    path."""
+    hist = files.history()
+    prob = files.problem()
+    sign = -1.0 if getattr(prob, "sense", "min") == "max" else 1.0
+
+    def draw(k: int) -> tuple[Any, str]:
+        g, pop, fit = hist[k]
+        i = int(np.nanargmin(np.where(np.isfinite(fit), sign * fit, np.inf)))
+        path = prob.decode(pop[i:i + 1])[0]
+        fig = path_figure(prob.map, np.asarray(path), {}, f"generation {g}: best path")
+        return fig, f"generation {g}: best fitness {fit[i]:.6g}"
+
+    return Frames(len(hist), draw)

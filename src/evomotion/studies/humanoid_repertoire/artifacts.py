@@ -23,9 +23,9 @@ import numpy as np
 
 from evomotion.outfile import WriteError, atomic_write_text, claim, kind_of, reason
 from evomotion.run.context import RunContext
-from evomotion.sim import nao
-from evomotion.sim.nao.motion import Motion, format_motion
-from evomotion.sim.nao.repertoire import INDEX, chain, read_cell, read_index  # noqa: F401
+from evomotion.sim.motion import Motion, format_motion
+from evomotion.sim.repertoire import INDEX, chain, read_cell, read_index  # noqa: F401
+from evomotion.sim.robots import nao
 from evomotion.studies.humanoid_repertoire import step
 
 READY_S = 0.6
@@ -66,7 +66,7 @@ def write_repertoire(out_dir: Path, hold_s: float, problem: Any = None) -> list[
     from evomotion.studies.humanoid_repertoire.runfiles import load_archive
 
     check_number("hold (s)", hold_s, lo=0.0, hi=MAX_HOLD_S)
-    robot = None if getattr(problem, "is_nao", True) else problem.robot
+    robot = None if problem is None or problem.steps.name == "closed_form" else problem.robot
     box = MEASURES if robot is None else problem.measure_spec
     motion_of = step_motion if robot is None else problem.motion
     a = load_archive(out_dir / "archive.npz")
@@ -156,12 +156,13 @@ def run_problem(run: Path, config: Any = None) -> Any:
     """The problem of a run folder (from its config.toml, or ``config``, its resolved
     :class:`~evomotion.run.config.Config`) when it is another robot's than the NAO, else
     None (the NAO's steps need no problem to be rebuilt)."""
-    from evomotion.sim.robot import is_nao
+    from evomotion.sim.robots import capabilities_of
     from evomotion.studies.humanoid_repertoire.problem import make_problem
     from evomotion.studies.humanoid_repertoire.runfiles import run_config
+    from evomotion.studies.humanoid_repertoire.steppers import CLOSED_FORM_CAPABILITIES
 
     cfg = config if config is not None else run_config(run)
-    if is_nao(cfg.problem.robot):
+    if set(CLOSED_FORM_CAPABILITIES) <= set(capabilities_of(cfg.problem.robot)):
         return None
     return make_problem(cfg.problem)
 
@@ -211,7 +212,8 @@ def finalize(ctx: RunContext) -> None:
     try:
         contact_sheet(ctx.out_dir / "repertoire", sheet,
                       ctx.out_dir / "repertoire" / "contact_sheet.mp4",
-                      robot=None if ctx.problem.is_nao else ctx.problem.robot)
+                      robot=None if ctx.problem.steps.name == "closed_form"
+                      else ctx.problem.robot)
     except RuntimeError as exc:  # no GL backend (RenderUnavailableError) or a render error
         ctx.log(f"contact_sheet.mp4 skipped: {exc}")
         return
@@ -226,11 +228,11 @@ def contact_sheet(folder: Path, entries: list[dict], video: Path, hold_s: float 
 
     check_videos_on()
     if robot is None:
-        from evomotion.sim.nao.replay import simulate_motion
+        from evomotion.sim.robots.nao.replay import simulate_motion
 
         runs = [simulate_motion(read_cell(folder, e), hold_s=hold_s) for e in entries]
         return render_video(np.concatenate([r["qpos"] for r in runs]), runs[0]["dt"], video)
-    from evomotion.sim.robot.play import play_motion, robot_camera
+    from evomotion.sim.play import play_motion, robot_camera
 
     if not robot.xml:
         raise RuntimeError("the robot's edited model cannot be written as MJCF text")

@@ -1,11 +1,14 @@
-"""The repertoire problem: one NAO step (:mod:`.step`), described by what it does.
+"""The repertoire problem: one step of a robot (:mod:`.step`), described by what it does; the
+robot (``problem.robot``, the NAO by default) is a parameter.
 
-Each genome's key poses (every 20 ms, ready pose to ready pose) become one servo target per
-physics step by the linear interpolation :func:`evomotion.sim.nao.replay.motion_targets`
-applies to a ``.motion``, from the robot standing in the ready pose, on the model every
-study uses; the motion is followed by ``hold_s`` (2 s) in the ready pose. So the cell's
-exported ``.motion`` replayed with ``evomotion replay --hold 2`` is the evaluated rollout
-(measured at the same physics step; the batch runs to the longest step's end).
+Each genome's key poses (every 20 ms, ready pose to ready pose; the NAO's through its
+closed-form leg IK, another biped's through a numerical one, :mod:`.steppers`) become one
+servo target per physics step by the linear interpolation a ``.motion`` is played with
+(:func:`evomotion.sim.robots.nao.replay.motion_targets` on the NAO), from the robot standing
+in the ready pose, on the model every study uses; the motion is followed by ``hold_s`` (2 s)
+in the ready pose. So the cell's exported ``.motion`` replayed with ``evomotion replay
+--hold 2`` is the evaluated rollout (measured at the same physics step; the batch runs to
+the longest step's end).
 
 Measures (behaviour descriptors), at the end of the hold, in the robot's initial frame:
 ``dx_m`` / ``dy_m``, the torso's displacement (forward / left; the torso stands over the
@@ -21,58 +24,53 @@ rollout.ServoWork`; 0.01 per J): between about -1 and 0; one that falls scores
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from evomotion.core.checks import check_fields, check_number, check_text
-from evomotion.core.problem import Evaluation, GenomeSpec, MeasureSpec
+from evomotion.core.problem import Evaluation, GenomeSpec
 from evomotion.errors import InputError
-from evomotion.sim import nao
-from evomotion.sim.backend import BatchedRollouts, make_simulator, validate_backend
-from evomotion.sim.nao.motion import Motion
-from evomotion.sim.nao.replay import motion_targets
+from evomotion.sim.backend import BatchedRollouts, make_simulator
+from evomotion.sim.motion import Motion
+from evomotion.sim.physics_config import PhysicsConfig, validate_physics
+from evomotion.sim.robots import nao
 from evomotion.sim.rollout import ServoWork, fall_step, fell, torso_track
 from evomotion.studies.humanoid_repertoire import step
+from evomotion.studies.humanoid_repertoire.steppers import MEASURES, METRICS, stepper_for
 
-METRICS = ("time_to_fall_s", "fell", "dx_m", "dy_m", "dtheta_deg", "peak_tilt_deg", "work_j")
-MEASURES = MeasureSpec(("dx_m", "dy_m", "dtheta_deg"), np.array([-0.10, -0.08, -45.0]),
-                       np.array([0.15, 0.08, 45.0]), (10, 8, 9))
 FALLEN_OBJECTIVE = -10.0
 NAO_TIMESTEP_S = 0.004
-#: the documented ranges of the ``[problem]`` floats: hold and segment (s), objective lost
-#: per joule, fall height (m; no biped's torso falls from higher)
+#: the documented ranges of the ``[problem]`` floats: hold (s), objective lost per joule,
+#: fall height (m; no biped's torso falls from higher)
 MAX_HOLD_S = 60.0
-MAX_SEGMENT_S = 60.0
 MAX_EFFORT_WEIGHT = 100.0
 MAX_FALL_HEIGHT_M = 5.0
 
 
 @dataclass(frozen=True)
-class HumanoidRepertoireConfig:
-    """The ``[problem]`` section of ``humanoid-repertoire``."""
+class RepertoireKeys:
+    """The repertoire's own keys of ``[problem]`` (first in ``config.toml``; the physics keys
+    are :mod:`evomotion.sim.physics_config`'s)."""
 
     hold_s: float = 2.0  # the ready pose held after the step (s)
     effort_weight: float = 0.01  # objective lost per joule of servo work
     fall_height_m: float = nao.FALL_HEIGHT_M
     fall_tilt_rad: float = nao.FALL_TILT_RAD
-    threads: int = 0  # mujoco.rollout threads; 0 = all cores
-    backend: str = "cpu"  # physics: cpu (mujoco.rollout, float64) | warp (MuJoCo Warp, float32)
-    warp_device: str = ""  # backend warp: "cuda:0", "cpu", ...; "" = the first GPU, else the CPU
-    warp_deterministic: bool = True  # backend warp: MuJoCo Warp opt.deterministic = ALL
-    warp_nconmax: int = 16  # backend warp: contacts per world to start with (grown when short)
-    batch_rollouts: int = 2048  # rollouts simulated (and recorded in memory) at once
-    segment_s: float = 0.4  # fallen robots stop being simulated at these boundaries (s)
-    #: the robot: "" or "nao" (the NAO, through its closed-form leg IK), another bundled
-    #: biped (op3, dm-humanoid) or a spec .toml (sim/robot): the same step, scaled to its
-    #: size, through a numerical leg IK (robot_step.py); its [fall] thresholds apply unless
-    #: fall_height_m / fall_tilt_rad are set
-    robot: str = ""
 
-    def for_worker(self) -> HumanoidRepertoireConfig:
-        return dataclasses.replace(self, threads=1) if self.threads == 0 else self
+
+@dataclass(frozen=True)
+class HumanoidRepertoireConfig(PhysicsConfig, RepertoireKeys):
+    """The ``[problem]`` section of ``humanoid-repertoire``: its own keys
+    (:class:`RepertoireKeys`), the physics' (:mod:`evomotion.sim.physics_config`), the
+    robot."""
+
+    #: the robot: "" or "nao" (the NAO, through its closed-form leg IK), another bundled
+    #: biped (op3, dm-humanoid) or a spec .toml (sim/robots): the same step, scaled to its
+    #: size, through a numerical leg IK (numerical_step.py); its [fall] thresholds apply
+    #: unless fall_height_m / fall_tilt_rad are set
+    robot: str = ""
 
     def validate(self) -> None:
         check_fields(self, "problem")
@@ -83,10 +81,7 @@ class HumanoidRepertoireConfig:
                      hi=MAX_FALL_HEIGHT_M, lo_open=True)
         check_number("problem.fall_tilt_rad", self.fall_tilt_rad, lo=0.0, hi=math.pi,
                      lo_open=True)
-        check_number("problem.threads", self.threads, lo=0, hi=1024, integer=True)
-        validate_backend(self)
-        check_number("problem.segment_s", self.segment_s, lo=0.0, hi=MAX_SEGMENT_S,
-                     lo_open=True)
+        validate_physics(self)
         check_text("problem.robot", self.robot)
 
     def genome_dim(self) -> int:
@@ -105,63 +100,63 @@ class HumanoidRepertoireConfig:
 
 
 class HumanoidRepertoireProblem(BatchedRollouts):
-    """Batch evaluation of steps: objective and (dx, dy, dtheta) measures."""
+    """Batch evaluation of steps of one robot (``cfg.robot``, the NAO by default; a biped with
+    feet ``left`` and ``right``): objective and (dx, dy, dtheta) measures. The key poses
+    come from the stepper its capabilities allow (:func:`.steppers.stepper_for`)."""
 
     sense = "max"
-    metric_names = METRICS
-    measure_spec = MEASURES
+    metric_names = METRICS  # the instance's: its stepper's
+    measure_spec = MEASURES  # the instance's: scaled to the robot's size
 
     def __init__(self, cfg: HumanoidRepertoireConfig | None = None) -> None:
-        from evomotion.sim.robot import load_nao
+        from evomotion.sim.robots import load_robot
 
         self.cfg = cfg = cfg or HumanoidRepertoireConfig()
         cfg.validate()
-        self.robot = load_nao(cfg.robot, "RobotRepertoireProblem")  # model, initial state
-        self.is_nao = True
-        self.model = self.robot.model
-        self.dt = float(self.model.opt.timestep)
-        self.genome = GenomeSpec(step.LOWER.copy(), step.UPPER.copy(), names=step.NAMES)
-        self.horizon_s = cfg.horizon_s()
+        r = self.robot = load_robot(cfg.robot or "nao")
+        if set(r.feet) != {"left", "right"}:
+            raise InputError(f"problem.robot: {r.name} has feet {', '.join(r.feet)}; a step "
+                             "needs a biped with feet 'left' and 'right'")
+        self.model = m = r.model
+        self.dt = float(m.opt.timestep)
+        self.steps = stepper_for(r, cfg, self.dt)
+        self.metric_names = self.steps.metric_names
+        self.genome = GenomeSpec(self.steps.lower, self.steps.upper, names=step.NAMES)
+        self.measure_spec = self.steps.measure_spec
+        self.horizon_s = self.steps.horizon_s
         self.nstep = int(math.ceil(self.horizon_s / self.dt))
-        self.sim = make_simulator(self.model, cfg, cfg.threads)
+        self.sim = make_simulator(m, cfg, cfg.threads)
         self.segment_steps = max(1, int(round(cfg.segment_s / self.dt)))
-        self.state0 = self.robot.state_at(step.ready_pose())
-        self.work = ServoWork(self.model)
-        self.fall_height_m, self.fall_tilt_rad = self.robot.fall_thresholds(cfg.fall_height_m,
-                                                                            cfg.fall_tilt_rad)
+        self.state0 = self.steps.state0
+        self.work = ServoWork(m, self.steps.work_servos)
+        self.fall_height_m, self.fall_tilt_rad = r.fall_thresholds(cfg.fall_height_m,
+                                                                   cfg.fall_tilt_rad)
 
     def initial_population(self, n: int, rng: np.random.Generator) -> np.ndarray:
-        """The in-place step of :data:`.step.DEFAULT` (CMA-ME's emitters start from it)."""
-        return np.tile(step.DEFAULT, (max(int(n), 1), 1))
+        """The in-place step (the stepper's default; CMA-ME's emitters start from it)."""
+        return np.tile(self.steps.default, (max(int(n), 1), 1))
 
     def motion(self, genes: np.ndarray) -> Motion:
-        """The step of one genome as a Webots motion (ready pose to ready pose)."""
-        from evomotion.studies.humanoid_repertoire.artifacts import step_motion
-
-        return step_motion(genes)
+        """The step of one genome as a motion of the robot's joints (ready pose to ready
+        pose)."""
+        return self.steps.motion(genes)
 
     def controls(self, genomes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Servo targets ``[P, nstep, 22]`` (each step's motion, then its last pose held) and
+        """Servo targets ``[P, nstep, nu]`` (each step's motion, then its last pose held) and
         the last physics step of each step's motion plus ``hold_s`` ``[P]``, where it is
         measured: the last step ``evomotion replay --hold hold_s`` simulates."""
-        ctrl = np.empty((len(genomes), self.nstep, len(nao.JOINTS)))
-        end = np.empty(len(genomes), np.int64)
-        for i, g in enumerate(genomes):
-            m = self.motion(g)
-            _, ctrl[i] = motion_targets(m, self.dt, self.nstep)
-            end[i] = min(int(np.ceil((m.duration_s + self.cfg.hold_s) / self.dt)),
-                         self.nstep) - 1
-        return ctrl, end
+        return self.steps.controls(genomes, self.nstep)[:2]
 
     def _fallen(self, states: np.ndarray) -> np.ndarray:
         return fell(states, self.fall_height_m, self.fall_tilt_rad)
 
-
     def _evaluate_batch(self, genomes: np.ndarray) -> Evaluation:
         genomes = np.atleast_2d(np.asarray(genomes, dtype=float))
-        ctrl, end = self.controls(genomes)
+        ctrl, end, extra = self.steps.controls(genomes, self.nstep)
         states, _ = self.sim.run_until(self.state0, ctrl, self._fallen, self.segment_steps)
-        return self.score(states, ctrl, end)
+        ev = self.score(states, ctrl, end)
+        ev.metrics.update(extra)
+        return ev
 
     def score(self, states: np.ndarray, ctrl: np.ndarray, end: np.ndarray) -> Evaluation:
         """Objective, metrics and measures from recorded ``states[P, nstep, ns]``, measured
@@ -191,14 +186,7 @@ class HumanoidRepertoireProblem(BatchedRollouts):
 
 
 def make_problem(cfg: HumanoidRepertoireConfig) -> HumanoidRepertoireProblem:
-    """The NAO's repertoire, or with ``cfg.robot`` another biped's
-    (:class:`.robot_problem.RobotRepertoireProblem`)."""
+    """The repertoire of ``cfg.robot`` (the NAO by default)."""
     if not isinstance(cfg, HumanoidRepertoireConfig):
         raise InputError("humanoid-repertoire: expected a HumanoidRepertoireConfig")
-    from evomotion.sim.robot import is_nao
-
-    if not is_nao(cfg.robot):
-        from evomotion.studies.humanoid_repertoire.robot_problem import RobotRepertoireProblem
-
-        return RobotRepertoireProblem(cfg)
     return HumanoidRepertoireProblem(cfg)

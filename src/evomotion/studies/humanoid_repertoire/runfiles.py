@@ -6,7 +6,7 @@ Every command that takes a repertoire (``pick``, ``walk-to``, ``export``, the ki
 - :func:`repertoire_run`: the folder (or its ``repertoire/``) is a run of this study, read
   from its ``config.toml``; another study's run is refused, naming that study;
 - :func:`load_index`: ``repertoire/index.json`` of such a run, read with the bounded JSON
-  reader and checked entry by entry (:func:`evomotion.sim.nao.repertoire.read_index`: each
+  reader and checked entry by entry (:func:`evomotion.sim.repertoire.read_index`: each
   step's measured ``dx_m``/``dy_m`` within +-1 m, ``dtheta_deg`` within +-180 degrees, its
   ``objective`` within +-1000);
 - :func:`load_archive`: ``archive.npz`` through the run loop's reader (the npz reader that
@@ -46,8 +46,8 @@ def run_config(run: Path) -> Any:
 def load_index(run: str | Path, option: str = "RUN") -> tuple[Path, dict]:
     """``(repertoire folder, index)`` of the repertoire run ``run``: the run checked by
     :func:`repertoire_run`, its index read and checked by
-    :func:`evomotion.sim.nao.repertoire.read_index` (bounded JSON, every entry's ranges)."""
-    from evomotion.sim.nao.repertoire import read_index
+    :func:`evomotion.sim.repertoire.read_index` (bounded JSON, every entry's ranges)."""
+    from evomotion.sim.repertoire import read_index
 
     return read_index(repertoire_run(run, option))
 

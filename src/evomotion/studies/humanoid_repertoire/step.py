@@ -4,7 +4,7 @@ Why not the joint-space knots of humanoid-step: those drive the 10 leg servos wi
 yaw-pitch, so a step cannot turn (the contact model no longer lets a foot spin), and 190 genes
 are a poor search space for a repertoire of 720 cells. This encoding is the humanoid-step
 idea (shift the weight onto the stance leg, then swing) written in Cartesian space through
-the closed-form leg IK (:mod:`evomotion.sim.nao.leg_ik`), so every genome is a kinematically
+the closed-form leg IK (:mod:`evomotion.sim.robots.nao.leg_ik`), so every genome is a kinematically
 valid step and every cell's motion starts and ends in the same ready pose: repertoire
 motions chain without transitions.
 
@@ -26,9 +26,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from evomotion.sim import nao
-from evomotion.sim.nao.joint_limits import JOINT_RANGES
-from evomotion.sim.nao.leg_ik import leg_ik, rot_z
+from evomotion.sim.robots import nao
+from evomotion.sim.robots.nao.joint_limits import JOINT_RANGES
+from evomotion.sim.robots.nao.leg_ik import leg_ik, rot_z
 
 #: (name, low, high, default): SI units (m, s, rad); the commanded displacement is in the
 #: robot's initial frame

@@ -13,6 +13,7 @@ from evomotion.studies.humanoid_repertoire.problem import (
     HumanoidRepertoireConfig,
     make_problem,
 )
+from evomotion.studies.view import StudyView
 
 cli = typer.Typer(help="A repertoire of steps (dx, dy, dtheta) of a NAO or another biped "
                        "(--robot) by CMA-ME.",
@@ -29,7 +30,7 @@ def pick_cmd(run: Path = typer.Argument(..., help="a humanoid-repertoire run fol
                                                                 "within +-360"),
              json_out: bool = typer.Option(False, "--json", help="JSON on stdout")) -> None:
     """The repertoire's step nearest the request: its .motion and measured behaviour."""
-    from evomotion.studies.humanoid_repertoire.use import pick
+    from evomotion.studies.humanoid_repertoire.step_planning import pick
 
     r = pick(run, dx, dy, dtheta)
     if json_out:
@@ -65,7 +66,7 @@ def walk_to_cmd(run: Path = typer.Argument(..., help="a humanoid-repertoire run 
                                                              "in the run folder)"),
                 json_out: bool = typer.Option(False, "--json", help="JSON on stdout")) -> None:
     """Plan a sequence of repertoire steps to a pose (A*), chain and play it."""
-    from evomotion.studies.humanoid_repertoire.use import walk_to
+    from evomotion.studies.humanoid_repertoire.step_planning import walk_to
 
     r = walk_to(run, x, y, theta, video=video, out=out)
     if json_out:
@@ -99,6 +100,7 @@ STUDY = Study(
     finalize=lazy_hook(ARTIFACTS, "finalize"),
     best_record=lazy_hook(ARTIFACTS, "best_record"),
     cli=cli,
+    view=StudyView(motions=True, archive_map=True),
     smoke=("algorithm.emitters=2", "algorithm.pop_size=4", "problem.hold_s=0.2",
            ),
 )

@@ -7,13 +7,12 @@ from pathlib import Path
 
 import numpy as np
 
+from evomotion.outfile import atomic_write_text, write_json
 from evomotion.run.context import RunContext
-from evomotion.run.folder import atomic_write_text, write_json
-from evomotion.sim import nao
-from evomotion.sim.nao.motion import Motion, format_motion
+from evomotion.sim.motion import Motion, format_motion
 from evomotion.studies.humanoid_step.problem import HumanoidStepProblem
 
-POSE_MS = 40  # Webots motions (and the seed's Motion.save) sample a pose every 40 ms
+POSE_MS = 40  # Webots motions (and the paper's Motion.save) sample a pose every 40 ms
 
 
 def genome_motion(problem: HumanoidStepProblem, genome: np.ndarray) -> Motion:
@@ -21,7 +20,7 @@ def genome_motion(problem: HumanoidStepProblem, genome: np.ndarray) -> Motion:
     over the step time, as a Webots motion."""
     times_ms = np.arange(0, int(round(problem.cfg.motion_s * 1000)) + 1, POSE_MS)
     ctrl = problem.controls(np.atleast_2d(genome), times_ms / 1000.0)[0]
-    joints = nao.JOINTS if problem.is_nao else list(problem.robot.joints)
+    joints = tuple(problem.robot.joints)
     return Motion(joints, times_ms, ctrl)
 
 
@@ -35,14 +34,14 @@ def write_best_motion(ctx: RunContext) -> Path | None:
 
 def write_exports(ctx: RunContext) -> bool:
     """``best_naoqi.py`` and ``best_keyframes.json`` beside ``best.motion``, when the best
-    motion passes the real-NAO checks (:mod:`evomotion.sim.nao.joint_limits`); otherwise the
+    motion passes the real-NAO checks (:mod:`evomotion.sim.robots.nao.joint_limits`); otherwise the
     reason goes to the log, nothing is written and older exports are removed (the run does
     not fail for it)."""
-    from evomotion.sim.nao.export import write_run_exports
-
     if ctx.best_genome is None or not np.all(np.isfinite(ctx.best_genome)):
         return False
-    return write_run_exports(genome_motion(ctx.problem, ctx.best_genome), ctx.out_dir, ctx.log)
+    export = ctx.problem.robot.capability("naoqi_export", "humanoid-step's NAOqi exports")
+    return export.write_run_exports(genome_motion(ctx.problem, ctx.best_genome), ctx.out_dir,
+                                    ctx.log)
 
 
 def on_checkpoint(ctx: RunContext) -> None:
@@ -52,8 +51,8 @@ def on_checkpoint(ctx: RunContext) -> None:
 def finalize(ctx: RunContext) -> None:
     """best.motion, its replay summary (best_replay.json), best.mp4 and fitness.png."""
     from evomotion.run.plots import plot_fitness
-    from evomotion.sim.nao.motion import read_motion
-    from evomotion.sim.nao.replay import replay_motion
+    from evomotion.sim.motion import read_motion
+    from evomotion.sim.robots.nao.replay import replay_motion
 
     stats = ctx.out_dir / "stats.csv"
     if stats.exists():
@@ -61,7 +60,7 @@ def finalize(ctx: RunContext) -> None:
     path = write_best_motion(ctx)
     if path is None:
         return
-    if not ctx.problem.is_nao:
+    if not ctx.problem.robot.has("webots_names"):  # replayed as Webots plays it: the NAO
         return finalize_robot(ctx)
     write_exports(ctx)
     video: Path | None = ctx.out_dir / "best.mp4"
@@ -97,7 +96,7 @@ def finalize_robot(ctx: RunContext) -> None:
     try:
         if not robot.xml:
             raise RuntimeError("the robot's edited model cannot be written as MJCF text")
-        from evomotion.sim.robot.play import robot_camera
+        from evomotion.sim.play import robot_camera
 
         render_video(states[0, :, 1:1 + robot.model.nq], problem.dt, video,
                      model_xml=robot.xml, camera=robot_camera(robot))

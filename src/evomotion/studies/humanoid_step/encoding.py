@@ -1,6 +1,6 @@
-"""Servo trajectories from genomes: the seed's piecewise-linear knots and its alternatives.
+"""Servo trajectories from genomes: the paper's piecewise-linear knots and its alternatives.
 
-Seed 000 (Chikishev & Sizikov 2009, section 2.2 and ``Main.createIndividual``): the step time
+Paper 000 (Chikishev & Sizikov 2009, section 2.2 and ``Main.createIndividual``): the step time
 ``T`` is split into ``K`` equal intervals; the value of each of the 10 leg servos at every
 interval boundary is a gene, the first and last boundary are pinned to the initial pose, and
 values in between are linear in time (``SplineTwo``: ``y = a x + b``). Section 3.2 names the

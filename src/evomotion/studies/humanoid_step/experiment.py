@@ -1,15 +1,17 @@
-"""The seed's experiment (`evomotion humanoid-step study`): five crossovers compared.
+"""The paper's experiment (`evomotion humanoid-step study`): five crossovers compared.
 
-Seed 000, section 3: population 100, mutation probability 0.3, K = 20 intervals, roulette
+Paper 000, section 3: population 100, mutation probability 0.3, K = 20 intervals, roulette
 selection, elitism 0.1; crossovers one-point, arithmetic, geometric, linear and BLX-alpha
-(alpha = 0.7). The seed reports that BLX-alpha reaches a forward step after about 70
+(alpha = 0.7). The paper reports that BLX-alpha reaches a forward step after about 70
 generations and the arithmetic crossover after about 140. Here BLX-alpha and arithmetic run
 on ``seeds`` seeds each, the other three on ``max(1, seeds // 3)``. Per run we record the
 best/mean/min fitness per generation, the first generation in which an individual makes a
 *step* (feet >= 5 cm forward, not fallen; see :mod:`.problem`) and the first generation that
 reaches the highest fitness (stands the whole time with the feet >= ``forward_cap_m``
-forward). Runs are independent and are spread over ``workers`` processes (one
-``mujoco.rollout`` thread each).
+forward). The runs go one after the other through the run loop in memory
+(:func:`~evomotion.run.in_memory.run_in_memory`); each population is evaluated by the run
+loop's ``process`` evaluator over ``workers`` processes (one ``mujoco.rollout`` thread each),
+one pool for the whole experiment, or in this process when ``workers`` is 1.
 """
 
 from __future__ import annotations
@@ -18,14 +20,17 @@ import csv
 import dataclasses
 import io
 import os
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from evomotion.core.algorithms import ALGORITHMS
 from evomotion.outfile import atomic_write_text, check_target, save_figure
-from evomotion.run.evaluators import SerialEvaluator
+from evomotion.run.config import Config, RunSection
+from evomotion.run.evaluators import SerialEvaluator, make_evaluator
+from evomotion.run.in_memory import run_in_memory
 from evomotion.studies.humanoid_step.problem import HumanoidStepConfig, HumanoidStepProblem
 
 CROSSOVERS: dict[str, dict] = {  # label -> engine crossover + params
@@ -39,34 +44,39 @@ ALGO = {"mutation": "perturb_k", "mutation_rate": 0.3, "mutation_params": {"k": 
         "selection": "roulette", "elitism": 0.1}
 
 
-class _Recorder(SerialEvaluator):
-    """The run's serial evaluator, keeping per batch (steps made, highest fitness)."""
+class _Recorder:
+    """The run's evaluator: passes each batch to ``evaluate`` (the experiment's evaluator, not
+    closed here) and keeps per batch (steps made, highest fitness)."""
 
-    def __init__(self, problem: HumanoidStepProblem) -> None:
-        super().__init__(lambda _cfg: problem, None)
+    def __init__(self, evaluate: Callable[[np.ndarray], Any]) -> None:
+        self.evaluate = evaluate
         self.batches: list[tuple[int, float]] = []
 
-    def __call__(self, genomes: np.ndarray):
-        ev = super().__call__(genomes)
+    def __call__(self, genomes: np.ndarray) -> Any:
+        ev = self.evaluate(genomes)
         self.batches.append((int(ev.metrics["stepped"].sum()), float(ev.fitness.max())))
         return ev
 
+    def close(self) -> None:
+        pass
+
 
 def run_one(label: str, seed: int, pop: int, generations: int,
-            problem_cfg: HumanoidStepConfig) -> dict:
-    """One GA run (through the run loop, no folder); returns its curve and the first
-    generation with a step (or None)."""
-    from evomotion.run.config import Config, RunSection
-    from evomotion.run.runner import run_study
-    from evomotion.studies.humanoid_step.study import STUDY
-
+            problem_cfg: HumanoidStepConfig, evaluator: Any = None) -> dict:
+    """One GA run in memory (:func:`~evomotion.run.in_memory.run_in_memory`); returns its
+    curve and the first generation with a step (or None). ``evaluator`` (default: this
+    process) evaluates every population. A Ctrl-C (or SIGTERM) ends the whole study: the runs
+    finished before it stay in ``results.csv`` and ``curves/``."""
     cfg_cls, _ = ALGORITHMS["ga"]
     algo = cfg_cls(pop_size=pop, **ALGO, **CROSSOVERS[label])
     problem = HumanoidStepProblem(problem_cfg)
-    rec = _Recorder(problem)
+    rec = _Recorder(evaluator or SerialEvaluator(lambda _cfg: problem, None))
     cfg = Config("humanoid-step", RunSection(seed=seed, generations=generations,
                                              checkpoint_every=0), algo, problem_cfg)
-    res = run_study(STUDY, cfg, None, problem=problem, evaluator=rec)
+    res = run_in_memory(cfg, problem, evaluator=rec)
+    if res.stop_reason == "interrupted":
+        problem.sim.close()
+        raise KeyboardInterrupt
     full = problem_cfg.motion_s + problem_cfg.hold_s + \
         problem_cfg.distance_weight * problem_cfg.forward_cap_m  # the highest fitness
     stepped = [n for n, _ in rec.batches]
@@ -91,28 +101,28 @@ def run_experiment(out: Path, quick: bool = False, seeds: int = 10, generations:
                    pop: int = 100, workers: int = 0, bounds_scale: float = 0.25,
                    intervals: int = 20, echo=print) -> list[dict]:
     """Run the plan, write ``results.csv``, ``curves/*.csv``, ``summary.md``, ``curves.png``.
-    ``bounds_scale = 1`` uses the seed's whole Table 1 (see docs/humanoid-step.md)."""
-    # the seed's experiment: its fitness and its 1 s hold (the study default is the step fitness)
+    ``bounds_scale = 1`` uses the paper's whole Table 1 (see docs/humanoid-step.md)."""
+    # the paper's experiment: its fitness and its 1 s hold (the study default is the step fitness)
     problem_cfg = HumanoidStepConfig(intervals=intervals, bounds_scale=bounds_scale, threads=1,
-                                     fitness="seed", hold_s=1.0)
+                                     fitness="paper", hold_s=1.0)
     if quick:
         seeds, generations, pop = 1, 2, 8
         problem_cfg = dataclasses.replace(problem_cfg, intervals=4, motion_s=0.4, hold_s=0.2)
     out = Path(out)
     check_outputs(out)
-    jobs = plan(seeds)
-    workers = workers or min(len(jobs), os.cpu_count() or 1)
-    args = [(label, s, pop, generations, problem_cfg) for label, s in jobs]
+    workers = min(workers or os.cpu_count() or 1, pop)
     results: list[dict] = []
     _write_results(out, results)
-    if workers == 1:
-        for a in args:
-            results.append(_save(out, run_one(*a), results))
-    else:
-        with ProcessPoolExecutor(workers) as pool:
-            futures = [pool.submit(run_one, *a) for a in args]
-            for fut in as_completed(futures):
-                results.append(_save(out, fut.result(), results))
+    # one pool of the run loop's process workers for every run (None: this process)
+    evaluator = make_evaluator("process", HumanoidStepProblem, problem_cfg, workers) \
+        if workers > 1 else None
+    try:
+        for label, s in plan(seeds):
+            results.append(_save(out, run_one(label, s, pop, generations, problem_cfg,
+                                               evaluator), results))
+    finally:
+        if evaluator is not None:
+            evaluator.close()
     results.sort(key=lambda r: (list(CROSSOVERS).index(r["crossover"]), r["seed"]))
     _write_results(out, results)
     table = summary_table(results, generations)

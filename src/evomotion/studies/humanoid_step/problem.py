@@ -1,4 +1,4 @@
-"""The forward-step problem of seed 000: evaluate a batch of leg trajectories on the NAO.
+"""The forward-step problem of paper 000: evaluate a batch of leg trajectories on the NAO.
 
 Each genome is decoded (see :mod:`.encoding`) into targets for the 10 leg servos on every
 physics step of ``motion_s + hold_s`` seconds; the other 12 servos hold the initial pose.
@@ -20,7 +20,7 @@ and among those it never saturates:
   step must meet (and per second of flight), plus ``step_bonus_m`` (0.05 m) once the feet are
   ``step_min_m`` (5 cm) forward.
 
-``fitness = "seed"`` is the seed's literal one (``--preset seed``):
+``fitness = "paper"`` is the paper's literal one (``--preset paper``; ``"seed"`` is its old name):
 ``time_to_fall_s + distance_weight * clip(forward_m, -forward_cap_m, forward_cap_m)``
 (seconds, ``distance_weight`` = 10 s/m, ``forward_cap_m`` = 0.2 m), which saturates at
 ``motion_s + hold_s + 2`` and rewards turning and hopping steps as much as straight ones.
@@ -40,7 +40,6 @@ run when nearly every individual falls.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -50,13 +49,14 @@ import numpy as np
 from evomotion.core.checks import check_choice, check_fields, check_number
 from evomotion.core.problem import Evaluation
 from evomotion.errors import InputError
-from evomotion.sim import nao
-from evomotion.sim.backend import BatchedRollouts, make_simulator, validate_backend
+from evomotion.sim.backend import BatchedRollouts, make_simulator
+from evomotion.sim.physics_config import PerturbedWorldsConfig, PhysicsConfig, validate_physics
+from evomotion.sim.robots import nao
 from evomotion.sim.rollout import fall_step, fell, torso_track
 from evomotion.studies.humanoid_step.encoding import ENCODINGS, ServoEncoding
 
-#: Seed 000, Table 1: servo angle limits (rad) used as GA bounds.
-SEED_TABLE1: dict[str, tuple[float, float]] = {
+#: Paper 000, Table 1: servo angle limits (rad) used as GA bounds.
+PAPER_TABLE1: dict[str, tuple[float, float]] = {
     "LKneePitch": (0.0, 2.2689), "RKneePitch": (0.0, 2.2689),
     "LAnkleRoll": (-0.7854, 0.4363), "RAnkleRoll": (-0.4363, 0.7854),
     "LHipRoll": (-0.4363, 0.7854), "RHipRoll": (-0.7854, 0.4363),
@@ -65,15 +65,16 @@ SEED_TABLE1: dict[str, tuple[float, float]] = {
 }
 METRICS = ("time_to_fall_s", "forward_m", "lateral_m", "heading_change_rad", "flight_s", "fell",
            "stepped", "fall_rate")
-FITNESSES = ("step", "seed")
+FITNESSES = ("step", "paper")
+#: Old names of fitnesses: ``"seed"`` is the old name of ``"paper"`` (run folders written before
+#: issue 32 record it, and they load and resume unchanged).
+OLD_FITNESS_NAMES = {"seed": "paper"}
 #: a flight phase is at least this many consecutive physics steps (12 ms) with neither sole on
 #: the floor; shorter gaps are contact flicker at touch-down, not a hop
 FLIGHT_MIN_STEPS = 3
-#: sole-floor contact sensors added to the model (1 while the sole touches the floor)
-#: ``problem.intervals`` at most; ``problem.threads`` at most (one MjData per thread)
+#: ``problem.intervals`` at most
 MAX_INTERVALS = 10_000
-MAX_THREADS = 1024
-#: the NAO model's physics step (``models/nao_h25.xml``), for estimates before it is loaded
+#: the NAO model's physics step (``robots/nao/nao_h25.xml``), for estimates before it is loaded
 NAO_TIMESTEP_S = 0.004
 #: doubles recorded per individual and physics step: state (58), sensors, controls (22),
 #: leg targets, rounded up
@@ -81,14 +82,15 @@ ROLLOUT_DOUBLES_PER_STEP = 100
 
 
 @dataclass(frozen=True)
-class HumanoidStepConfig:
-    """The ``[problem]`` section of ``humanoid-step``."""
+class StepKeys:
+    """The step's own keys of ``[problem]`` (first in ``config.toml``; the physics and world
+    keys are :mod:`evomotion.sim.physics_config`'s)."""
 
     encoding: str = "linear"  # linear | spline | harmonic
-    intervals: int = 20  # K time intervals of the step (seed: 20)
+    intervals: int = 20  # K time intervals of the step (paper: 20)
     motion_s: float = 2.0  # duration of the step motion T (s)
-    hold_s: float = 2.0  # initial pose held after the motion (s; seed: 1)
-    fitness: str = "step"  # step (see module doc) | seed (the seed's literal fitness)
+    hold_s: float = 2.0  # initial pose held after the motion (s; paper: 1)
+    fitness: str = "step"  # step (module doc) | paper (the paper's literal one; old name: seed)
     heading_weight: float = 0.5  # step fitness: metres lost per radian of turning (m/rad)
     lateral_weight: float = 2.0  # step fitness: metres lost per metre of lateral drift
     flight_weight: float = 2.0  # step fitness: metres lost per second without a sole down (m/s)
@@ -96,42 +98,29 @@ class HumanoidStepConfig:
     lateral_tolerance_m: float = 0.02  # ... or 2 cm of lateral drift ...
     excess_weight: float = 5.0  # ... each extra radian / metre (or second of flight) costs
     step_bonus_m: float = 0.05  # step fitness: credit for feet >= step_min_m forward (m)
-    distance_weight: float = 10.0  # seed fitness: fitness per metre forward (s/m)
-    forward_cap_m: float = 0.2  # seed fitness: forward distance credited at most (m)
+    distance_weight: float = 10.0  # paper fitness: fitness per metre forward (s/m)
+    forward_cap_m: float = 0.2  # paper fitness: forward distance credited at most (m)
     fall_height_m: float = nao.FALL_HEIGHT_M
     fall_tilt_rad: float = nao.FALL_TILT_RAD  # 45 degrees
     step_min_m: float = 0.05
-    bounds_scale: float = 1.0  # 1 = seed Table 1 (intersected with the model ranges)
-    worlds: int = 1  # K worlds per candidate: the nominal one and K - 1 perturbed (1: nominal)
-    world_seed: int = -1  # the K worlds come from default_rng(world_seed); -1: the run's seed
-    world_aggregate: str = "mean"  # mean | quantile: how the K fitness values are combined
-    world_quantile: float = 0.25  # with "quantile": this quantile of the K values
-    threads: int = 0  # mujoco.rollout threads; 0 = all cores
-    backend: str = "cpu"  # physics: cpu (mujoco.rollout, float64) | warp (MuJoCo Warp, float32)
-    warp_device: str = ""  # backend warp: "cuda:0", "cpu", ...; "" = the first GPU, else the CPU
-    warp_deterministic: bool = True  # backend warp: MuJoCo Warp opt.deterministic = ALL
-    warp_nconmax: int = 16  # backend warp: contacts per world to start with (grown when short)
-    batch_rollouts: int = 2048  # rollouts simulated (and recorded in memory) at once
+    bounds_scale: float = 1.0  # 1 = the paper's Table 1 (intersected with the model ranges)
+
+
+@dataclass(frozen=True)
+class HumanoidStepConfig(PhysicsConfig, PerturbedWorldsConfig, StepKeys):
+    """The ``[problem]`` section of ``humanoid-step``: its own keys (:class:`StepKeys`), the
+    perturbed worlds' and the physics' (:mod:`evomotion.sim.physics_config`), the robot."""
+
     segment_s: float = 0.2  # fallen robots stop being simulated at these boundaries (s)
-    #: the robot: "" or "nao" (the NAO, sim/robot/specs/nao.toml), another bundled spec name
+    #: the robot: "" or "nao" (the NAO, sim/robots/nao/nao.toml), another bundled spec name
     #: (dm-humanoid, op3) or a spec .toml (sim/robot); its [evolve] joints make the step, its
     #: [fall] thresholds apply unless fall_height_m / fall_tilt_rad are set to other values
     #: than the NAO's defaults
     robot: str = ""
 
-    def for_worker(self) -> HumanoidStepConfig:
-        """The config of a one-core evaluator worker: ``threads`` 0 (all cores) becomes 1;
-        an explicit thread count is kept."""
-        return dataclasses.replace(self, threads=1) if self.threads == 0 else self
-
     def validate(self) -> None:
         """One-line :class:`InputError` for impossible settings (see :func:`validate`)."""
         validate(self)
-
-    def with_run_seed(self, seed: int) -> HumanoidStepConfig:
-        """The config a run with ``run.seed = seed`` uses: ``world_seed`` -1 becomes ``seed``, so
-        the K perturbed worlds are drawn from the run seed unless a seed of their own is set."""
-        return dataclasses.replace(self, world_seed=seed) if self.world_seed < 0 else self
 
     def genome_dim(self) -> int:
         """The genome's length (for the memory check before the problem is built)."""
@@ -150,10 +139,10 @@ class HumanoidStepConfig:
 
 
 def servo_bounds(model, scale: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
-    """Seed Table 1 intersected with the model's joint ranges for ``nao.LEG_SERVOS``; with
+    """The paper's Table 1 intersected with the model's joint ranges for ``nao.LEG_SERVOS``; with
     ``scale < 1`` each interval shrinks towards the initial pose by that factor."""
     rng = nao.joint_ranges(model, nao.LEG_SERVOS)
-    t1 = np.array([SEED_TABLE1[n] for n in nao.LEG_SERVOS])
+    t1 = np.array([PAPER_TABLE1[n] for n in nao.LEG_SERVOS])
     lo, hi = np.maximum(rng[:, 0], t1[:, 0]), np.minimum(rng[:, 1], t1[:, 1])
     q0 = leg_initial_pose()
     return q0 + scale * (lo - q0), q0 + scale * (hi - q0)
@@ -171,16 +160,19 @@ MAX_FALL_HEIGHT_M = 5.0
 MAX_TIME_S = 60.0
 
 
+def fitness_name(name: object) -> object:
+    """The fitness ``name`` under its name now (:data:`OLD_FITNESS_NAMES`)."""
+    return OLD_FITNESS_NAMES.get(name, name) if isinstance(name, str) else name
+
+
 def validate(cfg: HumanoidStepConfig) -> None:
     """One-line :class:`InputError` for impossible settings: every float finite and within
-    its documented range (the constants above)."""
+    its documented range (the constants above; the physics and world keys':
+    :func:`~evomotion.sim.physics_config.validate_physics`)."""
     check_fields(cfg, "problem")
     check_choice("problem.encoding", cfg.encoding, ENCODINGS)
-    check_choice("problem.fitness", cfg.fitness, FITNESSES)
-    check_choice("problem.world_aggregate", cfg.world_aggregate, ("mean", "quantile"))
-    check_number("problem.worlds", cfg.worlds, lo=1, hi=1024, integer=True)
-    check_number("problem.world_seed", cfg.world_seed, lo=-1, integer=True)
-    check_number("problem.world_quantile", cfg.world_quantile, lo=0.0, hi=1.0)
+    check_choice("problem.fitness", fitness_name(cfg.fitness), FITNESSES)
+    validate_physics(cfg)
     for key in ("heading_weight", "lateral_weight", "flight_weight", "excess_weight",
                 "distance_weight"):
         check_number(f"problem.{key}", getattr(cfg, key), lo=0.0, hi=MAX_WEIGHT)
@@ -191,15 +183,12 @@ def validate(cfg: HumanoidStepConfig) -> None:
     check_number("problem.forward_cap_m", cfg.forward_cap_m, lo=0.0, hi=MAX_LENGTH_M,
                  lo_open=True)
     check_number("problem.intervals", cfg.intervals, lo=2, hi=MAX_INTERVALS, integer=True)
-    check_number("problem.threads", cfg.threads, lo=0, hi=MAX_THREADS, integer=True)
-    validate_backend(cfg)
     check_number("problem.fall_height_m", cfg.fall_height_m, lo=0.0, hi=MAX_FALL_HEIGHT_M,
                  lo_open=True)
     check_number("problem.fall_tilt_rad", cfg.fall_tilt_rad, lo=0.0, hi=math.pi, lo_open=True)
     check_number("problem.motion_s", cfg.motion_s, lo=0.0, hi=MAX_TIME_S, lo_open=True)
     check_number("problem.hold_s", cfg.hold_s, lo=0.0, hi=MAX_TIME_S)
     check_number("problem.bounds_scale", cfg.bounds_scale, lo=0.0, hi=1.0, lo_open=True)
-    check_number("problem.segment_s", cfg.segment_s, lo=0.0, hi=MAX_TIME_S, lo_open=True)
 
 
 def flight_steps(airborne: np.ndarray, min_run: int) -> np.ndarray:
@@ -232,30 +221,26 @@ class HumanoidStepProblem(BatchedRollouts):
         self.sim = make_simulator(self.model, cfg, cfg.threads)
         self.worlds = None
         if cfg.worlds > 1:  # the nominal world and K - 1 drawn ones
-            from evomotion.sim.nao.worlds import Perturbation, World, draw_worlds
+            from evomotion.sim.worlds import Perturbation, World, draw_worlds
 
             self.worlds = [World(self.model)] + draw_worlds(
-                self.model, Perturbation(), cfg.worlds - 1,
+                self.model, Perturbation().for_mass(self.robot.mass_kg), cfg.worlds - 1,
                 np.random.default_rng(max(cfg.world_seed, 0)), cfg.motion_s)
 
     def _init_robot(self, cfg: HumanoidStepConfig) -> None:
-        """The robot of its spec (:mod:`evomotion.sim.robot`; the NAO's, ``nao.toml``, by
+        """The robot of its spec (:mod:`evomotion.sim.robots`; the NAO's, ``nao.toml``, by
         default): its ``[evolve]`` joints and ranges (shrunk towards the initial pose by
-        ``bounds_scale``; the NAO's are seed Table 1 within its model's ranges), feet ``left``
-        and ``right``, ``[fall]`` thresholds. ``is_nao``: the NAO (no ``robot``, or ``nao``),
-        which alone has perturbed worlds and the NAO exports."""
-        from evomotion.sim.robot import is_nao, load_robot
+        ``bounds_scale``; the NAO's are the paper's Table 1 within its model's ranges), feet
+        ``left`` and ``right``, ``[fall]`` thresholds. A robot with the ``webots_names`` and
+        ``naoqi_export`` capabilities (the NAO) also gets the NAO's replay and exports."""
+        from evomotion.sim.robots import load_robot
 
-        self.is_nao = is_nao(cfg.robot)
         r = self.robot = load_robot(cfg.robot or "nao")
         if set(r.feet) != {"left", "right"}:
             raise InputError(f"problem.robot: {r.name} has feet {', '.join(r.feet)}; a step "
                              "needs a biped with feet 'left' and 'right'")
         if not r.evolved:
             raise InputError(f"problem.robot: {r.spec.path} has no [evolve] joints")
-        if cfg.worlds > 1 and not self.is_nao:
-            raise InputError("problem.worlds > 1 (perturbed worlds) is for the NAO only; "
-                             "use problem.worlds = 1 with problem.robot")
         self.model = r.model
         q0 = r.pose[r.columns]
         lo = q0 + cfg.bounds_scale * (np.minimum(r.lower, q0) - q0)
@@ -311,7 +296,7 @@ class HumanoidStepProblem(BatchedRollouts):
         steps = np.arange(self.nstep)[None]
         airborne = ~down & (steps >= down.argmax(axis=1)[:, None]) & (steps <= last[:, None])
         flight_s = flight_steps(airborne, FLIGHT_MIN_STEPS) * self.dt
-        if c.fitness == "seed":
+        if fitness_name(c.fitness) == "paper":
             credit = np.clip(forward, -c.forward_cap_m, c.forward_cap_m)
             fitness = t_fall + c.distance_weight * credit
         else:
@@ -341,10 +326,10 @@ class HumanoidStepProblem(BatchedRollouts):
         return self.evaluate_worlds(genomes)
 
     def evaluate_worlds(self, genomes: np.ndarray) -> Evaluation:
-        """Every genome in each of the K perturbed worlds (:mod:`evomotion.sim.nao.worlds`),
+        """Every genome in each of the K perturbed worlds (:mod:`evomotion.sim.worlds`),
         one batch; fitness = mean or ``world_quantile`` of the K values, metrics = means over
         the worlds, plus ``fall_rate``."""
-        from evomotion.sim.nao.worlds import aggregate_worlds, simulate_worlds
+        from evomotion.sim.worlds import aggregate_worlds, simulate_worlds
 
         n, k = len(genomes), len(self.worlds)
         ctrl = np.repeat(self.controls(genomes), k, axis=0)  # genome-major: i * k + world

@@ -1,4 +1,4 @@
-"""``humanoid-step``: seed 000, a GA that teaches a simulated NAO a forward step."""
+"""``humanoid-step``: paper 000, a GA that teaches a simulated NAO a forward step."""
 
 from __future__ import annotations
 
@@ -9,8 +9,9 @@ import typer
 from evomotion.studies.base import Study
 from evomotion.studies.humanoid_step.artifacts import finalize, on_checkpoint
 from evomotion.studies.humanoid_step.problem import HumanoidStepConfig, HumanoidStepProblem
+from evomotion.studies.view import StudyView
 
-cli = typer.Typer(help="Seed 000: a forward step of the NAO, evolved by a GA.",
+cli = typer.Typer(help="Paper 000: a forward step of the NAO, evolved by a GA.",
                   no_args_is_help=True)
 
 
@@ -30,13 +31,13 @@ def study_cmd(out: Path | None = typer.Option(None, "--out",
                                                  "(1 to 1000)"),
               generations: int = typer.Option(100, help="generations per run (1 to 100000)"),
               pop: int = typer.Option(100, help="population size (4 to 100000)"),
-              workers: int = typer.Option(0, help="parallel runs (0 = all cores; at most "
-                                                  "1024)"),
-              bounds_scale: float = typer.Option(0.25, help="in (0, 1]; 1 = the seed's whole "
+              workers: int = typer.Option(0, help="evaluation processes (0 = all cores, 1 = "
+                                                  "this process; at most 1024)"),
+              bounds_scale: float = typer.Option(0.25, help="in (0, 1]; 1 = the paper's whole "
                                                             "Table 1"),
-              intervals: int = typer.Option(20, help="K time intervals (seed: 20; 2 to "
+              intervals: int = typer.Option(20, help="K time intervals (paper: 20; 2 to "
                                                      "10000)")) -> None:
-    """The seed's experiment: five crossovers, BLX-alpha vs arithmetic on several seeds."""
+    """The paper's experiment: five crossovers, BLX-alpha vs arithmetic on several seeds."""
     from evomotion.core.checks import check_number
     from evomotion.run.folder import make_output_folder
     from evomotion.studies.humanoid_step.experiment import check_outputs, run_experiment
@@ -57,7 +58,7 @@ def study_cmd(out: Path | None = typer.Option(None, "--out",
 
 STUDY = Study(
     name="humanoid-step",
-    description="Seed 000: a GA evolves a forward step of a NAO H25 in MuJoCo "
+    description="Paper 000: a GA evolves a forward step of a NAO H25 in MuJoCo "
                 "(10 leg servos x K knots; a straight step that stands through a 2 s hold).",
     problem_config=HumanoidStepConfig,
     make_problem=HumanoidStepProblem,
@@ -69,16 +70,17 @@ STUDY = Study(
         "run": {"generations": 80, "checkpoint_every": 10},
         "problem": {"intervals": 10, "bounds_scale": 0.25},
     },
-    presets={"seed": {"problem": {"intervals": 20, "bounds_scale": 1.0, "fitness": "seed",
-                                  "hold_s": 1.0},
-                      "run": {"generations": 100}}},
-    preset_notes={"seed": "the seed's literal setting: its fitness (time to fall + forward "
-                          "distance, 1 s hold), K = 20 intervals over Table 1's whole ranges, "
-                          "population 100 x 100 generations"},
+    presets={"paper": {"problem": {"intervals": 20, "bounds_scale": 1.0, "fitness": "paper",
+                                   "hold_s": 1.0},
+                       "run": {"generations": 100}}},
+    preset_notes={"paper": "the paper's literal setting: its fitness (time to fall + forward "
+                           "distance, 1 s hold), K = 20 intervals over Table 1's whole ranges, "
+                           "population 100 x 100 generations"},
     core_algorithms=("ga", "cmaes"),
     on_checkpoint=on_checkpoint,
     finalize=finalize,
     cli=cli,
+    view=StudyView(motions=True),
     smoke=(
         "algorithm.pop_size=6",
         "problem.motion_s=0.4",

@@ -17,10 +17,10 @@ from typing import Any
 
 import numpy as np
 
+from evomotion.outfile import atomic_write_text, write_json
 from evomotion.run.context import RunContext
-from evomotion.run.folder import atomic_write_text, write_json
-from evomotion.sim.nao.motion import Motion, format_motion
-from evomotion.studies.humanoid_walk import gait
+from evomotion.sim.motion import Motion, format_motion
+from evomotion.studies.humanoid_walk import foot_gait
 from evomotion.studies.humanoid_walk.walk_motion import assemble, walk_parts
 
 PART_FILES = ("walk_start.motion", "walk_cycle.motion", "walk_stop.motion")
@@ -34,11 +34,11 @@ def best_record(ctx: RunContext) -> dict[str, Any]:
     """The gait parameters by name, the period as played, and the walk's structure."""
     if not _ok(ctx.best_genome):
         return {}
-    if not getattr(ctx.problem, "is_nao", True):
+    if ctx.problem.gait.name != "foot":
         return {"robot": ctx.problem.robot.name, "gait": dict(zip(
             ctx.problem.genome.names, (float(v) for v in ctx.best_genome), strict=True))}
     parts = walk_parts(ctx.best_genome, ctx.problem.cfg.walk_s)
-    return {"gait": gait.named(ctx.best_genome),
+    return {"gait": foot_gait.named(ctx.best_genome),
             "motion": {"start_s": parts.start.duration_s, "cycle_s": parts.cycle.duration_s,
                        "cycles": parts.cycles, "stop_s": parts.stop.duration_s,
                        "total_s": assemble(parts).duration_s}}
@@ -48,11 +48,8 @@ def write_motions(ctx: RunContext) -> Motion | None:
     """``best.motion`` and its three parts; the whole walk (``None`` without a best)."""
     if not _ok(ctx.best_genome):
         return None
-    if not getattr(ctx.problem, "is_nao", True):  # the robot's channels every 20 ms
-        p = ctx.problem
-        t_ms = np.arange(0, int(p.horizon_s * 1000) + 1, gait.POSE_MS)
-        q = p.controls(np.atleast_2d(ctx.best_genome), t_ms / 1000.0)[0]
-        whole = Motion(list(p.robot.joints), t_ms, q)
+    if ctx.problem.gait.name != "foot":  # the robot's channels every 20 ms
+        whole = ctx.problem.motion(ctx.best_genome)
         atomic_write_text(ctx.out_dir / "best.motion", format_motion(whole))
         return whole
     parts = walk_parts(ctx.best_genome, ctx.problem.cfg.walk_s)
@@ -69,13 +66,13 @@ def on_checkpoint(ctx: RunContext) -> None:
 
 def finalize(ctx: RunContext) -> None:
     """The motions, the exports, the replay summary and the video."""
-    from evomotion.sim.nao.export import write_run_exports
-    from evomotion.sim.nao.replay import replay_motion
+    from evomotion.sim.robots.nao.export import write_run_exports
+    from evomotion.sim.robots.nao.replay import replay_motion
 
     motion = write_motions(ctx)
     if motion is None:
         return
-    if not getattr(ctx.problem, "is_nao", True):
+    if ctx.problem.gait.name != "foot":
         return finalize_robot(ctx)
     # best_naoqi.py and best_keyframes.json only when the walk passes the real-NAO checks
     write_run_exports(motion, ctx.out_dir, ctx.log)
@@ -103,15 +100,11 @@ def finalize_robot(ctx: RunContext) -> None:
     from evomotion.sim.render import RenderUnavailableError, render_video
 
     p = ctx.problem
-    states, ctrl = p.simulate(np.atleast_2d(ctx.best_genome))
-    from evomotion.studies.humanoid_walk import robot_gait
-
-    period = np.array([ctx.best_genome[0]])
-    walk_s = robot_gait.walk_seconds(period, p.cfg.walk_s)
-    ev = p.score(states, ctrl, period)
+    states, batch = p.simulate(np.atleast_2d(ctx.best_genome))
+    ev = p.score(states, batch.ctrl, batch)
     summary = {"robot": p.robot.name, "gait_kind": p.kind,
                **{k: float(v[0]) for k, v in ev.metrics.items()},
-               "walk_s": float(walk_s[0]), "horizon_s": p.horizon_s}
+               "walk_s": float(batch.walk_s[0]), "horizon_s": p.horizon_s}
     summary["fell"] = bool(summary["fell"])
     write_json(ctx.out_dir / "best_replay.json", summary)
     back = 3.0 if p.kind == "biped" else 6.0  # a quadruped is longer than it is tall
@@ -119,7 +112,7 @@ def finalize_robot(ctx: RunContext) -> None:
     try:
         if not p.robot.xml:
             raise RuntimeError("the robot's edited model cannot be written as MJCF text")
-        from evomotion.sim.robot.play import robot_camera
+        from evomotion.sim.play import robot_camera
 
         render_video(states[0, :, 1:1 + p.model.nq], p.dt, video, model_xml=p.robot.xml,
                      camera=robot_camera(p.robot, back, least_m=1.2))

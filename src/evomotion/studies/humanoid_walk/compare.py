@@ -6,7 +6,7 @@ Webots ships for its NAO (package data, Apache-2.0; Webots' ``Forwards50.motion`
 the fixtures this project has). For each: duration, displacement, heading change, speed
 (forward displacement over the motion's duration), heading change per metre (for motions that
 move at least 5 cm forward) and whether it fell. ``--trials N`` adds the fall rate in N
-perturbed worlds (:mod:`evomotion.sim.nao.worlds`, default ranges) for each motion.
+perturbed worlds (:mod:`evomotion.sim.worlds`, default ranges) for each motion.
 """
 
 from __future__ import annotations
@@ -16,8 +16,9 @@ import math
 from pathlib import Path
 
 from evomotion.errors import InputError
-from evomotion.sim.nao.motion import SHIPPED_MOTIONS, Motion, read_motion, shipped_motion
-from evomotion.sim.nao.replay import StressOptions, simulate_motion, stress_motion
+from evomotion.sim.motion import Motion, read_motion
+from evomotion.sim.robots.nao.replay import StressOptions, simulate_motion, stress_motion
+from evomotion.sim.robots.nao.webots_motions import SHIPPED_MOTIONS, shipped_motion
 
 WEBOTS = tuple(m for m in SHIPPED_MOTIONS if m != "Shoot")
 #: heading per metre is reported only for motions that move at least this far forward (m)
@@ -38,10 +39,12 @@ def walk_motion_path(run: Path) -> Path:
 
 
 def check_walk_run(run: Path, option: str = "RUN") -> None:
-    """One line unless the folder ``run`` is a ``humanoid-walk`` run of the NAO (its
-    ``config.toml`` names the study; another study's run is refused, naming it)."""
+    """One line unless the folder ``run`` is a ``humanoid-walk`` run of a foot-placement
+    walk (the NAO's; its ``config.toml`` names the study and a robot with the capabilities of
+    :data:`.gaits.FOOT_CAPABILITIES`; another study's run is refused, naming it)."""
     from evomotion.run.config import config_from_run_dir
-    from evomotion.sim.robot import is_nao
+    from evomotion.sim.robots import capabilities_of
+    from evomotion.studies.humanoid_walk.gaits import FOOT_CAPABILITIES
 
     name, raw = config_from_run_dir(run)
     if name != "humanoid-walk":
@@ -49,7 +52,7 @@ def check_walk_run(run: Path, option: str = "RUN") -> None:
                          "(or a .motion file)")
     problem = raw.get("problem", {})
     robot = problem.get("robot", "") if isinstance(problem, dict) else ""
-    if not isinstance(robot, str) or not is_nao(robot):
+    if not isinstance(robot, str) or not set(FOOT_CAPABILITIES) <= set(capabilities_of(robot)):
         raise InputError(f"{option} {run}: a walk of robot {str(robot)[:80]!r}; compare "
                          "replays NAO walks beside Webots' NAO motions")
 

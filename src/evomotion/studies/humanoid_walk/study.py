@@ -8,6 +8,7 @@ import typer
 
 from evomotion.studies.base import Study, lazy_hook
 from evomotion.studies.humanoid_walk.problem import HumanoidWalkConfig, make_problem
+from evomotion.studies.view import StudyView
 
 cli = typer.Typer(help="A NAO walk: 14 gait parameters evolved by CMA-ES.",
                   no_args_is_help=True)
@@ -53,6 +54,7 @@ STUDY = Study(
     finalize=lazy_hook(ARTIFACTS, "finalize"),
     best_record=lazy_hook(ARTIFACTS, "best_record"),
     cli=cli,
+    view=StudyView(motions=True),
     smoke=(
         "algorithm.pop_size=4",
         "problem.walk_s=0.5",

@@ -17,9 +17,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from evomotion.sim import nao
-from evomotion.sim.nao.motion import Motion
-from evomotion.studies.humanoid_walk import gait
+from evomotion.sim.motion import Motion
+from evomotion.sim.robots import nao
+from evomotion.studies.humanoid_walk import foot_gait
 
 
 @dataclass(frozen=True)
@@ -28,19 +28,19 @@ class WalkParts:
     cycle: Motion
     stop: Motion
     cycles: int  # steady cycles of the whole walk
-    schedule: gait.Schedule
+    schedule: foot_gait.Schedule
 
 
-def parts_batch(genes: np.ndarray, s: gait.Schedule) -> tuple[np.ndarray, ...]:
+def parts_batch(genes: np.ndarray, s: foot_gait.Schedule) -> tuple[np.ndarray, ...]:
     """Poses ``(start[P, a, 22], cycle[P, c + 1, 22], stop[P, b, 22])`` of genomes sharing the
     schedule ``s``; the cycle's last pose is its first (a loop), ``stop`` starts at a cycle
     start (its first pose is the cycle's first too)."""
-    ms = gait.POSE_MS
+    ms = foot_gait.POSE_MS
     a = s.ready_ms + s.ramp_ms
     t_start = np.arange(0, a + 1, ms, dtype=np.int64)
     t_cycle = np.arange(a, a + s.period_ms, ms, dtype=np.int64)
     t_stop = np.arange(s.walk_end_ms - s.ramp_ms, s.walk_end_ms + 1, ms, dtype=np.int64)
-    q = gait.joint_targets(genes, np.concatenate([t_start, t_cycle, t_stop]), s)
+    q = foot_gait.joint_targets(genes, np.concatenate([t_start, t_cycle, t_stop]), s)
     start, cycle, stop = np.split(q, [t_start.size, t_start.size + t_cycle.size], axis=1)
     # one pose per phase: the cycle closes on its own first pose, the stop opens on it
     cycle = np.concatenate([cycle, cycle[:, :1]], axis=1)
@@ -57,13 +57,13 @@ def assemble_poses(start: np.ndarray, cycle: np.ndarray, n: int,
 
 
 def _times(k: int) -> np.ndarray:
-    return np.arange(k, dtype=np.int64) * gait.POSE_MS
+    return np.arange(k, dtype=np.int64) * foot_gait.POSE_MS
 
 
 def walk_parts(genes: np.ndarray, walk_s: float) -> WalkParts:
     """The three motions of one genome."""
     g = np.asarray(genes, dtype=float)
-    s = gait.schedule(float(g[gait.INDEX["period_s"]]), walk_s, 0.0)
+    s = foot_gait.schedule(float(g[foot_gait.INDEX["period_s"]]), walk_s, 0.0)
     start, cycle, stop = (p[0] for p in parts_batch(g[None], s))
     return WalkParts(*(Motion(nao.JOINTS, _times(len(p)), p) for p in (start, cycle, stop)),
                      cycles=s.steady_ms // s.period_ms, schedule=s)

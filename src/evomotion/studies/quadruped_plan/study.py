@@ -1,10 +1,10 @@
-"""Study ``quadruped-plan``: quadruped walking plans by best-first / A* search (seed 003).
+"""Study ``quadruped-plan``: quadruped walking plans by best-first / A* search (paper 003).
 
 ``evomotion run quadruped-plan`` searches one plan through the run loop (``[problem]`` =
 QuadrupedPlanConfig, ``[algorithm]`` = the search stepped in batches of expansions, see
 :mod:`.search_driver`): stats.csv per batch, checkpoints, resume; at the end ``plan.json``,
 ``plan.png``, ``plan.gif`` and the checker's verdict in ``log.txt``.
-``evomotion quadruped-plan study`` prints the seed's 12-configuration table;
+``evomotion quadruped-plan study`` prints the paper's 12-configuration table;
 ``evomotion quadruped-plan check PLAN.json`` re-verifies a plan (exit 1 on a violation).
 Exit codes: 0 plan found; 1 no plan (unreachable goal, budget spent) or a violation.
 """
@@ -18,26 +18,28 @@ from typing import Annotated, Any
 import typer
 
 from evomotion.errors import InputError
-from evomotion.outfile import atomic_write_text, check_target
+from evomotion.outfile import check_target, write_json
 from evomotion.studies.base import Study
-from evomotion.studies.quadruped_plan.checker import PlanViolationError, check_plan
-from evomotion.studies.quadruped_plan.experiment import format_table, seed_table
-from evomotion.studies.quadruped_plan.mission_driver import RecedingConfig
-from evomotion.studies.quadruped_plan.mission_driver import make_driver as make_receding_driver
-from evomotion.studies.quadruped_plan.plan import (
+from evomotion.studies.quadruped_plan.missions.driver import RecedingConfig
+from evomotion.studies.quadruped_plan.missions.driver import make_driver as make_receding_driver
+from evomotion.studies.quadruped_plan.plans.checker import PlanViolationError, check_plan
+from evomotion.studies.quadruped_plan.plans.experiment import format_table, paper_table
+from evomotion.studies.quadruped_plan.plans.plan import (
     plan_document,
     read_plan,
     world_section,
     write_plan,
 )
-from evomotion.studies.quadruped_plan.planner import (
+from evomotion.studies.quadruped_plan.plans.planner import (
     QuadrupedPlanConfig,
     constants,
     exact_plan,
     make_problem,
 )
-from evomotion.studies.quadruped_plan.rules import ANGLE_GRID, POS_GRID
-from evomotion.studies.quadruped_plan.search_driver import SearchConfig, make_driver
+from evomotion.studies.quadruped_plan.plans.search_driver import SearchConfig, make_driver
+from evomotion.studies.quadruped_plan.rules.rules import ANGLE_GRID, POS_GRID
+from evomotion.studies.quadruped_plan.task_check import apply_task, find_task
+from evomotion.studies.view import StudyView, lazy
 
 NO_PLAN = 1
 
@@ -75,7 +77,7 @@ def _receding(ctx: Any) -> bool:
 
 def best_record(ctx: Any) -> dict[str, Any]:
     if _receding(ctx):
-        from evomotion.studies.quadruped_plan.mission import summary
+        from evomotion.studies.quadruped_plan.missions.mission import summary
 
         return summary(ctx.state)
     res, _ = _outcome(ctx)
@@ -114,8 +116,8 @@ def finalize(ctx: Any) -> int:
 
 def _finalize_mission(ctx: Any) -> int:
     """mission.json (the executed walk), its pictures and the checker's verdict."""
-    from evomotion.studies.quadruped_plan.mission import summary
-    from evomotion.studies.quadruped_plan.mission_doc import mission_document
+    from evomotion.studies.quadruped_plan.missions.doc import mission_document
+    from evomotion.studies.quadruped_plan.missions.mission import summary
     from evomotion.studies.quadruped_plan.views import animate_plan, plot_plan
 
     mission, state = ctx.driver.mission, ctx.state
@@ -145,7 +147,7 @@ def _finalize_mission(ctx: Any) -> int:
 
 
 cli = typer.Typer(add_completion=False, no_args_is_help=True,
-                  help="Quadruped walking plans by best-first / A* search (seed 003).")
+                  help="Quadruped walking plans by best-first / A* search (paper 003).")
 
 
 @cli.command("study")
@@ -158,12 +160,12 @@ def study_cmd(
     astar_angle_grid: Annotated[float, typer.Option(
         help="Duplicate grid for the body angle in the A* rows [rad]")] = ANGLE_GRID,
 ) -> None:
-    """Print the seed's 12-configuration table next to the seed's figures."""
+    """Print the paper's 12-configuration table next to the paper's figures."""
     if astar_pos_grid <= 0 or astar_angle_grid <= 0:
         raise InputError("--astar-pos-grid and --astar-angle-grid: expected > 0")
     base = QuadrupedPlanConfig(max_expansions=max_expansions)
-    rows = seed_table(base, astar_rows=astar, astar_seconds=astar_seconds,
-                      astar_grid=(astar_pos_grid, astar_angle_grid))
+    rows = paper_table(base, astar_rows=astar, astar_seconds=astar_seconds,
+                       astar_grid=(astar_pos_grid, astar_angle_grid))
     typer.echo(format_table(rows))
     if any(r.stop_reason == "found" and r.check != "ok" for r in rows):
         raise typer.Exit(1)
@@ -180,11 +182,10 @@ def missions_cmd(
     json_out: Annotated[Path | None, typer.Option("--json", help="Write the figures here")] = None,
 ) -> None:
     """Receding-horizon walks vs one-shot plans in the bundled worlds (docs)."""
-    import json
 
-    from evomotion.studies.quadruped_plan.heuristic import GAINS
-    from evomotion.studies.quadruped_plan.mission_experiment import format_rows, run_row
-    from evomotion.studies.quadruped_plan.world import load_world
+    from evomotion.studies.quadruped_plan.missions.experiment import format_rows, run_row
+    from evomotion.studies.quadruped_plan.rules.heuristic import GAINS
+    from evomotion.studies.quadruped_plan.worlds.world import load_world
 
     if not 1 <= seeds <= 10_000:
         raise InputError(f"--seeds: expected 1 to 10000, got {seeds}")
@@ -207,8 +208,7 @@ def missions_cmd(
                 typer.echo(format_rows(rows[-1:]).splitlines()[-1])
     typer.echo(format_rows(rows))
     if json_out is not None:
-        atomic_write_text(json_out, json.dumps(_finite([r.figures() for r in rows]), indent=1,
-                                               allow_nan=False) + "\n", "figures file")
+        write_json(json_out, [r.figures() for r in rows], "figures file", indent=1)
     if any(r.check_failures for r in rows):
         for r in rows:
             for line in r.check_failures:
@@ -227,7 +227,7 @@ def simulate_cmd(
     import json
 
     from evomotion.sim.render import RenderUnavailableError
-    from evomotion.studies.quadruped_plan.simulate import simulate_document
+    from evomotion.studies.quadruped_plan.plans.simulate import simulate_document
 
     if not 0.1 <= speed <= 1000:
         raise InputError(f"--speed: expected 0.1 to 1000, got {speed}")
@@ -251,15 +251,6 @@ def simulate_cmd(
         raise typer.Exit(1)
 
 
-def _finite(x: Any) -> Any:
-    """``x`` with NaN and infinities as ``null`` (JSON has neither)."""
-    if isinstance(x, dict):
-        return {k: _finite(v) for k, v in x.items()}
-    if isinstance(x, list):
-        return [_finite(v) for v in x]
-    return None if isinstance(x, float) and not math.isfinite(x) else x
-
-
 def _mm(v: float | None) -> str:
     return "n/a" if v is None else f"{1000 * v:.1f} mm"
 
@@ -274,11 +265,9 @@ def check_cmd(
 ) -> None:
     """Re-verify every state and transition of a plan, and that it goes from the world's
     start to the world's goal; exit 1 on the first violation."""
-    from evomotion.studies.quadruped_plan.task_check import apply_task, find_task
-
     plan = plan_path(plan)
     doc = read_plan(plan)
-    task = find_task(plan, doc, world)
+    task = find_task(plan, doc, STUDY, world)
     try:
         if task is not None:
             doc = apply_task(doc, task)
@@ -305,20 +294,22 @@ def plan_path(path: Path) -> Path:
 
 STUDY = Study(
     name="quadruped-plan",
-    description="Quadruped walking plans by best-first / A* search (seed 003).",
+    description="Quadruped walking plans by best-first / A* search (paper 003).",
     problem_config=QuadrupedPlanConfig,
     make_problem=make_problem,
     # steps are batches of expansions; the search's own budgets ([problem]) end it
     defaults={"run": {"generations": 1_000_000, "checkpoint_every": 10}},
-    presets={"seed": {"problem": {"method": "best-first", "function": 1, "rule_set": "A"}}},
-    preset_notes={"seed": "the seed's first experiment: best-first with its function (1), "
-                          "rule set A (the default is function (3), rule set B)"},
+    presets={"paper": {"problem": {"method": "best-first", "function": 1, "rule_set": "A"}}},
+    preset_notes={"paper": "the paper's first experiment: best-first with its function (1), "
+                           "rule set A (the default is function (3), rule set B)"},
     core_algorithms=(),
     algorithms={"search": (SearchConfig, make_driver),
                 "receding": (RecedingConfig, make_receding_driver)},
     finalize=finalize,
     best_record=best_record,
     cli=cli,
+    view=StudyView(frames=lazy("evomotion.studies.quadruped_plan.views",
+                                          "studio_frames")),
     smoke=(
         "algorithm.batch_expansions=40",
         "problem.goal_x=0.0",

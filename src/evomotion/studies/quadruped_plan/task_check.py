@@ -29,9 +29,11 @@ from pathlib import Path
 from typing import Any
 
 from evomotion.errors import InputError
-from evomotion.studies.quadruped_plan.checker import PlanViolationError
-from evomotion.studies.quadruped_plan.model import QuadrupedModel, world_feet
-from evomotion.studies.quadruped_plan.world import World, bundled_worlds, load_world
+from evomotion.run.config import config_from_dict, config_from_run_dir
+from evomotion.studies.base import Study
+from evomotion.studies.quadruped_plan.plans.checker import PlanViolationError
+from evomotion.studies.quadruped_plan.rules.model import QuadrupedModel, world_feet
+from evomotion.studies.quadruped_plan.worlds.world import World, bundled_worlds, load_world
 
 GOAL_MOVE_MAX = 2.0  # [units] the documented default of algorithm.goal_move
 TOL = 1e-6  # [units] / [rad]
@@ -51,25 +53,25 @@ class Task:
     model: dict[str, float] | None = None  # a, b, l_min, l_max, ... (None: not known)
 
 
-def _run_config(plan_file: Path) -> Any | None:
-    """The configuration of the run folder holding ``plan_file``, or None."""
-    from evomotion.run.config import config_from_dict, config_from_run_dir
-    from evomotion.studies.quadruped_plan.study import STUDY
-
+def _run_config(plan_file: Path, study_def: Study) -> Any | None:
+    """The configuration of the run folder holding ``plan_file`` (a run of ``study_def``),
+    or None."""
     folder = plan_file.parent
     if not (folder / "config.toml").is_file():
         return None
     study, raw = config_from_run_dir(folder)
-    if study != STUDY.name:
+    if study != study_def.name:
         raise InputError(f"{folder / 'config.toml'}: a run of {study!r}, not of "
-                         f"{STUDY.name!r}")
-    return config_from_dict(STUDY, raw)
+                         f"{study_def.name!r}")
+    return config_from_dict(study_def, raw)
 
 
-def find_task(plan_file: Path, doc: dict[str, Any], world: str | None = None) -> Task | None:
-    """The task of ``doc`` (read from ``plan_file``); one-line :class:`InputError` when the
-    plan names a world that cannot be found."""
-    cfg = _run_config(plan_file)
+def find_task(plan_file: Path, doc: dict[str, Any], study_def: Study,
+              world: str | None = None) -> Task | None:
+    """The task of ``doc`` (read from ``plan_file``; its run folder's configuration is read
+    as ``study_def``'s, passed in so that this module needs no import of ``study.py``);
+    one-line :class:`InputError` when the plan names a world that cannot be found."""
+    cfg = _run_config(plan_file, study_def)
     problem = cfg.problem if cfg is not None else None
     goal_move = GOAL_MOVE_MAX
     clearances = model = None
@@ -173,7 +175,7 @@ def _world(doc: dict[str, Any], task: Task) -> dict[str, Any]:
     """The world section to check in: the world file's polygons and bounds, the posts the
     plan says appeared (more obstacles only make the check stricter), the run's clearances
     (the plan's where the run's configuration is not at hand)."""
-    from evomotion.studies.quadruped_plan.plan import world_section
+    from evomotion.studies.quadruped_plan.plans.plan import world_section
 
     mine = doc.get("world")
     if not mine:

@@ -3,7 +3,7 @@
 Both read only the plan.json / mission.json document, so they draw any plan that passes the
 checker: the world (obstacles grey, no-step zones hatched orange, hidden obstacles dashed,
 posts that appeared red), start and goal (and a goal that moved), the body path, the robot
-every few states, landing errors and slips, axes in the seed's units and a legend; the GIF
+every few states, landing errors and slips, axes in the paper's units and a legend; the GIF
 steps state by state with the rule's name and the support polygon (the swing triangle
 during a leg move).
 """
@@ -21,15 +21,17 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.patches import Patch, Polygon  # noqa: E402
 
+from evomotion.errors import InputError  # noqa: E402
 from evomotion.outfile import atomic_output, save_figure  # noqa: E402
-from evomotion.studies.quadruped_plan.rules import is_leg_rule  # noqa: E402
+from evomotion.studies.quadruped_plan.rules.rules import is_leg_rule  # noqa: E402
+from evomotion.studies.view import Frames, NothingYetError, RunFiles  # noqa: E402
 
 LEG_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red")
 LEG_SHORT = ("FL", "RL", "RR", "FR")
 
 
 def rule_name(rule: int, event: str = "") -> str:
-    """A rule of seed 003 (or a disturbance) in words."""
+    """A rule of paper 003 (or a disturbance) in words."""
     if event and event != "start":
         return f"disturbance: {event}"
     if rule == 0:
@@ -155,8 +157,8 @@ def _decor(ax: Any, doc: dict[str, Any], upto: int | None = None) -> list:
     ax.set_ylim(y0, y1)
     ax.set_aspect("equal")
     ax.grid(alpha=0.3)
-    ax.set_xlabel("x [seed units]")
-    ax.set_ylabel("y [seed units]")
+    ax.set_xlabel("x [paper units]")
+    ax.set_ylabel("y [paper units]")
     return handles
 
 
@@ -245,3 +247,17 @@ def animate_plan(doc: dict[str, Any], out_gif: str | Path, max_frames: int = 150
     plt.close(fig)
     with atomic_output(out_gif, "plan animation", suffix=".tmp.gif") as tmp:
         imageio.mimsave(tmp, frames, duration=1.0 / fps, loop=0)
+
+
+def studio_frames(files: RunFiles) -> Frames:
+    """The studio's view of a quadruped-plan run: its mission (or plan) state by state, with
+    the rule names and the support polygon (the paper's viewer)."""
+    name = next((n for n in ("mission.json", "plan.json") if (files.run_dir / n).exists()), None)
+    if name is None:
+        raise NothingYetError("no plan.json or mission.json: the search found no plan (yet)")
+    doc = files.json(name, "plan")
+    if not (isinstance(doc, dict) and isinstance(doc.get("states"), list) and doc["states"]):
+        raise InputError(f"{files.run_dir / name}: expected a plan with a non-empty list of "
+                         "states")
+    return Frames(len(doc["states"]), lambda k: (step_figure(doc, k), f"state {k}"),
+                  label="transition", title=f"{name}: {len(doc['states']) - 1} transitions")

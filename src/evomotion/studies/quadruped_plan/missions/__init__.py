@@ -1,0 +1,2 @@
+"""Missions: a walk replanned as the world is discovered (events, recovery, one-shot
+baseline, the mission document, driver and experiment)."""

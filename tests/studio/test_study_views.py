@@ -1,0 +1,62 @@
+"""The studio asks each study for its view (issue 32): it names no study, and every study's
+declared view is well formed; a study reads a run's files only through the studio's bounds."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from evomotion.errors import InputError
+from evomotion.studies import STUDIES, get_study
+from evomotion.studies.view import Frames, NothingYetError, Scene, StudyView
+from evomotion.studio import views
+
+STUDIO = Path(views.__file__).parent
+
+
+def test_the_studio_names_no_study():
+    source = {p.name: p.read_text() for p in STUDIO.glob("*.py")}
+    for name, target in STUDIES.items():
+        package = target.split(":")[0].rsplit(".", 1)[0]
+        for file, text in source.items():
+            assert f'"{name}"' not in text, (file, name)
+            assert package not in text, (file, package)
+
+
+@pytest.mark.parametrize("name", list(STUDIES))
+def test_every_declared_view_is_well_formed(name):
+    view = get_study(name).view
+    if view is None:
+        return
+    assert isinstance(view, StudyView)
+    assert view.motions or view.frames is not None or view.table or view.archive_map
+    assert view.frames is None or callable(view.frames)
+    if view.scene is not None:
+        assert isinstance(view.scene, Scene) and view.scene.name != "nao"
+        assert callable(view.scene.load_model) and callable(view.scene.initial_state)
+
+
+def test_run_files_say_what_is_missing_and_keep_the_bounds(tmp_path, monkeypatch):
+    files = views.StudioRunFiles("functions", tmp_path)
+    with pytest.raises(NothingYetError, match="population.bin"):
+        files.history()
+    with pytest.raises(NothingYetError, match="plan.json"):
+        files.json("plan.json", "plan")
+    assert files.stats() == {}
+    (tmp_path / "plan.json").write_text("[" * 10 + "]" * 10)
+    monkeypatch.setattr(views, "MAX_JSON_BYTES", 8)
+    with pytest.raises(InputError, match="plan.json"):
+        files.json("plan.json", "plan")
+
+
+def test_frames_of_a_study_step_through_figures(tmp_path):
+    from evomotion.api import run
+
+    out = tmp_path / "g"
+    run("grid-path", {"run": {"generations": 3, "history_every": 1},
+                      "algorithm": {"pop_size": 16}}, out)
+    frames = get_study("grid-path").view.frames(views.StudioRunFiles("grid-path", out))
+    assert isinstance(frames, Frames) and frames.count >= 3
+    fig, caption = frames.draw(frames.count - 1)
+    assert fig.axes and caption.startswith("generation ")
