@@ -116,9 +116,9 @@ def check_robot(robot: object) -> str:
     robot name, or a spec file that is a regular file of at most :data:`MAX_SPEC_BYTES`
     whose MJCF is a regular file of at most :data:`MAX_MJCF_BYTES`; else one
     :class:`InputError` line (nothing is loaded)."""
-    from evomotion.sim.robots import bundled_specs
+    from evomotion.sim.robots import bundled_robots
 
-    names = bundled_specs()
+    names = bundled_robots()
     head = f"problem.robot = {one_line(repr(robot), 120)}"
     if not isinstance(robot, str):
         raise InputError(f"{head}: expected a robot name or a spec path")

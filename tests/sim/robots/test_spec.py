@@ -13,7 +13,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from evomotion.errors import InputError
-from evomotion.sim.robots import build_robot, bundled_specs, load_robot, read_spec, spec_path
+from evomotion.sim.robots import build_robot, bundled_robots, load_robot, read_spec, spec_path
 from evomotion.sim.robots.spec import key_lines
 
 NAO_MJCF = "evomotion:sim/robots/nao/nao_h25.xml"
@@ -33,7 +33,7 @@ def _stands(robot, seconds: float = 3.0) -> tuple[float, float, float]:
     return float(q[:, 2].min()), float(tilt.max()), float(np.linalg.norm(q[-1, :2] - q[0, :2]))
 
 
-@pytest.mark.parametrize("name", bundled_specs())
+@pytest.mark.parametrize("name", bundled_robots())
 def test_bundled_robot_builds_and_stands(name):
     if name.startswith("dm-") and not HAS_DM:
         pytest.skip("dm_control is not installed")

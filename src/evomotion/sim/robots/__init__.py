@@ -38,9 +38,6 @@ def bundled_robots() -> list[str]:
                   if p.parent.name == p.stem.replace("-", "_"))
 
 
-bundled_specs = bundled_robots  # the former name (studio, tests)
-
-
 def _bundled_spec(name: str) -> Path | None:
     if not name or "/" in name or "\\" in name or name.startswith("."):
         return None
@@ -107,5 +104,5 @@ def capabilities_of(name_or_path: str) -> dict[str, str]:
 
 
 __all__ = ["CAPABILITIES", "ROBOTS_DIR", "Robot", "RobotSpec", "build_robot", "bundled_robots",
-           "bundled_specs", "capabilities_of", "capability_modules", "load_robot", "read_spec",
+           "capabilities_of", "capability_modules", "load_robot", "read_spec",
            "robot_folder", "spec_path"]
