@@ -21,7 +21,7 @@ from evomotion.sim.repertoire import read_cell, read_index
 ENTRY = {"cell": 3, "file": "cell-0003.motion", "objective": -0.5,
          "measured": {"dx_m": 0.05, "dy_m": -0.01, "dtheta_deg": 4.0},
          "centre": [0.05, 0.0, 0.0], "genes": {"shift_s": 0.4}}
-INDEX = {"robot": "nao", "is_nao": True, "box": {"lower": [-0.1, -0.1, -30],
+INDEX = {"robot": "nao", "stepper": "closed_form", "box": {"lower": [-0.1, -0.1, -30],
                                                   "upper": [0.1, 0.1, 30]},
          "measures": ["dx_m", "dy_m", "dtheta_deg"], "cells": [5, 5, 5], "archived": 1,
          "fallen": 0, "outside_box": 0, "hold_s": 0.5, "entries": [ENTRY]}
@@ -79,6 +79,7 @@ def test_deeply_nested_json_is_one_line(tmp_path, text):
     (json.dumps({**INDEX, "entries": {}}), "a list 'entries'"),
     (json.dumps({**INDEX, "robot": "nao\nerror: forged"}), "'robot' a printable name"),
     (json.dumps({**INDEX, "is_nao": "yes"}), "'is_nao' true or false"),
+    (json.dumps({**INDEX, "stepper": "magic"}), "'stepper' one of closed_form, numerical"),
     ("[]", "a list 'entries'"),
     ("{", "invalid JSON"),
 ])
@@ -142,7 +143,7 @@ json_values = st.recursive(
     | st.text(max_size=12) | st.sampled_from(["cell-0001.motion", "../x.motion"]),
     lambda inner: st.lists(inner, max_size=3) | st.dictionaries(
         st.sampled_from(["entries", "file", "cell", "objective", "measured", "dx_m", "dy_m",
-                         "dtheta_deg", "hold_s", "robot", "is_nao", "x"]), inner, max_size=4),
+                         "dtheta_deg", "hold_s", "robot", "is_nao", "stepper", "x"]), inner, max_size=4),
     max_leaves=12)
 
 

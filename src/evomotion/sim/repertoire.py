@@ -19,6 +19,7 @@ import numpy as np
 
 from evomotion.errors import FileFormatError, InputError
 from evomotion.sim.motion import Motion
+from evomotion.sim.robots.nao.old_repertoire import old_flag_problem, old_stepper
 
 INDEX = "index.json"
 #: the largest index.json read (bytes; a full NAO archive's index is about 1 MiB) and its
@@ -33,6 +34,8 @@ MAX_OBJECTIVE = 1000.0  # the objective of a step (tilt and effort) lies within 
 MAX_HOLD_S = 60.0
 #: a cell file: a plain name in the repertoire folder (no folder part, no "..")
 CELL_FILE = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]{0,250}\.motion$")
+#: the step models a repertoire is evolved with (``index.json``'s ``stepper``)
+STEPPERS = ("closed_form", "numerical")
 
 
 def read_index(run_or_folder: Path) -> tuple[Path, dict]:
@@ -67,7 +70,8 @@ def check_index(index: Any, path: Path) -> None:
     ``.motion`` name), a non-negative integer ``cell``, an ``objective`` within
     +-:data:`MAX_OBJECTIVE` and ``measured`` ``dx_m``/``dy_m`` within +-:data:`MAX_STEP_M` m and
     ``dtheta_deg`` within +-:data:`MAX_TURN_DEG`; ``hold_s`` (when given) within 0 to
-    :data:`MAX_HOLD_S` s, ``robot`` a short printable name, ``is_nao`` true or false."""
+    :data:`MAX_HOLD_S` s, ``robot`` a short printable name, ``stepper`` one of
+    :data:`STEPPERS` (an index written before it existed: its old NAO flag true or false)."""
     def bad(expected: str) -> FileFormatError:
         return FileFormatError(path, None, expected)
 
@@ -79,8 +83,12 @@ def check_index(index: Any, path: Path) -> None:
     robot = index.get("robot", "nao")
     if not isinstance(robot, str) or not robot.isprintable() or not 0 < len(robot) <= 200:
         raise bad(f"expected 'robot' a printable name, got {_short(robot)}")
-    if not isinstance(index.get("is_nao", True), bool):
-        raise bad(f"expected 'is_nao' true or false, got {_short(index['is_nao'])}")
+    stepper = index.get("stepper", STEPPERS[0])
+    if stepper not in STEPPERS:
+        raise bad(f"expected 'stepper' one of {', '.join(STEPPERS)}, got {_short(stepper)}")
+    old = old_flag_problem(index)
+    if old is not None:
+        raise bad(old)
     entries = index["entries"]
     if not entries:
         raise bad("the repertoire is empty (no standing step)")
@@ -108,11 +116,14 @@ def check_index(index: Any, path: Path) -> None:
             raise bad(f"entry {i}: expected 'cell' a non-negative integer, got {_short(c)}")
 
 
-def is_nao_repertoire(index: dict) -> bool:
-    """Was the repertoire evolved for the NAO (its own step, the bundled NAO)? Indexes
-    written before ``is_nao`` existed name their robot only (and were all the NAO's)."""
-    flag = index.get("is_nao")
-    return flag if isinstance(flag, bool) else index.get("robot", "nao") == "nao"
+def stepper_of(index: dict) -> str:
+    """The step model the repertoire was evolved with: ``"closed_form"`` (a robot with the
+    ``leg_ik`` capability through its own closed-form step, played by its own replay; the kick
+    walks only with these) or ``"numerical"`` (any robot's generic step; played on the model
+    its run's ``config.toml`` names). Indexes older than ``stepper``: see
+    :mod:`evomotion.sim.robots.nao.old_repertoire`."""
+    stepper = index.get("stepper")
+    return stepper if isinstance(stepper, str) else old_stepper(index)
 
 
 def cell_path(folder: Path, name: object) -> Path:

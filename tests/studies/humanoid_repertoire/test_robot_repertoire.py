@@ -81,7 +81,7 @@ def test_short_run_on_op3_writes_a_repertoire_that_pick_export_and_walk_to_use(t
     res = run_study(s, cfg, tmp_path, quiet=True)
     assert res.exit_code == 0
     index = json.loads((tmp_path / "repertoire" / "index.json").read_text())
-    assert index["robot"] == "op3" and index["is_nao"] is False and index["entries"]
+    assert index["robot"] == "op3" and index["stepper"] == "numerical" and index["entries"]
     assert index["box"]["upper"][0] > 0.15  # scaled to the OP3
     assert not (tmp_path / "repertoire" / "ready.motion").exists()
     robot = make_problem(cfg.problem).robot
@@ -131,19 +131,22 @@ def test_the_horizon_holds_the_longest_step_on_the_pose_grid(op3):
 
 def test_a_copy_of_the_nao_spec_is_another_robot(tmp_path):
     """The repertoire of a copy of nao.toml (another path) is another robot's: generic step,
-    walk-to plays it on the copy's model, the kick refuses it; old indexes without is_nao
-    count as the NAO's."""
+    walk-to plays it on the copy's model, the kick refuses it; old
+    indexes (a NAO flag, or the robot's name only) read alike."""
     import shutil
 
-    from evomotion.sim.repertoire import is_nao_repertoire
+    from evomotion.sim.repertoire import stepper_of
     from evomotion.sim.robots import spec_path
 
     copy = tmp_path / "my_nao.toml"
     shutil.copy(spec_path("nao"), copy)
     p = make_problem(HumanoidRepertoireConfig(robot=str(copy), threads=1))
     assert p.steps.name == "numerical" and p.robot.name == "nao"
-    assert is_nao_repertoire({"robot": "nao"}) and not is_nao_repertoire({"robot": "op3"})
-    assert not is_nao_repertoire({"robot": "nao", "is_nao": False})
+    assert stepper_of({"robot": "nao"}) == "closed_form"
+    assert stepper_of({"robot": "op3"}) == "numerical"
+    assert stepper_of({"robot": "nao", "is_nao": False}) == "numerical"
+    assert stepper_of({"robot": "nao", "is_nao": True}) == "closed_form"
+    assert stepper_of({"robot": "nao", "stepper": "numerical"}) == "numerical"
     from evomotion.studies.humanoid_repertoire.problem import HumanoidRepertoireProblem
 
     assert type(p) is HumanoidRepertoireProblem  # one problem class, the robot a parameter

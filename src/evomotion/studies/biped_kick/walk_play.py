@@ -30,7 +30,7 @@ import numpy as np
 from evomotion.errors import InputError
 from evomotion.run.config import run_of_study
 from evomotion.sim.motion import Motion
-from evomotion.sim.repertoire import is_nao_repertoire, read_cell, read_index
+from evomotion.sim.repertoire import read_cell, read_index, stepper_of
 from evomotion.sim.robots import nao
 from evomotion.sim.robots.nao.replay import motion_targets
 from evomotion.sim.rollout import fall_step, torso_track
@@ -100,10 +100,10 @@ def walk(run: SceneRun, repertoire: Path, ctrl: np.ndarray, goal: np.ndarray,
     """Walk ``run`` to ``goal`` (x, y, heading) along the Bézier ``ctrl`` with the steps of
     ``repertoire``; returns the steps taken and the final error."""
     folder, index = load_index(repertoire)
-    if not is_nao_repertoire(index):
-        raise InputError(f"{folder}: a repertoire of robot {index.get('robot')!r} (not the "
-                         "NAO's own step); the kick walks the NAO (a humanoid-repertoire run "
-                         "without problem.robot)")
+    if stepper_of(index) != "closed_form":
+        raise InputError(f"{folder}: a repertoire of robot {index.get('robot')!r} evolved with "
+                         "the numerical step; the kick walks the NAO with its closed-form step "
+                         "(a humanoid-repertoire run without problem.robot)")
     entries = index["entries"]
     for name in ["ready.motion"] + [Path(str(e["file"])).name for e in entries]:
         if not (folder / name).is_file():

@@ -90,7 +90,8 @@ def write_repertoire(out_dir: Path, hold_s: float, problem: Any = None) -> list[
                           "repertoire ready motion")
     atomic_write_text(folder / INDEX, json.dumps({
         "robot": "nao" if robot is None else robot.name,
-        "is_nao": robot is None,  # the NAO's own step (a copy of nao.toml is another robot)
+        # the closed-form step of a robot with leg_ik (a copy of nao.toml is another robot)
+        "stepper": "closed_form" if robot is None else "numerical",
         "box": {"lower": box.lower.tolist(), "upper": box.upper.tolist()},
         "measures": list(a.measure_names), "cells": a.cells, "archived": int(a.cell.size),
         "fallen": int((~up).sum()), "outside_box": int((up & ~inside).sum()),

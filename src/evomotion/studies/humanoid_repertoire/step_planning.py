@@ -29,7 +29,7 @@ import numpy as np
 
 from evomotion.core.checks import check_number
 from evomotion.errors import InputError
-from evomotion.sim.repertoire import chain, is_nao_repertoire, read_cell
+from evomotion.sim.repertoire import chain, read_cell, stepper_of
 from evomotion.studies.humanoid_repertoire.runfiles import load_index
 
 #: the farthest request or target (m, each of x and y) and the largest turn (degrees)
@@ -189,7 +189,7 @@ def walk_to(run: Path, x: float, y: float, theta_deg: float, video: Path | None 
     if not idx:
         raise InputError("walk-to: the target is the start pose (nothing to do) or no "
                          "step of the repertoire gets closer to it")
-    problem = None if is_nao_repertoire(index) else _robot_problem(folder)
+    problem = None if stepper_of(index) == "closed_form" else _robot_problem(folder)
     joints = None if problem is None else problem.robot.joints
     motion = chain(with_pauses([read_cell(folder, entries[i], joints) for i in idx], settle_s))
     atomic_write_text(out, format_motion(motion), "chained motion (--out)")
