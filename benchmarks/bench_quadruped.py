@@ -38,14 +38,21 @@ def table_once() -> tuple[int, float, float, dict[str, list]]:
         solve,
     )
 
+    try:
+        from evomotion.studies.quadruped_plan.plans.search_config import SearchConfig
+    except ImportError:  # a baseline before issue 32: the search settings in [problem]
+        SearchConfig = None  # noqa: N806
     expansions, cpu, wall, per = 0, 0.0, 0.0, {}
     for function in (1, 2, 3):
         for rule_set in ("A", "B"):
             for start, phi in STARTS.items():
-                cfg = replace(QuadrupedPlanConfig(), function=function, rule_set=rule_set,
-                              start_phi=phi)
+                cfg = replace(QuadrupedPlanConfig(), rule_set=rule_set, start_phi=phi)
+                if SearchConfig is None:
+                    cfg, search = replace(cfg, function=function), ()
+                else:
+                    search = (SearchConfig(function=function),)
                 c0, w0 = time.process_time(), time.perf_counter()
-                res = solve(cfg, make_problem(cfg))
+                res = solve(cfg, *search, make_problem(cfg))
                 dc, dw = time.process_time() - c0, time.perf_counter() - w0
                 if not res.found:
                     raise SystemExit(f"({function}) {rule_set} {start}: {res.message}")

@@ -31,15 +31,16 @@ def paper_plans(robust: bool) -> list[tuple[str, dict]]:
         make_problem,
         solve,
     )
+    from evomotion.studies.quadruped_plan.plans.search_config import SearchConfig
 
     out = []
+    search = SearchConfig(function=3 if robust else 1, max_expansions=300_000)
     for rs in "AB":
         for label, phi in (("a", math.pi / 4), ("b", 1.5 * math.pi)):
-            cfg = QuadrupedPlanConfig(rule_set=rs, function=3 if robust else 1,
-                                      start_phi=phi, min_margin=0.1 if robust else 0.0,
-                                      shifts=robust, max_expansions=300_000)
+            cfg = QuadrupedPlanConfig(rule_set=rs, start_phi=phi,
+                                      min_margin=0.1 if robust else 0.0, shifts=robust)
             p = make_problem(cfg)
-            res = solve(cfg, p)
+            res = solve(cfg, search, p)
             if not res.found:
                 out.append((f"paper {rs}/{label}", {}))
                 continue
@@ -60,7 +61,7 @@ def _search_plan(world: str, robust: bool) -> dict:
 
     cfg = QuadrupedPlanConfig(world=world, min_margin=0.1 if robust else 0.0, shifts=robust)
     p = make_problem(cfg)
-    res = solve(cfg, p)
+    res = solve(cfg, None, p)
     if not res.found:
         return {}
     doc = plan_document(p.model, res.states, res.rules, p.goal, p.goal_tolerance, cfg.sense,

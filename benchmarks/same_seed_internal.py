@@ -75,18 +75,24 @@ def quadruped_plan() -> dict:
     and rule) and a coarse-grid A*."""
     from evomotion.studies.quadruped_plan.plans.planner import QuadrupedPlanConfig, solve
 
+    try:
+        from evomotion.studies.quadruped_plan.plans.search_config import SearchConfig
+
+        def plan(search: dict, **task):
+            return solve(QuadrupedPlanConfig(**task), SearchConfig(**search))
+    except ImportError:  # before issue 32: the search settings were [problem] keys
+        def plan(search: dict, **task):
+            return solve(QuadrupedPlanConfig(**task, **search))
     out: dict = {}
     for fn in (1, 3):
         for rs in ("A", "B"):
             for start, phi in (("a", math.pi / 4), ("b", math.pi / 2)):
-                r = solve(QuadrupedPlanConfig(function=fn, rule_set=rs, start_phi=phi,
-                                              max_seconds=1e9))
+                r = plan({"function": fn, "max_seconds": 1e9}, rule_set=rs, start_phi=phi)
                 out[f"quadruped-plan/{fn}/{rs}/{start}"] = [
                     r.stop_reason, r.expansions, len(r.states),
                     [list(s[:11]) for s in r.states], r.rules]
-    r = solve(QuadrupedPlanConfig(method="astar", rule_set="B", start_phi=math.pi / 2,
-                                  pos_grid=1, angle_grid=0.2, max_seconds=1e9, goal_x=-3,
-                                  goal_y=3))
+    r = plan({"method": "astar", "max_seconds": 1e9}, rule_set="B", start_phi=math.pi / 2,
+             pos_grid=1, angle_grid=0.2, goal_x=-3, goal_y=3)
     out["quadruped-plan/astar-coarse"] = [r.stop_reason, r.expansions, len(r.states), r.rules]
     return out
 

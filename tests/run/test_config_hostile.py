@@ -188,14 +188,32 @@ def test_memory_check_uses_the_problem_genome():
 
 def test_quadruped_max_seconds():
     q = get_study("quadruped-plan")
-    with pytest.raises(InputError, match="problem.max_seconds: expected a finite number"):
+    with pytest.raises(InputError, match="algorithm.max_seconds: expected a finite number"):
+        resolve_config(q, None, ["algorithm.max_seconds=nan"])
+    with pytest.raises(InputError, match="algorithm.max_seconds"):
+        resolve_config(q, None, ["algorithm.max_seconds=-inf"])
+    # the old place (problem.max_seconds, before issue 32) names the new one
+    with pytest.raises(InputError, match="algorithm.max_seconds: expected a finite number"):
         resolve_config(q, None, ["problem.max_seconds=nan"])
-    with pytest.raises(InputError, match="problem.max_seconds"):
-        resolve_config(q, None, ["problem.max_seconds=-inf"])
     # inf is the documented "no time limit", and survives config.toml
-    cfg = resolve_config(q, None, ["problem.max_seconds=inf"])
-    assert cfg.problem.max_seconds == math.inf
+    cfg = resolve_config(q, None, ["algorithm.max_seconds=inf"])
+    assert cfg.algorithm.max_seconds == math.inf
     assert config_from_dict(q, tomllib.loads(config_to_toml(cfg))) == cfg
+
+
+def test_quadruped_old_and_new_key_together_is_one_line(tmp_path):
+    q = get_study("quadruped-plan")
+    with pytest.raises(InputError) as e:
+        resolve_config(q, None, ["problem.method=astar", "algorithm.method=astar"])
+    assert one_line(e) == ("problem.method and algorithm.method: the same setting under its "
+                           "old and its new name; give only algorithm.method")
+    f = tmp_path / "c.toml"
+    f.write_text("[problem]\nweight = 2.0\n[algorithm]\nweight = 2.0\n")
+    with pytest.raises(InputError, match="^problem.weight and algorithm.weight: "):
+        resolve_config(q, f)
+    # the old key in one source, the new in another: the later source wins, as for any key
+    f.write_text("[problem]\nweight = 2.0\n")
+    assert resolve_config(q, f, ["algorithm.weight=4.0"]).algorithm.weight == 4.0
 
 
 def test_every_inf_field_documents_its_meaning():
@@ -251,7 +269,8 @@ def test_every_inf_field_documents_its_meaning():
     ("functions", "run.seed.x=1", "run.seed: expected int, got dict"),
     ("functions", "algorithm.name=cga", None),  # valid: resolves
     ("functions", "algorithm.name=cmaes", None),
-    ("quadruped-plan", "problem.weight=nan", "problem.weight"),
+    ("quadruped-plan", "algorithm.weight=nan", "algorithm.weight"),
+    ("quadruped-plan", "problem.weight=nan", "algorithm.weight"),  # the old place (issue 32)
     ("quadruped-plan", "problem.gif_max_frames=0", "problem.gif_max_frames"),
     ("quadruped-plan", "problem.goal_x=1e300", "problem.goal_x"),
     ("quadruped-plan", "problem.sector_half_width=3", "sector_half_width"),

@@ -143,7 +143,8 @@ json_values = st.recursive(
     | st.text(max_size=12) | st.sampled_from(["cell-0001.motion", "../x.motion"]),
     lambda inner: st.lists(inner, max_size=3) | st.dictionaries(
         st.sampled_from(["entries", "file", "cell", "objective", "measured", "dx_m", "dy_m",
-                         "dtheta_deg", "hold_s", "robot", "is_nao", "stepper", "x"]), inner, max_size=4),
+                         "dtheta_deg", "hold_s", "robot", "is_nao", "stepper", "x"]), inner,
+        max_size=4),
     max_leaves=12)
 
 

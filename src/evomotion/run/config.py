@@ -3,7 +3,8 @@
 The top level has three sections: ``[run]`` (:class:`RunSection`), ``[algorithm]`` (the
 dataclass registered for ``algorithm.name`` in :data:`evomotion.core.algorithms.ALGORITHMS`)
 and ``[problem]`` (the study's ``problem_config``). Unknown keys and wrong types raise
-:class:`~evomotion.errors.InputError` naming the key and listing the valid ones.
+:class:`~evomotion.errors.InputError` naming the key and listing the valid ones; a key the
+study moved (``Study.moved_keys``) is read at its new place with a note (:mod:`.moved_keys`).
 
 Nothing a user writes gets past as a traceback: the file is decoded as UTF-8 with a
 ``FILE:LINE`` error; every ``float`` field must be finite unless its field metadata documents
@@ -31,6 +32,7 @@ from evomotion.core.checks import ALLOW_INF, check_fields, check_number, check_t
 from evomotion.core.registry import lookup
 from evomotion.errors import FileFormatError, InputError
 from evomotion.run.contracts import ConfiguredStudy
+from evomotion.run.moved_keys import move_sources
 
 #: a config file is refused above this size (it is a handful of keys)
 MAX_CONFIG_BYTES = 1 << 20
@@ -278,16 +280,22 @@ def resolve_config(study: ConfiguredStudy, file: Path | None = None,
                    values: dict[str, Any] | None = None) -> Config:
     """Resolve the full config of ``study`` (a :class:`~evomotion.studies.base.Study`):
     dataclass defaults < study defaults < ``preset`` < TOML ``file`` < ``values`` (sections
-    as a dict, the Python API's ``config``) < ``overrides``."""
-    user: dict[str, Any] = {}
+    as a dict, the Python API's ``config``) < ``overrides``; keys the study moved
+    (``study.moved_keys``) are read at their new place, with a note (:mod:`.moved_keys`)."""
+    layers: list[dict[str, Any]] = []  # each source alone: an old and a new key in one clash
     if file is not None:
-        user = load_toml(file)
-        user.pop("study", None)
-        user.pop("preset", None)
+        layers.append(load_toml(file))
+        layers[-1].pop("study", None)
+        layers[-1].pop("preset", None)
     if values:
-        user = _merge(user, values)
+        layers.append(dict(values))
+    given: dict[str, Any] = {}
     for item in overrides:
-        user = apply_override(user, item)
+        given = apply_override(given, item)
+    layers.append(given)
+    user: dict[str, Any] = {}
+    for layer in layers:
+        user = _merge(user, layer)
     defaults = {k: dict(v) for k, v in study.defaults.items()}
     preset = current_preset_name(study, preset)
     if preset is not None:
@@ -303,6 +311,14 @@ def resolve_config(study: ConfiguredStudy, file: Path | None = None,
         defaults = _merge(defaults, dict(chosen))
     default_alg = defaults.get("algorithm", {}).get("name") or default_algorithm(study)
     user_alg = user.get("algorithm", {}) if isinstance(user.get("algorithm"), dict) else {}
+    if study.moved_keys:  # the keys a study moved, read at their new place (one note each)
+        name = str(user_alg.get("name", default_alg))
+        *layers, defaults = move_sources([*layers, defaults], study.moved_keys,
+                                         _sections(study, name), name)
+        user = {}
+        for layer in layers:
+            user = _merge(user, layer)
+        user_alg = user.get("algorithm", {}) if isinstance(user.get("algorithm"), dict) else {}
     if user_alg.get("name", default_alg) != default_alg:
         defaults.pop("algorithm", None)  # the study's tuning is for its own algorithm
     _drop_other_operator_params(study, defaults, user_alg, default_alg)
@@ -312,7 +328,19 @@ def resolve_config(study: ConfiguredStudy, file: Path | None = None,
     return dataclasses.replace(cfg, preset=preset)
 
 
+def _sections(study: ConfiguredStudy, algorithm: str) -> dict[str, type] | None:
+    """The dataclass of each section for method ``algorithm`` (None: an unknown method)."""
+    algorithms = study_algorithms(study)
+    if algorithm not in algorithms:
+        return None
+    return {"run": RunSection, "algorithm": algorithms[algorithm],
+            "problem": study.problem_config}
+
+
 def config_from_dict(study: Any, raw: dict[str, Any]) -> Config:
+    if getattr(study, "moved_keys", None) and isinstance(raw.get("algorithm", {}), dict):
+        name = str(raw.get("algorithm", {}).get("name", default_algorithm(study)))
+        (raw,) = move_sources([raw], study.moved_keys, _sections(study, name), name)
     extra = set(raw) - {"run", "algorithm", "problem", "study", "preset"}
     if extra:
         raise InputError(f"unknown section '{sorted(extra)[0]}'; valid sections: "

@@ -190,6 +190,16 @@ class SelfChecking(Protocol):
 # --- optional hooks of a problem --------------------------------------------------------------
 
 @runtime_checkable
+class ContextRows(Protocol):
+    """A problem whose evaluation rows carry more than the genome (a policy search's
+    observation normaliser and episode seeds, :mod:`evomotion.studies.policy_search`): its
+    driver builds the rows; ``evaluation_rows(genomes)`` gives rows with a neutral context
+    (for checks that evaluate genomes directly)."""
+
+    def evaluation_rows(self, genomes: Any) -> Any: ...
+
+
+@runtime_checkable
 class EstimatesDeviceMemory(Protocol):
     """A GPU-backend problem: ``device_memory(pop_size) -> (needed, free, device)`` of one
     batch, or ``None`` (free ``None``: unknown)."""
@@ -221,7 +231,8 @@ class HasMeasures(Protocol):
 class ConfiguredStudy(Protocol):
     """What the config resolver reads of a study (:func:`evomotion.run.config.
     resolve_config`): its ``[problem]`` dataclass, its defaults and presets (sections of
-    overrides), the registered optimizers it accepts (``None``: all) and its own methods."""
+    overrides), the registered optimizers it accepts (``None``: all), its own methods and the
+    keys it moved (``{"problem.method": "algorithm.method"}``: old place -> new place)."""
 
     @property
     def name(self) -> str: ...
@@ -240,3 +251,6 @@ class ConfiguredStudy(Protocol):
 
     @property
     def algorithms(self) -> StudyAlgorithms: ...
+
+    @property
+    def moved_keys(self) -> Mapping[str, str]: ...

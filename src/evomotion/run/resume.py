@@ -9,7 +9,7 @@ seed, the study, any ``[algorithm]`` or ``[problem]`` key) is refused, naming th
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -21,6 +21,7 @@ from evomotion.run.contracts import LoopStudy
 from evomotion.run.counters import Counters
 from evomotion.run.driver import Driver
 from evomotion.run.folder import clean_temporaries
+from evomotion.run.moved_keys import moved_record
 from evomotion.run.run_state import RunFiles, RunState
 from evomotion.run.stopping import limit_reached
 
@@ -80,12 +81,17 @@ def _flat(d: dict[str, Any], prefix: str = "") -> Iterator[tuple[str, Any]]:
             yield f"{prefix}{k}", list(v) if isinstance(v, tuple) else v
 
 
-def check_same_config(recorded: Any, config: Config, run_dir: Path) -> None:
+def check_same_config(recorded: Any, config: Config, run_dir: Path,
+                      moved: Mapping[str, str] | None = None) -> None:
+    """Refuse a checkpoint recorded with another config; ``moved``: the keys the study moved
+    since (``Study.moved_keys``), compared at their new place."""
     if recorded is None:
         return  # written before checkpoints recorded their config
     if not isinstance(recorded, dict):
         raise CheckpointError("config: expected an object")
     now = config_record(config)
+    if moved:
+        recorded = moved_record(recorded, moved, now)
     for key in sorted(set(recorded) | set(now)):
         if key not in recorded and now[key] == _field_default(config, key):
             continue  # a key added after the run started, at its default: same results
@@ -120,13 +126,14 @@ def _generation(name: str) -> int:
     return int(found[1]) if found else -1
 
 
-def restore(run_dir: Path, driver: Driver, config: Config) -> tuple[Any, Any, dict, list[str]]:
+def restore(run_dir: Path, driver: Driver, config: Config,
+            moved: Mapping[str, str] | None = None) -> tuple[Any, Any, dict, list[str]]:
     """``(state, rng, counters, log lines)`` of the newest valid checkpoint of ``run_dir``
     (the lines say which damaged checkpoints were skipped; log them after the log is cut back
-    to the checkpoint)."""
+    to the checkpoint); ``moved``: see :func:`check_same_config`."""
 
     def accept(arrays: dict, meta: dict) -> tuple[Any, Any]:
-        check_same_config(meta.get("config"), config, run_dir)
+        check_same_config(meta.get("config"), config, run_dir, moved)
         st_a = {k[6:]: v for k, v in arrays.items() if k.startswith("state.")}
         st_m = {k[6:]: v for k, v in meta.items() if k.startswith("state.")}
         try:
@@ -158,7 +165,8 @@ def resume_run(study: LoopStudy, config: Config, problem: Any, driver: Driver, o
     artifacts left to write, and how many temporary files were cleaned; the files are cut
     back to the checkpoint."""
     log = files.log
-    state, rng, doc, notes = restore(out_dir, driver, config)
+    moved = getattr(study, "moved_keys", None)  # a Study's (evomotion.studies.base)
+    state, rng, doc, notes = restore(out_dir, driver, config, moved)
     c = Counters.from_json(doc)
     cleaned = clean_temporaries(out_dir)
     done = c.stop_reason

@@ -47,6 +47,9 @@ class Study:
       ``None``: its curves only).
     - ``smoke``: ``--set`` items that make a run of a few seconds (the conformance tests and
       ``benchmarks/run_loop_table.py`` use them; a user can too, to check an installation).
+    - ``moved_keys``: keys the study moved, old place -> new place (``{"problem.method":
+      "algorithm.method"}``); a config with the old one is read at the new place with a note
+      (:mod:`evomotion.run.moved_keys`: files, ``--set``, run folders on resume).
     """
 
     name: str
@@ -67,6 +70,7 @@ class Study:
     cli: Any = None
     smoke: tuple[str, ...] = ()
     view: StudyView | None = None
+    moved_keys: dict[str, str] = field(default_factory=dict)
 
 
 def lazy_hook(module: str, name: str) -> Callable[[RunContext], Any]:

@@ -10,20 +10,23 @@ from evomotion.sim.quadruped import QuadrupedSpec, execute_plan, plan_qpos
 from evomotion.sim.quadruped.trajectory import build_timeline
 from evomotion.studies.quadruped_plan.plans.plan import plan_document
 from evomotion.studies.quadruped_plan.plans.planner import QuadrupedPlanConfig, make_problem, solve
+from evomotion.studies.quadruped_plan.plans.search_config import SearchConfig
 
 SPEC = QuadrupedSpec()
-#: rule set B, function 3: 13 states, margins >= 0.04 units
-SHORT_B = QuadrupedPlanConfig(start_phi=0.0, goal_x=0.0, goal_y=-3.0, rule_set="B",
-                              function=3, max_seconds=20.0)
+#: rule set B, function 3: 13 states, margins >= 0.04 units (task, search)
+SHORT_B = (QuadrupedPlanConfig(start_phi=0.0, goal_x=0.0, goal_y=-3.0, rule_set="B"),
+           SearchConfig(function=3, max_seconds=20.0))
 #: rule set A, function 1 (the paper's): lifts with margin 0; the first 25 states
-SHORT_A = QuadrupedPlanConfig(start_phi=math.pi / 4, goal_x=-2.0, goal_y=2.0, rule_set="A",
-                              function=1, max_seconds=20.0)
+SHORT_A = (QuadrupedPlanConfig(start_phi=math.pi / 4, goal_x=-2.0, goal_y=2.0, rule_set="A"),
+           SearchConfig(function=1, max_seconds=20.0))
 POSITION_BOUND_M = 0.02  # final torso position error allowed on the short plans
 
 
-def _states(cfg: QuadrupedPlanConfig, n: int | None = None) -> list[dict]:
+def _states(case: tuple[QuadrupedPlanConfig, SearchConfig], n: int | None = None
+            ) -> list[dict]:
+    cfg, search = case
     p = make_problem(cfg)
-    res = solve(cfg, p)
+    res = solve(cfg, search, p)
     assert res.found
     doc = plan_document(p.model, res.states, res.rules, p.goal, cfg.goal_tolerance, cfg.sense,
                         cfg.rule_set, None, {})

@@ -234,8 +234,9 @@ def load_scenario(name_or_path: str | Path) -> Scenario:
         exists = p.exists()
     except (OSError, ValueError):  # e.g. a NUL in the name
         exists = False
-    if not exists:
-        bundled = SCENARIO_DIR / f"{OLD_SCENARIO_NAMES.get(str(name_or_path), name_or_path)}.scen"
+    if not exists:  # a bundled name (an old one read as its new name)
+        name_or_path = OLD_SCENARIO_NAMES.get(str(name_or_path), name_or_path)
+        bundled = SCENARIO_DIR / f"{name_or_path}.scen"
         if bundled.is_file():
             p = bundled
         else:

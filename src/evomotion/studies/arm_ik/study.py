@@ -13,7 +13,7 @@ import typer
 
 from evomotion.studies.arm_ik.artifacts import best_record, finalize
 from evomotion.studies.arm_ik.problem import ArmIKConfig, make_problem
-from evomotion.studies.arm_ik.scenario import bundled_names, load_scenario
+from evomotion.studies.arm_ik.scenario import OLD_SCENARIO_NAMES, bundled_names, load_scenario
 from evomotion.studies.arm_ik.schedule import OWN_ALGORITHMS
 from evomotion.studies.base import Study
 from evomotion.studies.view import StudyView, lazy
@@ -46,7 +46,8 @@ def study(
     from evomotion.studies.arm_ik.experiment import HEADER, success_table
     from evomotion.studies.arm_ik.objective import MATCHINGS
 
-    names = scenario or [n for n in bundled_names() if n != "unreachable"]
+    names = [OLD_SCENARIO_NAMES.get(n, n) for n in scenario] if scenario else \
+        [n for n in bundled_names() if n != "unreachable"]
     check_number("--seeds", seeds, lo=1, hi=MAX_SEEDS, integer=True)
     check_number("--wall-seconds", wall_seconds, lo=0.0, hi=MAX_WALL_SECONDS)
     for m in matching or []:

@@ -1,12 +1,13 @@
 """Study ``quadruped-plan``: quadruped walking plans by best-first / A* search (paper 003).
 
 ``evomotion run quadruped-plan`` searches one plan through the run loop (``[problem]`` =
-QuadrupedPlanConfig, ``[algorithm]`` = the search stepped in batches of expansions, see
-:mod:`.search_driver`): stats.csv per batch, checkpoints, resume; at the end ``plan.json``,
-``plan.png``, ``plan.gif`` and the checker's verdict in ``log.txt``.
-``evomotion quadruped-plan study`` prints the paper's 12-configuration table;
-``evomotion quadruped-plan check PLAN.json`` re-verifies a plan (exit 1 on a violation).
-Exit codes: 0 plan found; 1 no plan (unreachable goal, budget spent) or a violation.
+QuadrupedPlanConfig, the task; ``[algorithm]`` = SearchConfig, the method and budgets of the
+search stepped in batches of expansions, see :mod:`.search_driver`; the search keys' old places
+``problem.method`` etc. are still read, ``moved_keys``): stats.csv per batch, checkpoints,
+resume; at the end ``plan.json``, ``plan.png``, ``plan.gif`` and the checker's verdict in
+``log.txt``. ``evomotion quadruped-plan study`` prints the paper's 12-configuration table;
+``evomotion quadruped-plan check PLAN.json`` re-verifies a plan (exit 1 on a violation). Exit
+codes: 0 plan found; 1 no plan (unreachable goal, budget spent) or a violation.
 """
 
 from __future__ import annotations
@@ -32,11 +33,11 @@ from evomotion.studies.quadruped_plan.plans.plan import (
 )
 from evomotion.studies.quadruped_plan.plans.planner import (
     QuadrupedPlanConfig,
-    constants,
     exact_plan,
     make_problem,
 )
-from evomotion.studies.quadruped_plan.plans.search_driver import SearchConfig, make_driver
+from evomotion.studies.quadruped_plan.plans.search_config import SEARCH_KEYS, SearchConfig
+from evomotion.studies.quadruped_plan.plans.search_driver import make_driver
 from evomotion.studies.quadruped_plan.rules.rules import ANGLE_GRID, POS_GRID
 from evomotion.studies.quadruped_plan.task_check import apply_task, find_task
 from evomotion.studies.view import StudyView, lazy
@@ -47,17 +48,17 @@ NO_PLAN = 1
 def _outcome(ctx: Any) -> tuple[Any, dict | None]:
     """The search result (exact plan) and its plan document, computed once per context."""
     if "plan" not in ctx.cache:
-        cfg, problem = ctx.config.problem, ctx.problem
+        cfg, alg, problem = ctx.config.problem, ctx.config.algorithm, ctx.problem
         res = exact_plan(problem, ctx.driver.result(ctx.state))
         doc = None
         if res.found:
-            search = {"method": cfg.method, "function": cfg.function,
-                      "k": list(constants(cfg)), "weight": cfg.weight,
+            search = {"method": alg.method, "function": alg.function,
+                      "k": list(alg.constants(cfg.rule_set)), "weight": alg.weight,
                       "stop_reason": res.stop_reason, "expansions": res.expansions,
                       "generated": res.generated, "reopened": res.reopened,
                       "seconds": res.seconds, "cost": res.cost, "pos_grid": cfg.pos_grid,
                       "angle_grid": cfg.angle_grid}
-            if cfg.method != "best-first":  # proved: least plan length >= lower_bound
+            if alg.method != "best-first":  # proved: least plan length >= lower_bound
                 search["lower_bound"] = res.lower_bound
             world = None
             if problem.terrain is not None:
@@ -89,14 +90,14 @@ def finalize(ctx: Any) -> int:
     """plan.json / plan.png / plan.gif and the checker's verdict; exit 1 without a plan."""
     from evomotion.studies.quadruped_plan.views import animate_plan, plot_plan
 
-    cfg = ctx.config.problem
+    cfg, alg = ctx.config.problem, ctx.config.algorithm
     if _receding(ctx):
         return _finalize_mission(ctx)
     res, doc = _outcome(ctx)
-    ctx.log(f"quadruped-plan {cfg.method} rule set {cfg.rule_set}"
-            + (f" function ({cfg.function}) k={constants(cfg)}" if cfg.method == "best-first"
-               else "") + f": {res.message}")
-    if cfg.method != "best-first" and (cfg.pos_grid, cfg.angle_grid) != (POS_GRID, ANGLE_GRID):
+    ctx.log(f"quadruped-plan {alg.method} rule set {cfg.rule_set}"
+            + (f" function ({alg.function}) k={alg.constants(cfg.rule_set)}"
+               if alg.method == "best-first" else "") + f": {res.message}")
+    if alg.method != "best-first" and (cfg.pos_grid, cfg.angle_grid) != (POS_GRID, ANGLE_GRID):
         ctx.log(f"note: least cost and bound hold for the duplicate grid ({cfg.pos_grid:g} "
                 f"units, {cfg.angle_grid:g} rad) only; a finer grid can have shorter plans")
     if doc is None:
@@ -163,9 +164,8 @@ def study_cmd(
     """Print the paper's 12-configuration table next to the paper's figures."""
     if astar_pos_grid <= 0 or astar_angle_grid <= 0:
         raise InputError("--astar-pos-grid and --astar-angle-grid: expected > 0")
-    base = QuadrupedPlanConfig(max_expansions=max_expansions)
-    rows = paper_table(base, astar_rows=astar, astar_seconds=astar_seconds,
-                       astar_grid=(astar_pos_grid, astar_angle_grid))
+    rows = paper_table(search=SearchConfig(max_expansions=max_expansions), astar_rows=astar,
+                       astar_seconds=astar_seconds, astar_grid=(astar_pos_grid, astar_angle_grid))
     typer.echo(format_table(rows))
     if any(r.stop_reason == "found" and r.check != "ok" for r in rows):
         raise typer.Exit(1)
@@ -297,9 +297,10 @@ STUDY = Study(
     description="Quadruped walking plans by best-first / A* search (paper 003).",
     problem_config=QuadrupedPlanConfig,
     make_problem=make_problem,
-    # steps are batches of expansions; the search's own budgets ([problem]) end it
+    # steps are batches of expansions; the search's own budgets ([algorithm]) end it
     defaults={"run": {"generations": 1_000_000, "checkpoint_every": 10}},
-    presets={"paper": {"problem": {"method": "best-first", "function": 1, "rule_set": "A"}}},
+    presets={"paper": {"algorithm": {"method": "best-first", "function": 1},
+                       "problem": {"rule_set": "A"}}},
     preset_notes={"paper": "the paper's first experiment: best-first with its function (1), "
                            "rule set A (the default is function (3), rule set B)"},
     core_algorithms=(),
@@ -310,6 +311,8 @@ STUDY = Study(
     cli=cli,
     view=StudyView(frames=lazy("evomotion.studies.quadruped_plan.views",
                                           "studio_frames")),
+    # the search settings were [problem] keys before issue 32 (receding: heuristic_gain only)
+    moved_keys={f"problem.{k}": f"algorithm.{k}" for k in SEARCH_KEYS},
     smoke=(
         "algorithm.batch_expansions=40",
         "problem.goal_x=0.0",

@@ -5,7 +5,6 @@ from __future__ import annotations
 import copy
 import json
 import math
-from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -20,28 +19,29 @@ from evomotion.studies.quadruped_plan.plans.experiment import (
 )
 from evomotion.studies.quadruped_plan.plans.plan import plan_document, read_plan, write_plan
 from evomotion.studies.quadruped_plan.plans.planner import QuadrupedPlanConfig, make_problem, solve
+from evomotion.studies.quadruped_plan.plans.search_config import SearchConfig
 from evomotion.studies.quadruped_plan.study import STUDY, cli
 
 
 def run_plan(problem_cfg: QuadrupedPlanConfig, out: Path, **alg) -> int:
-    """One run of the study through the run loop with this ``[problem]``."""
+    """One run of the study through the run loop with this ``[problem]`` (``alg``: the
+    ``[algorithm]`` keys)."""
     from evomotion.run.config import Config, RunSection
     from evomotion.run.runner import run_study
-    from evomotion.studies.quadruped_plan.plans.search_driver import SearchConfig
 
     out.mkdir(parents=True, exist_ok=True)
     cfg = Config("quadruped-plan", RunSection(generations=10**6), SearchConfig(**alg),
                  problem_cfg)
     return run_study(STUDY, cfg, out, quiet=True).exit_code
 
-SHORT = QuadrupedPlanConfig(start_phi=0.0, goal_x=0.0, goal_y=-7.0, rule_set="B", function=3,
-                            gif_max_frames=12)
+SHORT = QuadrupedPlanConfig(start_phi=0.0, goal_x=0.0, goal_y=-7.0, rule_set="B",
+                            gif_max_frames=12)  # with the default search: function (3)
 
 
 @pytest.fixture(scope="module")
 def doc() -> dict:
     p = make_problem(SHORT)
-    res = solve(SHORT, p)
+    res = solve(SHORT, None, p)
     assert res.found
     return plan_document(p.model, res.states, res.rules, p.goal, SHORT.goal_tolerance,
                          SHORT.sense, SHORT.rule_set, None, {"expansions": res.expansions})
@@ -121,7 +121,7 @@ def test_unreachable_goal_and_zero_budget_exit_non_zero(tmp_path: Path) -> None:
     assert run_plan(zone, tmp_path / "zone") == 1
     assert "inside the exclusion zone" in (tmp_path / "zone" / "log.txt").read_text()
     assert not (tmp_path / "zone" / "plan.json").exists()
-    assert run_plan(QuadrupedPlanConfig(max_expansions=0), tmp_path / "zero") == 1
+    assert run_plan(QuadrupedPlanConfig(), tmp_path / "zero", max_expansions=0) == 1
     assert "expansion budget is spent (0 expansions" in (tmp_path / "zero" / "log.txt"
                                                            ).read_text()
 
@@ -139,7 +139,7 @@ def test_study_descriptor_and_runner_entry(tmp_path: Path) -> None:
 
 def test_batches_of_expansions_give_the_one_shot_plan(tmp_path: Path) -> None:
     assert run_plan(SHORT, tmp_path / "small", batch_expansions=97) == 0
-    one = solve(SHORT, make_problem(SHORT))
+    one = solve(SHORT, None, make_problem(SHORT))
     doc = read_plan(tmp_path / "small" / "plan.json")
     assert len(doc["states"]) == len(one.states)
     assert doc["search"]["expansions"] == one.expansions
@@ -169,7 +169,8 @@ def test_cli_check_exit_codes(doc: dict, tmp_path: Path) -> None:
 
 
 def test_experiment_row_next_to_paper_figures() -> None:
-    row = run_config(QuadrupedPlanConfig(rule_set="A", function=1, start_phi=math.pi / 4), "a")
+    row = run_config(QuadrupedPlanConfig(rule_set="A", start_phi=math.pi / 4),
+                     SearchConfig(function=1), "a")
     assert row.stop_reason == "found" and row.check == "ok"
     assert row.paper == PAPER_FIGURES[(1, "A", "a")] == (284, 45)
     text = format_table([row])
@@ -190,14 +191,14 @@ def test_checker_requires_maximal_rule3_translation(doc: dict) -> None:
 
 def test_set_a_cannot_walk_forward_open_empties(tmp_path: Path) -> None:
     # rule set A places no foot ahead of its hip: walking towards body +Y gets stuck
-    cfg = QuadrupedPlanConfig(sense=1, rule_set="A", function=1, start_phi=math.pi / 4)
-    assert run_plan(cfg, tmp_path) == 1
+    cfg = QuadrupedPlanConfig(sense=1, rule_set="A", start_phi=math.pi / 4)
+    assert run_plan(cfg, tmp_path, function=1) == 1
     assert "OPEN is empty" in (tmp_path / "log.txt").read_text()
 
 
 def test_weighted_astar_run_reports_its_bound(tmp_path: Path) -> None:
-    cfg = replace(SHORT, method="weighted-astar", weight=2.0, max_expansions=60_000)
-    assert run_plan(cfg, tmp_path) == 0
+    assert run_plan(SHORT, tmp_path, method="weighted-astar", weight=2.0,
+                    max_expansions=60_000) == 0
     search = read_plan(tmp_path / "plan.json")["search"]
     assert search["lower_bound"] == search["cost"] / 2.0
     assert f"least cost >= {search['cost'] / 2.0:.4g}" in (tmp_path / "log.txt").read_text()

@@ -29,7 +29,7 @@ SHORT = QuadrupedPlanConfig(start_phi=0.0, goal_x=0.0, goal_y=-3.0, rule_set="B"
 @pytest.fixture(scope="module")
 def doc() -> dict:
     p = make_problem(SHORT)
-    res = solve(SHORT, p)
+    res = solve(SHORT, None, p)
     assert res.found
     d = plan_document(p.model, res.states, res.rules, p.goal, SHORT.goal_tolerance,
                       SHORT.sense, SHORT.rule_set, None, {"expansions": res.expansions})

@@ -8,11 +8,8 @@ from dataclasses import replace
 import pytest
 
 from evomotion.core.search import astar, best_first
-from evomotion.studies.quadruped_plan.plans.planner import (
-    QuadrupedPlanConfig,
-    constants,
-    make_problem,
-)
+from evomotion.studies.quadruped_plan.plans.planner import QuadrupedPlanConfig, make_problem
+from evomotion.studies.quadruped_plan.plans.search_config import SearchConfig
 from evomotion.studies.quadruped_plan.plans.walk_search import walk_astar, walk_best_first
 from evomotion.studies.quadruped_plan.rules.evaluation import paper_evaluation
 from evomotion.studies.quadruped_plan.rules.heuristic import plan_length_heuristic
@@ -40,13 +37,16 @@ CASES = [
 
 @pytest.mark.parametrize("case", CASES)
 def test_walk_best_first_equals_core_best_first(case: dict) -> None:
-    cfg = replace(QuadrupedPlanConfig(max_expansions=3000), **case)
-    ev = paper_evaluation(cfg.function, constants(cfg), (cfg.goal_x, cfg.goal_y), cfg.sense)
-    fast = walk_best_first(make_problem(cfg), ev, cfg.max_expansions)
-    ref = best_first(make_problem(cfg), ev, cfg.max_expansions)
+    case = dict(case)
+    search = SearchConfig(function=case.pop("function"), max_expansions=3000)
+    cfg = replace(QuadrupedPlanConfig(), **case)
+    ev = paper_evaluation(search.function, search.constants(cfg.rule_set),
+                          (cfg.goal_x, cfg.goal_y), cfg.sense)
+    fast = walk_best_first(make_problem(cfg), ev, search.max_expansions)
+    ref = best_first(make_problem(cfg), ev, search.max_expansions)
     _same(fast, ref)
     # an evaluation without the leg shortcut builds the leg children: same again
-    plain = walk_best_first(make_problem(cfg), lambda *a: ev(*a), cfg.max_expansions)
+    plain = walk_best_first(make_problem(cfg), lambda *a: ev(*a), search.max_expansions)
     _same(plain, ref)
 
 

@@ -11,6 +11,7 @@ from evomotion.core.search import best_first
 from evomotion.studies.quadruped_plan.plans.checker import check_plan
 from evomotion.studies.quadruped_plan.plans.plan import plan_document
 from evomotion.studies.quadruped_plan.plans.planner import QuadrupedPlanConfig, make_problem, solve
+from evomotion.studies.quadruped_plan.plans.search_config import SearchConfig
 from evomotion.studies.quadruped_plan.rules.evaluation import (
     PAPER_CONSTANTS,
     dev,
@@ -90,26 +91,27 @@ SHORT_GOALS = [(0.0, -4.0), (0.0, -7.0), (1.0, -5.0)]
 
 @pytest.mark.parametrize("goal", SHORT_GOALS)
 def test_astar_plans_never_longer_than_best_first(goal: tuple[float, float]) -> None:
-    base = QuadrupedPlanConfig(start_phi=0.0, goal_x=goal[0], goal_y=goal[1],
-                               max_expansions=60_000, max_seconds=30)
+    base = QuadrupedPlanConfig(start_phi=0.0, goal_x=goal[0], goal_y=goal[1])
+    search = SearchConfig(max_expansions=60_000, max_seconds=30)
     for rule_set in ("A", "B") if goal != (1.0, -5.0) else ("A",):
-        opt = solve(replace(base, rule_set=rule_set, method="astar"))
+        task = replace(base, rule_set=rule_set)
+        opt = solve(task, replace(search, method="astar"))
         assert opt.found
         h = plan_length_heuristic(M, goal, base.goal_tolerance)
         # admissible along the optimal plan: h never exceeds the cost still to go
         for i, s in enumerate(opt.states):
             assert h(s) <= len(opt.states) - 1 - i
         for function in (1, 2, 3):
-            bf = solve(replace(base, rule_set=rule_set, function=function))
+            bf = solve(task, replace(search, function=function))
             assert bf.found and opt.cost <= bf.cost
-        wa = solve(replace(base, rule_set=rule_set, method="weighted-astar", weight=2.0))
+        wa = solve(task, replace(search, method="weighted-astar", weight=2.0))
         assert wa.found and opt.cost <= wa.cost <= 2.0 * opt.cost
 
 
 def test_plans_from_make_problem_pass_the_checker() -> None:
-    cfg = QuadrupedPlanConfig(rule_set="A", function=3, start_phi=1.5 * math.pi)
+    cfg = QuadrupedPlanConfig(rule_set="A", start_phi=1.5 * math.pi)
     p = make_problem(cfg)
-    res = solve(cfg, p)
+    res = solve(cfg, SearchConfig(function=3), p)
     assert res.found
     summary = check_plan(plan_document(p.model, res.states, res.rules, p.goal,
                                        cfg.goal_tolerance, cfg.sense, cfg.rule_set, None, {}))
@@ -138,10 +140,10 @@ def test_sampled_rotation_gain_is_below_a_leg_move_and_keeps_astar_optimal() -> 
     chord, _, analytic = heuristic_constants(M)
     sampled = sampled_rotation_gain(M)
     assert 0 < sampled < chord < analytic
-    base = QuadrupedPlanConfig(start_phi=0.0, goal_x=0.0, goal_y=-7.0, rule_set="A",
-                               method="astar", max_expansions=60_000, max_seconds=30)
-    proved = solve(base)
-    tighter = solve(replace(base, heuristic_gain="sampled"))
+    base = QuadrupedPlanConfig(start_phi=0.0, goal_x=0.0, goal_y=-7.0, rule_set="A")
+    search = SearchConfig(method="astar", max_expansions=60_000, max_seconds=30)
+    proved = solve(base, search)
+    tighter = solve(base, replace(search, heuristic_gain="sampled"))
     assert proved.found and tighter.found and tighter.cost == proved.cost
     assert tighter.expansions <= proved.expansions
 
@@ -149,10 +151,11 @@ def test_sampled_rotation_gain_is_below_a_leg_move_and_keeps_astar_optimal() -> 
 def test_astar_lower_bound_on_the_full_task_is_below_best_first() -> None:
     # plain A* does not finish the paper's task (docs); its proved bound on the least plan
     # length must still not exceed the length of any plan found by best-first
-    base = QuadrupedPlanConfig(rule_set="A", start_phi=1.5 * math.pi, max_expansions=4000)
-    opt = solve(replace(base, method="astar", heuristic_gain="sampled"))
+    base = QuadrupedPlanConfig(rule_set="A", start_phi=1.5 * math.pi)
+    opt = solve(base, SearchConfig(method="astar", heuristic_gain="sampled",
+                                   max_expansions=4000))
     assert not opt.found and opt.stop_reason == "expansion-budget"
     assert opt.lower_bound >= 24  # above h(start) = 23: the search raised the bound
     for function in (1, 2, 3):
-        bf = solve(replace(base, function=function, max_expansions=50_000))
+        bf = solve(base, SearchConfig(function=function, max_expansions=50_000))
         assert bf.found and opt.lower_bound <= bf.cost

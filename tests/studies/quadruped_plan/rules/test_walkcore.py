@@ -15,11 +15,8 @@ import numpy as np
 import pytest
 
 from evomotion.studies.quadruped_plan.missions.mission import Mission
-from evomotion.studies.quadruped_plan.plans.planner import (
-    QuadrupedPlanConfig,
-    constants,
-    make_problem,
-)
+from evomotion.studies.quadruped_plan.plans.planner import QuadrupedPlanConfig, make_problem
+from evomotion.studies.quadruped_plan.plans.search_config import SearchConfig
 from evomotion.studies.quadruped_plan.plans.walk_search import walk_astar, walk_best_first
 from evomotion.studies.quadruped_plan.rules import rules
 from evomotion.studies.quadruped_plan.rules.evaluation import paper_evaluation
@@ -96,11 +93,11 @@ def test_successors_equal_the_python_ones_in_the_worlds(world, rule_set):
                                   dict(rule_set="A", min_margin=0.1, start_phi=2.0),
                                   dict(rule_set="B", pos_grid=0.05, angle_grid=0.01)])
 def test_searches_on_the_plane_are_the_python_ones(case):
-    cfg = replace(QuadrupedPlanConfig(goal_x=-4.0, goal_y=4.0, max_expansions=3000), **case)
+    cfg = replace(QuadrupedPlanConfig(goal_x=-4.0, goal_y=4.0), **case)
     p = make_problem(cfg)
     assert p.core
     _check_states(p, random.Random(2))
-    ev = paper_evaluation(3, constants(cfg), p.goal, cfg.sense)
+    ev = paper_evaluation(3, SearchConfig(function=3).constants(cfg.rule_set), p.goal, cfg.sense)
     a, b = walk_best_first(p, ev, 3000), walk_best_first(_pair(p), ev, 3000)
     assert (a.expansions, a.generated, a.rules, a.states) == \
         (b.expansions, b.generated, b.rules, b.states)

@@ -212,6 +212,6 @@ def test_fuzz_world_statements(tmp_path_factory, sx, sy, gx, gy, statements):
     assert all(np.isfinite(q.points).all() for q in w.polygons)
     assert np.isfinite([*w.bounds, *w.start, *w.goal, w.view, w.goal_tolerance]).all()
     try:  # what a run does next: one line, or a problem to search
-        make_problem(QuadrupedPlanConfig(world=str(p), max_expansions=10))
+        make_problem(QuadrupedPlanConfig(world=str(p)))
     except FileFormatError as e:
         assert str(e).startswith(f"{p}") and "\n" not in str(e)

@@ -35,10 +35,13 @@ MAX_TRANSITIONS = MAX_STATES - 4  # the last rule adds a landing error and a sli
 
 @dataclass(frozen=True)
 class RecedingConfig:
-    """``[algorithm]`` of a receding-horizon walk (see :mod:`.mission` for each field)."""
+    """``[algorithm]`` of a receding-horizon walk (see :mod:`.mission` for each field;
+    ``heuristic_gain``: the ARA* heuristic's rotation bound, ``problem.heuristic_gain`` before
+    issue 32)."""
 
     name: str = "receding"
     planner: str = "anytime"  # "anytime" (the paper's best-first (3), then ARA*) or "best-first"
+    heuristic_gain: str = "analytic"
     horizon: int = 8
     replan_expansions: int = 800
     replan_ms: float = 2000.0
@@ -59,6 +62,9 @@ class RecedingConfig:
         if self.planner not in PLANNERS:
             raise InputError(f"algorithm.planner: expected one of {', '.join(PLANNERS)}, "
                              f"got {self.planner!r}")
+        if self.heuristic_gain not in GAINS:
+            raise InputError(f"algorithm.heuristic_gain: expected one of {', '.join(GAINS)}, "
+                             f"got {self.heuristic_gain!r}")
         for key in ("horizon", "replan_expansions", "max_replans"):
             check_number(f"algorithm.{key}", getattr(self, key), lo=1, hi=10_000_000,
                          integer=True)
@@ -155,20 +161,18 @@ class RecedingDriver(Driver):
 def make_mission(problem_cfg: Any, algo: RecedingConfig) -> Mission:
     from evomotion.studies.quadruped_plan.plans.planner import load_config_world, make_model
 
-    if problem_cfg.heuristic_gain not in GAINS:
-        raise InputError(f"problem.heuristic_gain: expected one of {', '.join(GAINS)}")
+    algo.validate()
     world = load_config_world(problem_cfg)
     if world is None:
         raise InputError("algorithm.name = 'receding' needs a world: set problem.world to "
                          "corridor, field, gaps or a .world file")
     return Mission(world, make_model(problem_cfg), problem_cfg.rule_set, problem_cfg.sense,
-                   problem_cfg.heuristic_gain, algo.settings(), algo.disturbances(),
+                   algo.heuristic_gain, algo.settings(), algo.disturbances(),
                    planner=algo.planner, body_clearance=problem_cfg.body_clearance,
                    foot_clearance=problem_cfg.foot_clearance, shifts=problem_cfg.shifts)
 
 
 def make_driver(problem: Any, config: Any) -> RecedingDriver:
-    config.algorithm.validate()
     return RecedingDriver(make_mission(config.problem, config.algorithm))
 
 

@@ -15,10 +15,10 @@ from evomotion.studies.quadruped_plan.plans.checker import PlanViolationError, c
 from evomotion.studies.quadruped_plan.plans.plan import plan_document
 from evomotion.studies.quadruped_plan.plans.planner import (
     QuadrupedPlanConfig,
-    constants,
     make_problem,
     solve,
 )
+from evomotion.studies.quadruped_plan.plans.search_config import SearchConfig
 
 STARTS = {"a": math.pi / 4, "b": 1.5 * math.pi}
 # (function, rule set, start) -> (expanded states, states in the plan) as printed in the paper
@@ -51,11 +51,11 @@ class Row:
         return self.leg_moves / self.travel if self.travel > 0 else math.nan
 
 
-def run_config(cfg: QuadrupedPlanConfig, start: str) -> Row:
-    """Search one configuration and check its plan."""
+def run_config(cfg: QuadrupedPlanConfig, search: SearchConfig, start: str) -> Row:
+    """Search one configuration (task ``cfg``, ``search``) and check its plan."""
     problem = make_problem(cfg)
     t0 = time.perf_counter()
-    res = solve(cfg, problem)
+    res = solve(cfg, search, problem)
     secs = time.perf_counter() - t0
     legs, travel, check = 0, 0.0, "-"
     if res.found:
@@ -66,43 +66,45 @@ def run_config(cfg: QuadrupedPlanConfig, start: str) -> Row:
             legs, travel, check = summary["leg_moves"], summary["travel"], "ok"
         except PlanViolationError as e:
             check = f"FAIL: {e}"
-    fn = cfg.function if cfg.method == "best-first" else None
-    name = "A*" if cfg.method == "astar" else f"wA* w={cfg.weight:g}"
-    name = cfg.method if fn else f"{name} {cfg.heuristic_gain[:4]}"
+    fn = search.function if search.method == "best-first" else None
+    name = "A*" if search.method == "astar" else f"wA* w={search.weight:g}"
+    name = search.method if fn else f"{name} {search.heuristic_gain[:4]}"
     return Row(name,
-               fn, cfg.rule_set, start, constants(cfg) if fn else None, res.stop_reason,
+               fn, cfg.rule_set, start, search.constants(cfg.rule_set) if fn else None,
+               res.stop_reason,
                res.expansions, len(res.states), legs, travel, secs, check,
                PAPER_FIGURES.get((fn, cfg.rule_set, start)) if fn else None, res.lower_bound)
 
 
-def paper_table(base: QuadrupedPlanConfig | None = None, astar_rows: bool = False,
-                astar_seconds: float = 10.0, astar_grid: tuple[float, float] | None = None
-                ) -> list[Row]:
-    """The 12 best-first configurations (and, with ``astar_rows``, A* and weighted A* on the
-    four start/rule-set pairs, each limited to ``astar_seconds`` and ``base.max_expansions``;
-    their result column gives the proved lower bound on the least plan length).
+def paper_table(base: QuadrupedPlanConfig | None = None, search: SearchConfig | None = None,
+                astar_rows: bool = False, astar_seconds: float = 10.0,
+                astar_grid: tuple[float, float] | None = None) -> list[Row]:
+    """The 12 best-first configurations of task ``base`` (and, with ``astar_rows``, A* and
+    weighted A* on the four start/rule-set pairs, each limited to ``astar_seconds`` and
+    ``search.max_expansions``; their result column gives the proved lower bound on the least
+    plan length).
     ``astar_grid`` = (pos_grid, angle_grid) replaces the duplicate grids of the A* rows only
     (their optimality and bounds then hold for that coarser duplicate detection)."""
-    base = base or QuadrupedPlanConfig()
+    base, search = base or QuadrupedPlanConfig(), search or SearchConfig()
     rows = []
     for function in (1, 2, 3):
         for rule_set in ("A", "B"):
             for start, phi in STARTS.items():
-                cfg = replace(base, function=function, rule_set=rule_set, start_phi=phi,
-                              method="best-first")
-                rows.append(run_config(cfg, start))
+                cfg = replace(base, rule_set=rule_set, start_phi=phi)
+                rows.append(run_config(cfg, replace(search, function=function,
+                                                    method="best-first"), start))
     if astar_rows:
         variants = (("astar", "analytic", 1.0), ("astar", "sampled", 1.0),
                     ("weighted-astar", "sampled", 2.0), ("weighted-astar", "analytic", 3.0))
         for method, gain, weight in variants:
             for rule_set in ("A", "B"):
                 for start, phi in STARTS.items():
-                    cfg = replace(base, rule_set=rule_set, start_phi=phi, method=method,
-                                  heuristic_gain=gain, weight=weight,
-                                  max_seconds=astar_seconds)
+                    cfg = replace(base, rule_set=rule_set, start_phi=phi)
                     if astar_grid is not None:
                         cfg = replace(cfg, pos_grid=astar_grid[0], angle_grid=astar_grid[1])
-                    rows.append(run_config(cfg, start))
+                    rows.append(run_config(cfg, replace(search, method=method,
+                                                        heuristic_gain=gain, weight=weight,
+                                                        max_seconds=astar_seconds), start))
     return rows
 
 

@@ -1,9 +1,9 @@
-"""Configuration and one planning run: build the search problem, pick the method, search.
+"""The task (``[problem]``) and one planning run: build the search problem, search it.
 
-Methods: ``best-first`` (the paper's algorithm with its function 1, 2 or 3), ``astar``
-(A* on plan length with the admissible heuristic of ``evaluation``) and
-``weighted-astar`` (f = g + weight h); ``heuristic_gain`` picks the heuristic's rotation
-bound (``heuristic``).
+The task is the walk to plan: start, goal, rule set, the robot's geometry, the world and
+the duplicate-detection grids (they define which states are the same). How it is searched
+(method, evaluation function, budgets) is ``[algorithm]``, :class:`.search_config.
+SearchConfig`; :func:`solve` takes both.
 """
 
 from __future__ import annotations
@@ -11,16 +11,17 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 
-from evomotion.core.checks import check_fields, check_number, inf_ok
+from evomotion.core.checks import check_fields, check_number
 from evomotion.core.search import SearchResult
 from evomotion.errors import FileFormatError, InputError
 from evomotion.sim.quadruped.geometry import BODY_A, BODY_B, L_MAX, L_MIN, SECTOR_HALF_WIDTH
+from evomotion.studies.quadruped_plan.plans.search_config import SearchConfig
 from evomotion.studies.quadruped_plan.plans.walk_search import walk_astar, walk_best_first
 from evomotion.studies.quadruped_plan.rules.evaluation import (
     PAPER_CONSTANTS,
     paper_evaluation,
 )
-from evomotion.studies.quadruped_plan.rules.heuristic import GAINS, plan_length_heuristic
+from evomotion.studies.quadruped_plan.rules.heuristic import plan_length_heuristic
 from evomotion.studies.quadruped_plan.rules.model import QuadrupedModel
 from evomotion.studies.quadruped_plan.rules.rules import (
     ANGLE_GRID,
@@ -31,9 +32,6 @@ from evomotion.studies.quadruped_plan.rules.rules import (
 from evomotion.studies.quadruped_plan.worlds.terrain import Terrain, check_world_task
 from evomotion.studies.quadruped_plan.worlds.world import World, load_world
 
-METHODS = ("best-first", "astar", "weighted-astar")
-
-
 #: the largest magnitude of a coordinate or constant; the longest body side or leg; the most
 #: GIF frames (each ~1 MB while the GIF is made)
 MAX_COORD = 1e6
@@ -43,16 +41,17 @@ MAX_GIF_FRAMES = 400
 
 @dataclass(frozen=True)
 class QuadrupedPlanConfig:
-    """The ``[problem]`` section. Lengths in the paper's units, angles in radians.
+    """The ``[problem]`` section, the task. Lengths in the paper's units, angles in radians.
 
-    ``k1``/``k2``/``k3`` < 0 mean the paper's constants for ``function`` and ``rule_set``.
     ``zone_radius`` > 0 adds an exclusion zone (body centre and feet stay out of it).
     ``sense``: walking direction, -1 = body -Y (default, see docs), +1 = +Y, 0 = either.
-    ``pos_grid`` [units] / ``angle_grid`` [rad]: the duplicate-detection grids (docs).
-    ``max_seconds = inf``: no time limit (the only float that may be infinite); coordinates
-    are at most ``MAX_COORD`` in magnitude. ``world``: start, goal and tolerance come from the
-    world file (``start_*``/``goal_*``/``goal_tolerance`` must then stay unset), and plans
-    keep ``body_clearance`` / ``foot_clearance`` from its obstacles and no-step zones.
+    ``pos_grid`` [units] / ``angle_grid`` [rad]: the duplicate-detection grids (docs); they
+    stay here, not in ``[algorithm]``, because they define the state space (which states are
+    the same). Coordinates are at most ``MAX_COORD`` in magnitude. ``world``: start, goal
+    and tolerance come from the world file (``start_*``/``goal_*``/``goal_tolerance`` must
+    then stay unset), and plans keep ``body_clearance`` / ``foot_clearance`` from its
+    obstacles and no-step zones. The search settings are ``[algorithm]``
+    (:class:`~.search_config.SearchConfig`).
     """
 
     start_x: float = 0.0
@@ -62,17 +61,8 @@ class QuadrupedPlanConfig:
     goal_y: float = 10.0
     goal_tolerance: float = 0.25
     rule_set: str = "B"
-    method: str = "best-first"
-    function: int = 3
-    k1: float = -1.0
-    k2: float = -1.0
-    k3: float = -1.0
-    weight: float = 3.0
-    heuristic_gain: str = "analytic"
     pos_grid: float = POS_GRID
     angle_grid: float = ANGLE_GRID
-    max_expansions: int = 200_000
-    max_seconds: float = inf_ok(60.0, "no time limit")
     sense: int = -1
     a: float = BODY_A  # the robot's geometry (sim/quadruped/geometry.py)
     b: float = BODY_B
@@ -99,36 +89,18 @@ def validate(cfg: QuadrupedPlanConfig) -> None:
     for key in ("start_x", "start_y", "start_phi", "goal_x", "goal_y", "zone_x", "zone_y",
                 "goal_tolerance", "zone_radius", "a", "b", "l_min", "l_max", "min_margin"):
         check_number(f"problem.{key}", getattr(cfg, key), lo=-MAX_COORD, hi=MAX_COORD)
-    for key in ("k1", "k2", "k3"):  # < 0: the paper's constant
-        check_number(f"problem.{key}", getattr(cfg, key), hi=MAX_COORD)
     for key in ("a", "b", "l_min", "l_max"):
         check_number(f"problem.{key}", getattr(cfg, key), lo=-MAX_COORD, hi=MAX_BODY)
     check_number("problem.pos_grid", cfg.pos_grid, lo=1e-4, hi=MAX_BODY)
     check_number("problem.angle_grid", cfg.angle_grid, lo=1e-6, hi=math.pi)
-    check_number("problem.weight", cfg.weight, lo=1.0, hi=MAX_COORD)
     check_number("problem.zone_radius", cfg.zone_radius, lo=0.0)
     check_number("problem.min_margin", cfg.min_margin, lo=0.0)
     check_number("problem.gif_max_frames", cfg.gif_max_frames, lo=1, hi=MAX_GIF_FRAMES,
                  integer=True)
-    check_number("problem.max_seconds", cfg.max_seconds, lo=0.0, allow_inf=True)
-    if cfg.max_seconds == -math.inf:
-        raise InputError("problem.max_seconds: expected >= 0 (inf: no time limit), got -inf")
     if cfg.rule_set not in ("A", "B"):
         raise InputError(f"problem.rule_set: expected 'A' or 'B', got {cfg.rule_set!r}")
-    if cfg.method not in METHODS:
-        raise InputError(f"problem.method: expected one of {', '.join(METHODS)}, "
-                         f"got {cfg.method!r}")
-    if cfg.function not in (1, 2, 3):
-        raise InputError(f"problem.function: expected 1, 2 or 3, got {cfg.function}")
     if cfg.sense not in (-1, 0, 1):
         raise InputError(f"problem.sense: expected -1, 0 or 1, got {cfg.sense}")
-    if cfg.max_expansions < 0 or cfg.max_seconds < 0:
-        raise InputError("problem.max_expansions and problem.max_seconds must be >= 0")
-    if cfg.weight < 1:
-        raise InputError(f"problem.weight: expected >= 1, got {cfg.weight}")
-    if cfg.heuristic_gain not in GAINS:
-        raise InputError(f"problem.heuristic_gain: expected one of {', '.join(GAINS)}, "
-                         f"got {cfg.heuristic_gain!r}")
     if cfg.pos_grid <= 0 or cfg.angle_grid <= 0:
         raise InputError("problem.pos_grid and problem.angle_grid: expected > 0")
     try:
@@ -152,12 +124,6 @@ def validate(cfg: QuadrupedPlanConfig) -> None:
         if given:
             raise InputError(f"problem.{given[0]}: the world file gives start, goal and "
                              "obstacles; unset it or remove problem.world")
-
-
-def constants(cfg: QuadrupedPlanConfig) -> tuple[float, float, float]:
-    paper = PAPER_CONSTANTS[(cfg.function, cfg.rule_set)]
-    return tuple(v if v >= 0 else s for v, s in zip((cfg.k1, cfg.k2, cfg.k3), paper,
-                                                      strict=True))  # type: ignore[return-value]
 
 
 def make_model(cfg: QuadrupedPlanConfig) -> QuadrupedModel:
@@ -222,18 +188,23 @@ def unreachable_reason(cfg: QuadrupedPlanConfig) -> str | None:
     return None
 
 
-def solve(cfg: QuadrupedPlanConfig, problem: WalkProblem | None = None,
-          max_seconds: float | None = None) -> SearchResult:
-    """Run the configured search on ``problem`` (built from ``cfg`` when None)."""
-    problem = problem or make_problem(cfg)
-    secs = cfg.max_seconds if max_seconds is None else max_seconds
-    if cfg.method == "best-first":
-        ev = paper_evaluation(cfg.function, constants(cfg), problem.goal, cfg.sense)
-        return walk_best_first(problem, ev, cfg.max_expansions, secs)
+def solve(task: QuadrupedPlanConfig, search: SearchConfig | None = None,
+          problem: WalkProblem | None = None, max_seconds: float | None = None
+          ) -> SearchResult:
+    """Run the ``search`` (default: :class:`SearchConfig`'s) on ``problem`` (built from
+    ``task`` when None)."""
+    search = search or SearchConfig()
+    search.validate()
+    problem = problem or make_problem(task)
+    secs = search.max_seconds if max_seconds is None else max_seconds
+    if search.method == "best-first":
+        ev = paper_evaluation(search.function, search.constants(task.rule_set), problem.goal,
+                              task.sense)
+        return walk_best_first(problem, ev, search.max_expansions, secs)
     h = plan_length_heuristic(problem.model, problem.goal, problem.goal_tolerance,
-                              cfg.sense, cfg.heuristic_gain, problem.shifts)
-    weight = 1.0 if cfg.method == "astar" else cfg.weight
-    return exact_plan(problem, walk_astar(problem, h, weight, cfg.max_expansions, secs))
+                              task.sense, search.heuristic_gain, problem.shifts)
+    weight = 1.0 if search.method == "astar" else search.weight
+    return exact_plan(problem, walk_astar(problem, h, weight, search.max_expansions, secs))
 
 
 def exact_plan(problem: WalkProblem, res: SearchResult) -> SearchResult:

@@ -1,11 +1,12 @@
 """The quadruped-plan search as a driver: best-first / A* stepped in batches of expansions.
 
-``[algorithm]`` is ``name = "search"`` with ``batch_expansions`` (expansions per step); the
-method, the paper's function and the budgets stay in ``[problem]`` (they define which plan is
-searched for). One step expands up to ``batch_expansions`` more states, so a run logs, stops,
-checkpoints (the OPEN/CLOSED lists as arrays, :mod:`.search_state`) and resumes like any other;
-the expansions are what ``stats.csv`` counts as evaluations. A search has no batch evaluation
-to distribute, so only the serial evaluator applies.
+``[algorithm]`` is ``name = "search"`` (:class:`.search_config.SearchConfig`): the method, the
+paper's function, the budgets and ``batch_expansions`` (expansions per step); the task
+(``[problem]``) says which plan is searched for. One step expands up to ``batch_expansions``
+more states, so a run logs, stops, checkpoints (the OPEN/CLOSED lists as arrays,
+:mod:`.search_state`) and resumes like any other; the expansions are what ``stats.csv`` counts
+as evaluations. A search has no batch evaluation to distribute, so only the serial evaluator
+applies.
 """
 
 from __future__ import annotations
@@ -15,7 +16,6 @@ from typing import Any
 
 import numpy as np
 
-from evomotion.core.checks import check_fields
 from evomotion.core.search import (
     FOUND,
     OPEN_EMPTY,
@@ -23,13 +23,12 @@ from evomotion.core.search import (
     SearchResult,
     with_lower_bound,
 )
-from evomotion.errors import InputError
 from evomotion.run.driver import Driver, Evaluate, StepReport
 from evomotion.studies.quadruped_plan.plans.planner import (
     QuadrupedPlanConfig,
-    constants,
     unreachable_reason,
 )
+from evomotion.studies.quadruped_plan.plans.search_config import SearchConfig
 from evomotion.studies.quadruped_plan.plans.search_state import search_from_arrays, search_to_arrays
 from evomotion.studies.quadruped_plan.plans.walk_search import astar_evaluate, walk_search
 from evomotion.studies.quadruped_plan.rules.evaluation import paper_evaluation
@@ -37,20 +36,6 @@ from evomotion.studies.quadruped_plan.rules.heuristic import plan_length_heurist
 from evomotion.studies.quadruped_plan.rules.rules import WalkProblem
 
 EXTRA_COLUMNS = ("open", "nodes", "generated", "reopened")
-
-
-@dataclass(frozen=True)
-class SearchConfig:
-    """``[algorithm]`` of quadruped-plan."""
-
-    name: str = "search"
-    batch_expansions: int = 2_000  # expansions per step (a stats row, a checkpoint unit)
-
-    def validate(self) -> None:
-        check_fields(self, "algorithm")
-        if self.batch_expansions < 1:
-            raise InputError(f"algorithm.batch_expansions: expected >= 1, "
-                             f"got {self.batch_expansions}")
 
 
 @dataclass
@@ -65,24 +50,26 @@ class SearchDriver(Driver):
     uses_evaluator = False
     snapshot_every_step = False
 
-    def __init__(self, problem: WalkProblem, cfg: QuadrupedPlanConfig,
-                 search_cfg: SearchConfig) -> None:
-        search_cfg.validate()
-        self.problem, self.cfg, self.batch = problem, cfg, search_cfg.batch_expansions
-        self.weight = 1.0 if cfg.method == "astar" else cfg.weight
+    def __init__(self, problem: WalkProblem, task: QuadrupedPlanConfig,
+                 search: SearchConfig) -> None:
+        search.validate()
+        self.problem, self.task, self.cfg = problem, task, search
+        self.batch = search.batch_expansions
+        self.weight = 1.0 if search.method == "astar" else search.weight
 
     def _evaluate(self):
-        cfg = self.cfg
+        cfg, sense = self.cfg, self.task.sense
         if cfg.method == "best-first":
-            return paper_evaluation(cfg.function, constants(cfg), self.problem.goal, cfg.sense)
+            return paper_evaluation(cfg.function, cfg.constants(self.task.rule_set),
+                                    self.problem.goal, sense)
         h = plan_length_heuristic(self.problem.model, self.problem.goal,
-                                  self.problem.goal_tolerance, cfg.sense, cfg.heuristic_gain,
+                                  self.problem.goal_tolerance, sense, cfg.heuristic_gain,
                                   self.problem.shifts)
         return astar_evaluate(h, self.weight)
 
     def init(self, rng: np.random.Generator) -> SearchDriverState:
         return SearchDriverState(walk_search(self.problem, self._evaluate()),
-                           unreachable_reason(self.cfg))
+                                 unreachable_reason(self.task))
 
     def step(self, state: SearchDriverState, rng: np.random.Generator,
              evaluate: Evaluate) -> tuple[SearchDriverState, StepReport]:
