@@ -1,12 +1,14 @@
 """Play a motion (key poses of a robot's channels, :class:`~evomotion.sim.motion.Motion`)
 on a robot of :mod:`evomotion.sim.robots`, from its initial state.
 
-The targets between key poses are linear, as Webots and :func:`evomotion.sim.robots.nao.replay.
-motion_targets` interpolate them; a channel the motion does not name (or leaves ``*``) holds
-the robot's initial pose; after the last key pose the last pose is held.
+The targets between key poses are linear, as Webots interpolates them (:func:`keyframe_targets`,
+also the NAO's replay); a channel the motion does not name (or leaves ``*``) holds the robot's
+initial pose; after the last key pose the last pose is held.
 """
 
 from __future__ import annotations
+
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -15,21 +17,38 @@ from evomotion.sim.motion import Motion
 from evomotion.sim.rollout import BatchSimulator, fall_step, torso_track
 
 
+def keyframe_targets(joints: Sequence[str], pose: np.ndarray, motion: Motion, dt: float,
+                     nstep: int) -> tuple[np.ndarray, np.ndarray]:
+    """``(first pose[nu], targets[nstep, nu])`` of ``motion`` for the actuators ``joints``
+    (``pose``: what a channel the motion leaves out or ``*`` holds): each named channel
+    interpolated linearly between its keyframes, as Webots plays a ``.motion``; target ``i``
+    is applied from ``t = i dt``; the first pose holds each channel's first keyframe. Channels
+    of the motion that ``joints`` lacks are ignored (callers check them when they must)."""
+    t_s = motion.times_ms / 1000.0
+    t = dt * np.arange(nstep)
+    ctrl = np.tile(pose, (nstep, 1))
+    first = np.array(pose, dtype=float, copy=True)
+    index = {name: j for j, name in enumerate(joints)}
+    for name in motion.joints:
+        j = index.get(name)
+        if j is None:
+            continue
+        col = motion.column(name)
+        ok = ~np.isnan(col)
+        if ok.any():
+            ctrl[:, j] = np.interp(t, t_s[ok], col[ok])
+            first[j] = col[ok][0]
+    return first, ctrl
+
+
 def motion_controls(robot, motion: Motion, dt: float, nstep: int) -> np.ndarray:
-    """Actuator targets ``[nstep, nu]``: target ``i`` is applied from ``t = i dt``."""
+    """Actuator targets ``[nstep, nu]`` of ``robot`` (:func:`keyframe_targets`); a channel
+    that is not the robot's is one line."""
     unknown = [j for j in motion.joints if j not in robot.joints]
     if unknown:
         raise InputError(f"the motion names {unknown[0]!r}, not a channel of robot "
                          f"{robot.name!r} ({', '.join(robot.joints)})")
-    t_s = motion.times_ms / 1000.0
-    t = dt * np.arange(nstep)
-    ctrl = np.tile(robot.pose, (nstep, 1))
-    for name in motion.joints:
-        col = motion.column(name)
-        ok = ~np.isnan(col)
-        if ok.any():
-            ctrl[:, robot.joints.index(name)] = np.interp(t, t_s[ok], col[ok])
-    return ctrl
+    return keyframe_targets(robot.joints, robot.pose, motion, dt, nstep)[1]
 
 
 def play_motion(robot, motion: Motion, hold_s: float = 1.0, nthread: int = 1) -> dict:

@@ -35,6 +35,7 @@ import numpy as np
 from evomotion.core.checks import check_choice, check_number
 from evomotion.outfile import check_target
 from evomotion.sim.motion import Motion, read_motion
+from evomotion.sim.play import keyframe_targets
 from evomotion.sim.robots import nao
 from evomotion.sim.rollout import BatchSimulator, fall_step, torso_track
 from evomotion.sim.worlds import Perturbation, draw_worlds, make_world, simulate_worlds
@@ -46,22 +47,10 @@ _CHUNK_BYTES = 256 * 2**20  # states kept at once by a stress test
 
 
 def motion_targets(motion: Motion, dt: float, nstep: int) -> tuple[np.ndarray, np.ndarray]:
-    """(first pose[22], controls[nstep, 22]) for the model's actuators (``nao.JOINTS``)."""
-    base = nao.pose_vector()
-    t_s = motion.times_ms / 1000.0
-    t = dt * np.arange(nstep)  # the target applied during physics step i (from t = i dt)
-    ctrl = np.tile(base, (nstep, 1))
-    first = base.copy()
-    for j, name in enumerate(nao.JOINTS):
-        if name not in motion.joints:
-            continue
-        col = motion.column(name)
-        ok = ~np.isnan(col)
-        if not ok.any():
-            continue
-        ctrl[:, j] = np.interp(t, t_s[ok], col[ok])
-        first[j] = col[ok][0]
-    return first, ctrl
+    """(first pose[22], controls[nstep, 22]) for the model's actuators (``nao.JOINTS``):
+    :func:`evomotion.sim.play.keyframe_targets` from the NAO's initial pose (channels that are
+    not the NAO's, e.g. other robots' or LED channels, are ignored as Webots ignores them)."""
+    return keyframe_targets(nao.JOINTS, nao.pose_vector(), motion, dt, nstep)
 
 
 def simulate_motion(motion: Motion, hold_s: float = 1.0, nthread: int = 1) -> dict:
