@@ -31,12 +31,20 @@ ROOT = Path(__file__).resolve().parents[1]
 def table_once() -> tuple[int, float, float, dict[str, list]]:
     """Run the 12 configurations once: (expansions, CPU s, wall s, per-configuration
     [expansions, CPU s, rules of the plan])."""
-    from evomotion.studies.quadruped_plan.plans.experiment import STARTS
-    from evomotion.studies.quadruped_plan.plans.planner import (
-        QuadrupedPlanConfig,
-        make_problem,
-        solve,
-    )
+    try:
+        from evomotion.studies.quadruped_plan.plans.experiment import STARTS
+        from evomotion.studies.quadruped_plan.plans.planner import (
+            QuadrupedPlanConfig,
+            make_problem,
+            solve,
+        )
+    except ImportError:  # a baseline before issue 32: flat modules
+        from evomotion.studies.quadruped_plan.experiment import STARTS  # type: ignore
+        from evomotion.studies.quadruped_plan.planner import (  # type: ignore
+            QuadrupedPlanConfig,
+            make_problem,
+            solve,
+        )
 
     try:
         from evomotion.studies.quadruped_plan.plans.search_config import SearchConfig
@@ -72,11 +80,15 @@ def baseline_once(src: Path) -> tuple[int, float, float, dict[str, list]]:
 
 
 def export(rev: str, into: Path) -> Path:
+    """The package at ``rev`` in ``into/src``, its compiled successors built in place (as an
+    install builds them: a baseline without them would time the Python fallback)."""
     archive = into / "src.tar"
-    subprocess.run(["git", "-C", str(ROOT), "archive", "-o", str(archive), rev, "src"],
-                   check=True)
+    subprocess.run(["git", "-C", str(ROOT), "archive", "-o", str(archive), rev, "src",
+                    "setup.py", "pyproject.toml", "README.md"], check=True)
     with tarfile.open(archive) as tar:
         tar.extractall(into, filter="data")
+    subprocess.run([sys.executable, "setup.py", "-q", "build_ext", "--inplace"], cwd=into,
+                   check=True, capture_output=True)
     return into / "src"
 
 

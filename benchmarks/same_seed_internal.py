@@ -73,7 +73,10 @@ def arm_ik() -> dict:
 def quadruped_plan() -> dict:
     """Best-first with functions (1) and (3) on both rule sets from both starts (every state
     and rule) and a coarse-grid A*."""
-    from evomotion.studies.quadruped_plan.plans.planner import QuadrupedPlanConfig, solve
+    try:  # before issue 32 the study's modules were flat
+        from evomotion.studies.quadruped_plan.plans.planner import QuadrupedPlanConfig, solve
+    except ImportError:
+        from evomotion.studies.quadruped_plan.planner import QuadrupedPlanConfig, solve
 
     try:
         from evomotion.studies.quadruped_plan.plans.search_config import SearchConfig
