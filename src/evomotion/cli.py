@@ -169,7 +169,9 @@ def plot_cmd(
 
 @app.command("replay")
 def replay_cmd(
-    motion: Annotated[Path, typer.Argument(help="A Webots .motion file")],
+    motion: Annotated[Path, typer.Argument(
+        help="A Webots .motion file, or a policy run folder (gym, humanoid-balance) or its "
+             "policy.npz")],
     json_out: Annotated[bool, typer.Option("--json", help="Only JSON on stdout")] = False,
     video: Annotated[Path | None, typer.Option(help="Write an MP4 of the replay")] = None,
     hold: Annotated[float, typer.Option(help="Seconds held in the last pose")] = 1.0,
@@ -185,13 +187,35 @@ def replay_cmd(
     seed: Annotated[int, typer.Option(help="Seed of the --trials worlds")] = 0,
     start: Annotated[str | None, typer.Option(
         "--from", help="Initial state: standing, face-down or face-up")] = None,
+    stress: Annotated[int | None, typer.Option(
+        help="A policy: play it in N unseen perturbed worlds and print its survival")] = None,
 ) -> None:
     """Play a Webots .motion on the NAO model: displacement, heading change, fall;
-    optionally in perturbed worlds or from lying (docs/humanoid-step.md)."""
+    optionally in perturbed worlds or from lying (docs/humanoid-step.md). A policy run
+    folder: its policy in unseen episodes or pushed worlds (docs/gym.md,
+    docs/humanoid-balance.md)."""
     from evomotion.sim.robots.nao.replay import StressOptions, replay_command
 
     if not motion.exists():
         raise InputError(f"{motion}: no such motion file")
+    if motion.is_dir() or motion.suffix == ".npz":  # a run folder: its study replays it
+        if friction is not None or mass_scale is not None or start is not None:
+            raise InputError("replay of a policy: --friction, --mass-scale and --from apply to "
+                             "a .motion; use --stress N (--push P sets the push, N s)")
+        from evomotion.run.config import config_from_run_dir
+        from evomotion.studies import get_study
+
+        folder = motion.parent if motion.suffix == ".npz" else motion
+        study = get_study(config_from_run_dir(folder)[0])
+        if study.replay_run is None:
+            raise InputError(f"replay {motion}: a {study.name} run has nothing to replay here "
+                             "(a .motion file of it can be given instead)")
+        study.replay_run(motion, json_out=json_out, video=video,
+                         stress=stress if stress is not None else trials, seed=seed,
+                         push_ns=push)
+        return
+    if stress is not None:
+        raise InputError("--stress is for a policy run folder; a .motion takes --trials N")
     stress = StressOptions(friction=friction, mass_scale=mass_scale, push_ns=push,
                            trials=trials, seed=seed, start=start)
     replay_command(motion, json_out=json_out, video=video, hold_s=hold, stress=stress)

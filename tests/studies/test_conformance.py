@@ -21,6 +21,7 @@ import pytest
 
 from evomotion.run import runner
 from evomotion.run.config import resolve_config, study_algorithms
+from evomotion.run.contracts import ContextRows
 from evomotion.run.faults import fault_at
 from evomotion.run.runner import EXIT_INTERRUPTED, run_study
 from evomotion.run.stats import COLUMNS, read_stats
@@ -136,6 +137,8 @@ def test_batch_evaluation_is_deterministic_and_composable(name):
     assert g.lower.shape == g.upper.shape == (g.dim,) and np.all(g.lower <= g.upper)
     assert problem.sense in ("min", "max")
     x = g.sample(np.random.default_rng(0), 2)
+    if isinstance(problem, ContextRows):  # rows = genome + context (a policy's normaliser)
+        x = problem.evaluation_rows(x)
     ev1, ev2 = problem.evaluate(x), problem.evaluate(x)
     assert ev1.fitness.shape == (2,)
     assert set(ev1.metrics) >= set(problem.metric_names)

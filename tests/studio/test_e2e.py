@@ -22,7 +22,8 @@ pytestmark = pytest.mark.slow
 VIEW = {"arm-ik": ".view-image", "grid-path": ".view-image", "quadruped-plan": ".view-image",
         "humanoid-step": ".nao-scene", "humanoid-walk": ".nao-scene",
         "biped-kick": ".kick-table", "humanoid-repertoire": ".repertoire-map",
-        "functions": "text=no view of its own"}
+        "functions": "text=no view of its own", "gym": "text=no view of its own",
+        "humanoid-balance": "text=no view of its own"}
 
 
 def _rows(page) -> int:
@@ -71,8 +72,9 @@ def test_run_page_shows_curves_and_the_study_view(page, studio, name):
         src = page.locator(".view-image img").get_attribute("src")
         assert src and src.startswith("data:image/png")
     page.locator(".q-tab", has_text="config").click()
-    page.wait_for_selector(".run-config", state="visible")
-    assert f'study = "{name}"' in page.locator(".run-config").inner_text()
+    page.wait_for_selector(".run-config", state="visible")  # its text arrives after it
+    _wait(lambda: f'study = "{name}"' in page.locator(".run-config").inner_text(),
+          what="the run's config")
 
 
 def test_live_run_grows_then_stop_and_resume_from_the_page(page, studio):

@@ -4,7 +4,8 @@ Every factory is ``factory(genome, cfg, *, mutate=None)``: ``genome`` a
 :class:`evomotion.core.problem.GenomeSpec`, ``cfg`` an instance of the config dataclass, and
 ``mutate(x[n, d], rng, rate) -> x'`` an optional problem-supplied mutation
 (:data:`evomotion.core.optimizer.MutateFn`). The GA and the cellular GA use it in place of the
-registry mutation; CMA-ES has no mutation operator and raises ``ValueError`` when given one.
+registry mutation; CMA-ES and the evolution strategies of :mod:`evomotion.core.es` (OpenAI-ES,
+ARS, PGPE, SNES) have no mutation operator and raise ``ValueError`` when given one.
 The quality-diversity optimizers (MAP-Elites, CMA-ME; their configs say ``needs_measures``)
 also take ``measures=``, the problem's :class:`~evomotion.core.problem.MeasureSpec`.
 """
@@ -18,6 +19,10 @@ from typing import Any
 from evomotion.core.cellular_ga import CGAConfig, make_cga
 from evomotion.core.cma_me import CMAMEConfig, make_cma_me
 from evomotion.core.cmaes import CMAESConfig, make_cmaes
+from evomotion.core.es.ars import ARSConfig, make_ars
+from evomotion.core.es.openai_es import OpenAIESConfig, make_openai_es
+from evomotion.core.es.pgpe import PGPEConfig, make_pgpe
+from evomotion.core.es.snes import SNESConfig, make_snes
 from evomotion.core.ga import GAConfig, make_ga
 from evomotion.core.map_elites import MAPElitesConfig, make_map_elites
 from evomotion.core.optimizer import MutateFn, Optimizer
@@ -31,6 +36,10 @@ ALGORITHMS: dict[str, tuple[type, Callable[..., Optimizer]]] = {
     "cmaes": (CMAESConfig, make_cmaes),
     "map_elites": (MAPElitesConfig, make_map_elites),
     "cma_me": (CMAMEConfig, make_cma_me),
+    "openai_es": (OpenAIESConfig, make_openai_es),
+    "ars": (ARSConfig, make_ars),
+    "pgpe": (PGPEConfig, make_pgpe),
+    "snes": (SNESConfig, make_snes),
 }
 
 

@@ -115,6 +115,11 @@ class Optimizer(ABC):
         """Best genome seen so far and its cost (``inf`` before any tell)."""
         return state.best_x, float(state.best_cost)
 
+    def center(self, state: Any) -> np.ndarray:
+        """The point the method would deploy: the best genome seen here; the evolution
+        strategies (:mod:`evomotion.core.es`) override it with their distribution mean."""
+        return np.asarray(self.best(state)[0], dtype=float)
+
     def generation_done(self, state: Any) -> bool:
         """Whether the ``tell`` that returned ``state`` completed a generation."""
         return True

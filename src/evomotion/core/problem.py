@@ -112,7 +112,9 @@ class Evaluation:
     @staticmethod
     def concat(parts: list[Evaluation]) -> Evaluation:
         fit = np.concatenate([p.fitness for p in parts])
-        keys = list(parts[0].metrics) if parts else []
+        # the metrics every part has (a failed part has the scalar ones only)
+        keys = [k for k in parts[0].metrics if all(k in p.metrics for p in parts)] \
+            if parts else []
         metrics = {k: np.concatenate([p.metrics[k] for p in parts]) for k in keys}
         failed = np.concatenate(
             [p.failed if p.failed is not None else np.zeros(len(p), bool) for p in parts]

@@ -20,6 +20,8 @@ STUDIES: dict[str, str] = {
     "arm-ik": "evomotion.studies.arm_ik.study:STUDY",
     "biped-kick": "evomotion.studies.biped_kick.study:STUDY",
     "quadruped-plan": "evomotion.studies.quadruped_plan.study:STUDY",
+    "gym": "evomotion.studies.gym.study:STUDY",
+    "humanoid-balance": "evomotion.studies.humanoid_balance.study:STUDY",
 }
 
 

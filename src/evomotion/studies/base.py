@@ -42,6 +42,9 @@ class Study:
       folder (default: ``physics.json`` of a problem that simulates,
       :func:`~evomotion.studies.run_hooks.physics_run_record`).
     These hooks are the run loop's contracts (:mod:`evomotion.run.contracts`).
+    - ``replay_run(path, *, json_out, video, stress, seed, push_ns)``: ``evomotion replay RUN``
+      for a run of this study (a policy played in unseen episodes or worlds; ``None``: the
+      study's runs are replayed through their ``.motion`` files).
     - ``cli``: a ``typer.Typer`` with the study's own subcommands (``evomotion <name> ...``).
     - ``view``: what the studio shows of a run (:class:`~evomotion.studies.view.StudyView`;
       ``None``: its curves only).
@@ -67,6 +70,7 @@ class Study:
     artifact_scope: ArtifactScope | None = videos_scope
     replay: ReplayHook | None = motion_replay
     run_record: Callable[[Any], RunRecord | None] | None = physics_run_record
+    replay_run: Callable[..., None] | None = None
     cli: Any = None
     smoke: tuple[str, ...] = ()
     view: StudyView | None = None

@@ -91,10 +91,10 @@ def lazy(module: str, name: str) -> Callable[..., Any]:
     """The function ``name`` of ``module``, imported only when the studio first calls it (a
     view's matplotlib and drawing code, a scene's model)."""
 
-    def call(*args: Any) -> Any:
+    def call(*args: Any, **kwargs: Any) -> Any:
         import importlib
 
-        return getattr(importlib.import_module(module), name)(*args)
+        return getattr(importlib.import_module(module), name)(*args, **kwargs)
 
     call.__name__ = call.__qualname__ = name
     return call

@@ -1,0 +1,105 @@
+"""Ask/tell overhead per generation of the evolution strategies (issue 33): OpenAI-ES, ARS,
+PGPE and SNES at population 200 and 10,000 parameters, on the CPU, the cost function left
+out (a constant cost vector), so what is timed is the optimizer alone.
+
+EvoTorch and evosax are optional references: when installed, their counterparts are timed
+at the same population and dimension in the same run; when not, the script says so and
+times ours only (it never installs them). Figures: median milliseconds per generation over
+``--generations`` after ``--warmup``; the machine is shared, so compare ratios within a run.
+
+    python3 benchmarks/bench_es_overhead.py [--pop 200] [--dim 10000] [--generations 30]
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import time
+
+import numpy as np
+
+from evomotion.core.algorithms import make_optimizer
+from evomotion.core.problem import GenomeSpec
+
+OURS = {"openai_es": {}, "ars": {}, "pgpe": {}, "snes": {}}
+
+
+def time_ours(name: str, pop: int, dim: int, gens: int, warmup: int) -> float:
+    genome = GenomeSpec.box(dim, -10.0, 10.0)
+    opt = make_optimizer(name, genome, pop_size=pop, **OURS[name])
+    rng = np.random.default_rng(0)
+    state = opt.init(rng)
+    cost = np.random.default_rng(1).standard_normal(pop)
+    times = []
+    for g in range(warmup + gens):
+        t0 = time.perf_counter()
+        x, state = opt.ask(state, rng)
+        state = opt.tell(state, x, cost, rng)
+        if g >= warmup:
+            times.append(time.perf_counter() - t0)
+    return 1e3 * float(np.median(times))
+
+
+def references() -> list[str]:
+    have = [m for m in ("evotorch", "evosax") if importlib.util.find_spec(m) is not None]
+    for m in ("evotorch", "evosax"):
+        if m not in have:
+            print(f"{m}: not installed; timing evomotion only (install it to compare)")
+    return have
+
+
+def time_evotorch(pop: int, dim: int, gens: int, warmup: int) -> dict[str, float]:
+    import torch  # noqa: F401  (EvoTorch's own dependency)
+    from evotorch import Problem
+    from evotorch.algorithms import PGPE, SNES
+
+    problem = Problem("min", lambda x: x.sum(), solution_length=dim,
+                      initial_bounds=(-1.0, 1.0), vectorized=False)
+    out = {}
+    for label, make in (("pgpe", lambda: PGPE(problem, popsize=pop, center_learning_rate=0.075,
+                                              stdev_learning_rate=0.1, stdev_init=0.1,
+                                              optimizer="clipup",
+                                              optimizer_config={"max_speed": 0.15})),
+                        ("snes", lambda: SNES(problem, popsize=pop, stdev_init=0.1))):
+        searcher = make()
+        times = []
+        for g in range(warmup + gens):
+            t0 = time.perf_counter()
+            searcher.step()  # includes EvoTorch's (trivial) evaluation of the batch
+            if g >= warmup:
+                times.append(time.perf_counter() - t0)
+        out[label] = 1e3 * float(np.median(times))
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--pop", type=int, default=200)
+    ap.add_argument("--dim", type=int, default=10_000)
+    ap.add_argument("--generations", type=int, default=30)
+    ap.add_argument("--warmup", type=int, default=3)
+    a = ap.parse_args()
+    print(f"ask+tell per generation, population {a.pop}, {a.dim} parameters "
+          f"(median of {a.generations})")
+    for name in OURS:
+        ms = time_ours(name, a.pop, a.dim, a.generations, a.warmup)
+        print(f"  evomotion {name:10s} {ms:8.2f} ms")
+    rng = np.random.default_rng(0)
+    floor = []
+    for _ in range(a.generations):
+        t0 = time.perf_counter()
+        rng.standard_normal((a.pop // 2, a.dim))
+        floor.append(time.perf_counter() - t0)
+    print(f"  floor: drawing {a.pop // 2} x {a.dim} normals alone "
+          f"{1e3 * float(np.median(floor)):6.2f} ms (SNES draws twice as many)")
+    have = references()
+    if "evotorch" in have:
+        for name, ms in time_evotorch(a.pop, a.dim, a.generations, a.warmup).items():
+            print(f"  evotorch  {name:10s} {ms:8.2f} ms")
+    if "evosax" in have:
+        print("evosax: installed, but its API changes between releases; compare by hand "
+              "(not timed here)")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,1 @@
+"""Study ``gym``: Gymnasium environments as policy-search problems."""

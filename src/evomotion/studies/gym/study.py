@@ -1,0 +1,53 @@
+"""Study ``gym``: policies for any Gymnasium environment by evolution strategies (ARS, OpenAI-ES,
+PGPE, SNES), through the run loop.
+
+``evomotion run gym --set problem.env=Hopper-v5`` evolves a linear policy with ARS V2-t (the
+defaults: Mania et al. 2018's Hopper setting) and writes, beside the run's usual files,
+``policy.npz``, ``policy.py`` (numpy only) and ``policy.onnx`` of the best centre; ``stats.csv``
+has ``centre_return`` (the mean return of the centre on ``problem.eval_episodes`` unseen
+episodes), ``train_episodes`` and ``env_steps``. ``run.target`` stops at a return threshold.
+"""
+
+from __future__ import annotations
+
+from evomotion.studies.base import Study, lazy_hook
+from evomotion.studies.gym.problem import GymConfig, GymProblem
+from evomotion.studies.view import lazy
+
+#: the optimizers a policy search runs (core/es and CMA-ES), each through the policy driver
+POLICY_OPTIMIZERS = ("ars", "openai_es", "pgpe", "snes", "cmaes")
+
+
+def _algorithms() -> dict:
+    from evomotion.core.algorithms import ALGORITHMS
+    from evomotion.studies.policy_search import make_policy_driver
+
+    return {name: (ALGORITHMS[name][0], make_policy_driver) for name in POLICY_OPTIMIZERS}
+
+
+STUDY = Study(
+    name="gym",
+    description="Policies for Gymnasium environments by ES (ARS, OpenAI-ES, PGPE, SNES).",
+    problem_config=GymConfig,
+    make_problem=GymProblem,
+    # ARS V2-t on Hopper (Mania et al. 2018; the RL-zoo setting of their code): alpha 0.01,
+    # N 8 directions, b 4, nu 0.025
+    defaults={"algorithm": {"name": "ars", "pop_size": 16, "step_size": 0.01,
+                            "noise_std": 0.025, "top_directions": 4},
+              # episodes in evaluation processes, one per core (mj_step holds the GIL)
+              "run": {"generations": 1000, "checkpoint_every": 10, "evaluator": "process"}},
+    presets={"paper": {"algorithm": {"name": "ars", "pop_size": 16, "step_size": 0.01,
+                                     "noise_std": 0.025, "top_directions": 4}}},
+    preset_notes={"paper": "ARS V2-t with the paper's Hopper hyperparameters (alpha 0.01, "
+                           "N 8, b 4, nu 0.025)"},
+    core_algorithms=(),
+    algorithms=_algorithms(),
+    on_checkpoint=lazy_hook("evomotion.studies.gym.artifacts", "write_policy"),
+    finalize=lazy_hook("evomotion.studies.gym.artifacts", "finalize"),
+    best_record=lazy_hook("evomotion.studies.gym.artifacts", "best_record"),
+    replay=None,
+    replay_run=lazy("evomotion.studies.gym.replay", "replay_command"),
+    run_record=None,
+    smoke=("problem.env=Hopper-v5", "problem.max_episode_steps=20", "problem.eval_episodes=1",
+           "algorithm.pop_size=4", "algorithm.top_directions=0", "run.evaluator=serial"),
+)

@@ -1,0 +1,1 @@
+"""Study ``humanoid-balance``: a policy that keeps a pushed biped standing."""

@@ -1,0 +1,81 @@
+"""What a humanoid-balance run leaves: the best centre as ``policy.npz``, ``policy.py``,
+``policy.onnx`` (as the gym study's) and ``policy.json``, what a robot-side loop needs to feed
+it: the robot, the observation columns in order, the control period, the driven joints with
+their nominal pose and target bounds (``target = clip(nominal + action, lower, upper)``)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+POLICY_JSON = "policy.json"
+
+
+def policy_info(problem: Any) -> dict[str, Any]:
+    """The ``policy.json`` record of ``problem`` (a :class:`.problem.HumanoidBalanceProblem`)."""
+    from evomotion.sim.observations import CHANNELS
+
+    r, sim, cfg = problem.robot, problem.sim, problem.cfg
+    model = r.model
+    joints = [model.joint(int(model.actuator_trnid[int(c), 0])).name for c in sim.columns]
+    return {
+        "robot": r.name, "policy": problem.policy.kind,
+        "files": {"npz": "policy.npz", "py": "policy.py", "onnx": "policy.onnx"},
+        "observation_channels": list(problem.obs_spec.channels),
+        "observations": list(problem.obs_names),
+        "channel_meaning": {c: CHANNELS[c] for c in problem.obs_spec.channels},
+        "control_period_s": cfg.control_period_s, "physics_dt_s": problem.dt,
+        "control_steps": problem.control_steps,
+        "action": "offset (rad) from the nominal pose of each joint, in this order; "
+                  "target = clip(nominal + action, lower, upper)",
+        "joints": joints,
+        "nominal_rad": [float(v) for v in sim.nominal[sim.columns]],
+        "lower_rad": [float(v) for v in sim.lower], "upper_rad": [float(v) for v in sim.upper],
+        "other_actuators": "hold the nominal pose",
+        "nominal_pose_all_actuators": {model.actuator(i).name: float(sim.nominal[i])
+                                       for i in range(model.nu)},
+        "foot_contact_order": list(r.feet),
+    }
+
+
+def write_policy(ctx: Any) -> None:
+    """``policy.npz``/``.py``/``.onnx``/``.json`` of the best centre so far (every checkpoint)."""
+    from evomotion.core.policies.export import export_policy
+    from evomotion.outfile import atomic_write_text
+
+    state, problem = ctx.state, ctx.problem
+    if state is None or problem is None or ctx.out_dir is None or \
+            not state.best_cost < float("inf"):
+        return
+    formats: tuple[str, ...] = ("npz", "py", "onnx")
+    try:
+        import onnx  # noqa: F401
+    except ImportError:
+        formats = ("npz", "py")
+        if not ctx.cache.get("onnx_note"):
+            ctx.log("note: policy.onnx not written (pip install 'evomotion[onnx]')")
+            ctx.cache["onnx_note"] = True
+    export_policy(ctx.out_dir, problem.policy, state.best_x, state.best_obs_mean,
+                  state.best_obs_std, formats)
+    atomic_write_text(Path(ctx.out_dir) / POLICY_JSON,
+                      json.dumps(policy_info(problem), indent=1) + "\n")
+
+
+def finalize(ctx: Any) -> int | None:
+    write_policy(ctx)
+    s = ctx.state
+    if s is not None and s.best_cost < float("inf"):
+        ctx.log(f"humanoid-balance: best centre score {-s.best_cost:.3f} after "
+                f"{s.train_episodes} training episodes; policy.npz, policy.py, policy.json"
+                + (", policy.onnx" if not ctx.cache.get("onnx_note") else "")
+                + "; evomotion humanoid-balance compare RUN measures it")
+    return None
+
+
+def best_record(ctx: Any) -> dict[str, Any]:
+    s = ctx.state
+    if s is None:
+        return {}
+    return {"centre_return": -float(s.best_cost) if s.best_cost < float("inf") else None,
+            "train_episodes": int(s.train_episodes), "env_steps": int(s.env_steps)}

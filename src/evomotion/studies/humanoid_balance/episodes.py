@@ -1,0 +1,117 @@
+"""Balance episodes: one perturbed world per episode seed, a pushed robot under a batched policy.
+
+An episode's world comes from ``numpy.random.default_rng(seed)`` alone (:func:`episode_world`):
+with ``perturb`` the friction, link masses, torso CoM, motor strength and servo latency of
+:func:`evomotion.sim.worlds.draw_worlds` (the default ranges of
+:class:`~evomotion.sim.worlds.Perturbation`, as the walk's worlds), then one push: magnitude
+``U(push_min, push_max)`` N s (scaled by the robot's mass over the NAO's,
+:meth:`~evomotion.sim.worlds.Perturbation.for_mass`), direction uniform on the horizontal
+circle, time ``U(push_window) x duration_s``. The same seed gives the same world whatever
+else is evaluated beside it, so any split of the rows over evaluators gives the same numbers.
+
+Per episode (:func:`run_episodes`, :class:`~evomotion.sim.closed_loop.ClosedLoopSimulator`):
+
+- ``up_fraction``: physics steps before the fall over all steps (1: stood the whole time);
+- ``tilt_rad``: mean torso tilt from the vertical over the control steps simulated;
+- ``action_sq``: mean squared action (rad^2, the offsets from the nominal pose);
+- ``score = up_fraction - tilt_weight * tilt_rad - action_weight * action_sq`` (maximised):
+  time upright dominates, tilt and effort break ties between policies that stay up.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from evomotion.core.policies.spec import PolicySpec
+from evomotion.sim.closed_loop import ClosedLoopResult, ClosedLoopSimulator
+from evomotion.sim.worlds import Perturbation, World, draw_worlds
+
+
+@dataclass(frozen=True)
+class WorldDraw:
+    """What :func:`episode_world` draws from: push range (N s, already scaled for the robot's
+    mass), push time window (fractions of ``duration_s``), whether to perturb the model."""
+
+    push_ns: tuple[float, float]
+    push_window: tuple[float, float]
+    duration_s: float
+    perturb: bool = True
+
+
+def push_range(robot, push_min_ns: float, push_max_ns: float) -> tuple[float, float]:
+    """The push magnitudes for ``robot`` (N s): the NAO's range scaled by its mass."""
+    lo, hi = Perturbation(push_ns=(push_min_ns, push_max_ns)).for_mass(robot.mass_kg).push_ns
+    return float(lo), float(hi)
+
+
+def episode_world(model, draw: WorldDraw, seed: int, push_ns: float | None = None) -> World:
+    """The world of episode ``seed`` (see the module doc); ``push_ns`` fixes the magnitude
+    (direction and time still drawn, so the worlds match those of the same seeds otherwise)."""
+    rng = np.random.default_rng(int(seed))
+    world = (draw_worlds(model, Perturbation(), 1, rng, draw.duration_s)[0] if draw.perturb
+             else World(model))
+    mag = float(rng.uniform(*draw.push_ns))
+    angle = float(rng.uniform(0.0, 2.0 * math.pi))
+    when = float(rng.uniform(*draw.push_window)) * draw.duration_s
+    if push_ns is not None:
+        mag = float(push_ns)
+    vec = (mag * math.cos(angle), mag * math.sin(angle), 0.0)
+    params = dict(world.params, push_ns=list(vec), push_time_s=when, push_magnitude_ns=mag)
+    return dataclasses.replace(world, push_ns=vec, push_time_s=when, params=params)
+
+
+@dataclass(frozen=True)
+class Episodes:
+    """Per episode: ``score``, ``up_fraction``, ``tilt_rad``, ``action_sq``, ``survived``
+    (0/1), ``time_up_s``, and the observation moments ``obs_count``, ``obs_mean``,
+    ``obs_m2`` the policy saw; ``result`` is the closed-loop run itself."""
+
+    score: np.ndarray
+    up_fraction: np.ndarray
+    tilt_rad: np.ndarray
+    action_sq: np.ndarray
+    survived: np.ndarray
+    time_up_s: np.ndarray
+    obs_count: np.ndarray
+    obs_mean: np.ndarray
+    obs_m2: np.ndarray
+    result: ClosedLoopResult
+
+
+def run_episodes(sim: ClosedLoopSimulator, spec: PolicySpec, params: np.ndarray,
+                 mean: np.ndarray, std: np.ndarray, worlds: list[World], nstep: int,
+                 tilt_weight: float, action_weight: float,
+                 record_states: bool = False) -> Episodes:
+    """Episode ``i``: policy ``params[i]`` with normaliser ``mean[i]``, ``std[i]`` in
+    ``worlds[i]`` for ``nstep`` physics steps (see the module doc)."""
+    n = len(worlds)
+    sq = np.zeros(n)
+    acts = np.zeros(n, dtype=np.int64)
+
+    def policy(rows: np.ndarray, obs: np.ndarray) -> np.ndarray:
+        x = (obs - mean[rows]) / std[rows]  # each row's own normaliser (ARS V2 line 5)
+        a = spec.act(params[rows], x, np.zeros(spec.obs_dim), np.ones(spec.obs_dim))
+        sq[rows] += np.einsum("na,na->n", a, a) / a.shape[1]
+        acts[rows] += 1
+        return a
+
+    res = sim.run(policy, worlds, nstep, record_states=record_states)
+    up = res.fall_step / nstep
+    q = res.torso[:, :, 3:7]
+    up_z = 1.0 - 2.0 * (q[..., 1] ** 2 + q[..., 2] ** 2)
+    tilt = np.arccos(np.clip(up_z, -1.0, 1.0))[:, 1:]  # after each control step
+    done = np.maximum(np.ceil(res.steps / sim.k).astype(np.int64), 1)
+    valid = np.arange(tilt.shape[1])[None] < done[:, None]
+    tilt_mean = (tilt * valid).sum(axis=1) / done
+    action_sq = sq / np.maximum(acts, 1)
+    score = up - tilt_weight * tilt_mean - action_weight * action_sq
+    count = res.obs_count.astype(np.int64)
+    safe = np.maximum(count, 1)[:, None]
+    obs_mean = res.obs_sum / safe
+    obs_m2 = np.maximum(res.obs_sumsq - count[:, None] * obs_mean ** 2, 0.0)
+    return Episodes(score, up, tilt_mean, action_sq, (~res.fell).astype(float),
+                    res.fall_time_s, count, obs_mean, obs_m2, res)

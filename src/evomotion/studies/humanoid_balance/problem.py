@@ -1,0 +1,204 @@
+"""The balance task as a policy-search problem (``evomotion run humanoid-balance``).
+
+The robot (``problem.robot``: "" = the NAO, or any biped spec) starts standing in its nominal
+pose; a policy (:mod:`evomotion.core.policies`: linear as in ARS, or a tanh MLP) reads its
+sensors every ``control_period_s`` (20 ms: 5 NAO physics steps) and sets offsets (rad) from the
+nominal pose of its ``[evolve]`` joints, for ``duration_s`` = 10 s. Every episode is one
+perturbed world with a push of up to ``push_max_ns`` N s in a random horizontal direction
+(:mod:`.episodes`); a robot that falls ends its episode.
+
+An evaluation row is ``[params | obs mean | obs std | seed | episodes]``
+(:mod:`evomotion.studies.policy_search`); the fitness (maximised) is the mean episode score
+``up_fraction - tilt_weight * tilt_rad - action_weight * action_sq`` (:mod:`.episodes`), which is
+also the metric ``return``; ``survived`` is the share of the row's episodes never fallen.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from evomotion.core.checks import check_choice, check_fields, check_number, check_text, inf_ok
+from evomotion.core.problem import Evaluation, GenomeSpec, Sense
+from evomotion.errors import InputError
+from evomotion.studies.humanoid_balance.episodes import (
+    Episodes,
+    WorldDraw,
+    episode_world,
+    push_range,
+    run_episodes,
+)
+from evomotion.studies.policy_search import policy_rows, split_rows
+
+MAX_EPISODES = 1000
+MAX_DURATION_S = 600.0
+MAX_PUSH_NS = 1000.0
+METRICS = ("return", "steps", "survived", "time_up_s", "tilt_rad", "action_sq")
+
+
+@dataclass(frozen=True)
+class HumanoidBalanceConfig:
+    """``[problem]`` of humanoid-balance."""
+
+    robot: str = ""  # "" or "nao": the NAO; another bundled biped (op3) or a spec .toml
+    duration_s: float = 10.0  # episode length (s)
+    control_period_s: float = 0.02  # the policy's period (s), a whole number of physics steps
+    #: the observation channels (sim/observations.py), comma-separated
+    observations: str = "joint_pos,joint_vel,gravity,gyro,foot_contact"
+    policy: str = "linear"  # "linear" (ARS) or "mlp" (tanh hidden layers)
+    hidden: int = 32  # MLP: units per hidden layer
+    layers: int = 2  # MLP: hidden layers
+    normalize: bool = True  # ARS V2 observation normalisation (false: V1)
+    action_scale: float = 0.3  # rad of joint offset per unit of policy output
+    #: bound on every normalised observation (the standing robot's first statistics are
+    #: tiny, so a push would otherwise drive the inputs to thousands); inf: none (ARS)
+    clip_obs: float = inf_ok(5.0, "no clipping")
+    episodes: int = 2  # training episodes (worlds) per individual and generation
+    eval_episodes: int = 8  # episodes of the centre per generation (the reported return)
+    push_min_ns: float = 2.0  # push magnitude U(min, max) N s on the NAO (scaled by mass)
+    push_max_ns: float = 4.5
+    push_window_start: float = 0.2  # push time U(start, end) x duration_s
+    push_window_end: float = 0.6
+    perturb: bool = True  # also draw friction, masses, CoM, motors, latency per episode
+    tilt_weight: float = 0.1  # score lost per radian of mean torso tilt
+    action_weight: float = 0.1  # score lost per rad^2 of mean squared action
+    param_bound: float = 100.0  # the genome box +- this (the ES starts at 0: stand still)
+    threads: int = 0  # mujoco.rollout threads; 0 = all cores (1 in a worker process)
+
+    def validate(self) -> None:
+        check_fields(self, "problem")
+        check_text("problem.robot", self.robot)
+        check_number("problem.duration_s", self.duration_s, lo=0.0, hi=MAX_DURATION_S,
+                     lo_open=True)
+        check_number("problem.control_period_s", self.control_period_s, lo=0.0, hi=1.0,
+                     lo_open=True)
+        check_choice("problem.policy", self.policy, ("linear", "mlp"))
+        check_number("problem.hidden", self.hidden, lo=1, hi=4096, integer=True)
+        check_number("problem.layers", self.layers, lo=1, hi=8, integer=True)
+        check_number("problem.action_scale", self.action_scale, lo=0.0, hi=10.0, lo_open=True)
+        for key in ("episodes", "eval_episodes"):
+            check_number(f"problem.{key}", getattr(self, key), lo=1, hi=MAX_EPISODES,
+                         integer=True)
+        check_number("problem.push_min_ns", self.push_min_ns, lo=0.0, hi=MAX_PUSH_NS)
+        check_number("problem.push_max_ns", self.push_max_ns, lo=self.push_min_ns,
+                     hi=MAX_PUSH_NS)
+        check_number("problem.push_window_start", self.push_window_start, lo=0.0, hi=1.0)
+        check_number("problem.push_window_end", self.push_window_end,
+                     lo=self.push_window_start, hi=1.0)
+        for key in ("tilt_weight", "action_weight"):
+            check_number(f"problem.{key}", getattr(self, key), lo=0.0, hi=1000.0)
+        check_number("problem.clip_obs", self.clip_obs, lo=0.0, lo_open=True, allow_inf=True)
+        check_number("problem.param_bound", self.param_bound, lo=1e-6, hi=1e6)
+        check_number("problem.threads", self.threads, lo=0, hi=1024, integer=True)
+        for key in ("normalize", "perturb"):
+            if not isinstance(getattr(self, key), bool):
+                raise InputError(f"problem.{key}: expected true or false, got "
+                                 f"{getattr(self, key)!r}")
+
+    def channels(self) -> tuple[str, ...]:
+        return tuple(c.strip() for c in self.observations.split(",") if c.strip())
+
+    def for_worker(self) -> HumanoidBalanceConfig:
+        """One rollout thread in a one-core evaluator worker (an explicit count is kept)."""
+        return replace(self, threads=1) if self.threads == 0 else self
+
+
+class HumanoidBalanceProblem:
+    """Rows of policy parameters (+ normaliser and seeds) -> balance scores."""
+
+    sense: Sense = "max"
+    metric_names: tuple[str, ...] = METRICS
+
+    def __init__(self, cfg: HumanoidBalanceConfig | None = None) -> None:
+        from evomotion.core.policies import make_policy
+        from evomotion.sim.closed_loop import ClosedLoopSimulator
+        from evomotion.sim.observations import ObservationSpec
+        from evomotion.sim.robots import load_robot
+
+        self.cfg = cfg = cfg or HumanoidBalanceConfig()
+        cfg.validate()
+        self.robot = r = load_robot(cfg.robot or "nao")
+        if len(r.feet) != 2:
+            raise InputError(f"problem.robot: {r.name} has {len(r.feet)} feet; the balance "
+                             "task stands a biped")
+        self.dt = float(r.model.opt.timestep)
+        k = cfg.control_period_s / self.dt
+        if abs(k - round(k)) > 1e-6 or round(k) < 1:
+            raise InputError(f"problem.control_period_s: {cfg.control_period_s} s is not a whole "
+                             f"number of {r.name}'s {self.dt} s physics steps")
+        self.control_steps = int(round(k))
+        self.nstep = int(math.ceil(cfg.duration_s / self.dt))
+        self.obs_spec = ObservationSpec(cfg.channels())
+        threads = cfg.threads or max(1, min(os.cpu_count() or 1, 8))
+        self.sim = ClosedLoopSimulator(r, self.obs_spec, self.control_steps, threads)
+        self.obs_names = self.sim.observe.names
+        self.obs_dim, self.act_dim = self.sim.observation_size, self.sim.action_size
+        nominal = np.asarray(r.pose, float)[self.sim.columns]
+        low, high = self.sim.lower - nominal, self.sim.upper - nominal
+        options: dict[str, Any] = ({"hidden": (cfg.hidden,) * cfg.layers}
+                                   if cfg.policy == "mlp" else {})
+        self.policy = make_policy(cfg.policy, self.obs_dim, self.act_dim,
+                                  scale=cfg.action_scale, low=low, high=high,
+                                  clip_obs=cfg.clip_obs, **options)
+        lo, hi = self.policy.genome_bounds(cfg.param_bound)
+        self.genome = GenomeSpec(lo, hi)
+        self.draw = WorldDraw(push_range(r, cfg.push_min_ns, cfg.push_max_ns),
+                              (cfg.push_window_start, cfg.push_window_end), cfg.duration_s,
+                              cfg.perturb)
+        self.episodes, self.eval_episodes = cfg.episodes, cfg.eval_episodes
+        self.normalize = cfg.normalize
+
+    def worlds(self, seeds: np.ndarray, push_ns: float | None = None) -> list:
+        """The episode worlds of ``seeds`` (one drawn per distinct seed)."""
+        cache: dict[int, Any] = {}
+        for s in np.unique(seeds):
+            cache[int(s)] = episode_world(self.robot.model, self.draw, int(s), push_ns)
+        return [cache[int(s)] for s in seeds]
+
+    def play(self, params: np.ndarray, mean: np.ndarray, std: np.ndarray, seeds: np.ndarray,
+             push_ns: float | None = None, record_states: bool = False) -> Episodes:
+        """Episodes of ``params[n, P]`` (normalisers ``mean[n, o]``, ``std[n, o]``) in the
+        worlds of ``seeds[n]``."""
+        return run_episodes(self.sim, self.policy, np.asarray(params, float),
+                            np.asarray(mean, float), np.asarray(std, float),
+                            self.worlds(np.asarray(seeds), push_ns), self.nstep,
+                            self.cfg.tilt_weight, self.cfg.action_weight, record_states)
+
+    def evaluation_rows(self, genomes: np.ndarray) -> np.ndarray:
+        """``genomes`` as rows with no normalisation and the episodes from seed 0."""
+        return policy_rows(np.asarray(genomes, float), np.zeros(self.obs_dim),
+                           np.ones(self.obs_dim), 0, self.episodes)
+
+    def evaluate(self, rows: np.ndarray) -> Evaluation:
+        from evomotion.core.policies.normalizer import combine
+
+        params, mean, std, seeds, episodes = split_rows(np.asarray(rows, float),
+                                                        self.genome.dim, self.obs_dim)
+        if (episodes < 1).any() or (episodes > MAX_EPISODES).any():
+            raise ValueError("episodes per row out of range")
+        owner = np.repeat(np.arange(len(rows)), episodes)
+        start = np.repeat(np.cumsum(episodes) - episodes, episodes)
+        ep_seeds = np.repeat(seeds, episodes) + (np.arange(owner.size) - start)
+        ep = self.play(params[owner], mean[owner], std[owner], ep_seeds)
+        n = len(rows)
+        per = np.bincount(owner, minlength=n).astype(float)
+
+        def avg(v: np.ndarray) -> np.ndarray:
+            return np.bincount(owner, np.asarray(v, float), minlength=n) / per
+
+        counts, means, m2s = np.zeros(n), np.zeros((n, self.obs_dim)), \
+            np.zeros((n, self.obs_dim))
+        for r in range(n):  # a row's episodes taken together in order
+            sel = owner == r
+            c, m, s = combine(ep.obs_count[sel], ep.obs_mean[sel], ep.obs_m2[sel])
+            counts[r], means[r], m2s[r] = float(c), m, s
+        ret = avg(ep.score)
+        control_steps = np.ceil(ep.result.steps / self.control_steps)
+        return Evaluation(ret, {"return": ret, "steps": avg(control_steps),
+                                "survived": avg(ep.survived), "time_up_s": avg(ep.time_up_s),
+                                "tilt_rad": avg(ep.tilt_rad), "action_sq": avg(ep.action_sq),
+                                "obs_count": counts, "obs_mean": means, "obs_m2": m2s})

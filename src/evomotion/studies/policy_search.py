@@ -1,0 +1,183 @@
+"""Policy search on the run loop: an evolution strategy over a policy's flat parameters, with
+the observation normalisation of ARS V2 (Mania et al. 2018, Algorithm 2, lines 5-8) kept in the
+run's state.
+
+Not a study: the driver the policy studies (``gym``, the NAO's balance) share. One step is one
+generation: the optimizer's ``ask``, one evaluation of the population and of the distribution's
+centre (the policy a user deploys) in one batch, the normaliser merged with every observation
+the population saw, then ``tell``. The evaluation is the run's evaluator like any other; the
+normaliser and the episode seeds travel in each row (:func:`policy_rows`), so serial, process,
+Ray and Dask evaluators return the same numbers, and a resume continues bit-identically (the
+state is the optimizer's plus the normaliser's arrays).
+
+A policy problem (:class:`PolicyProblem`) evaluates rows ``[params | obs mean | obs std | seed
+| episodes]``: ``episodes`` episodes starting from the seeds ``seed, seed + 1, ...``; it returns
+the training fitness (e.g. the return minus ARS's survival shift) and the metrics ``return``
+(the environment's own), ``steps`` and the observation moments ``obs_count``, ``obs_mean[n, o]``,
+``obs_m2[n, o]`` (combined in row order, :mod:`evomotion.core.policies.normalizer`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+import numpy as np
+
+from evomotion.core.optimizer import Optimizer
+from evomotion.core.policies import normalizer
+from evomotion.core.policies.normalizer import Moments, RunningStats, combine, mean_std
+from evomotion.core.problem import GenomeSpec
+from evomotion.core.state import state_from_arrays, state_to_arrays
+from evomotion.run.ask_tell import make_optimizer
+from evomotion.run.driver import Driver, Evaluate, StepReport
+
+#: episode seeds are drawn below this (exact in a float64 row)
+SEED_LIMIT = 2**31 - 1
+EXTRA_COLUMNS = ("centre_return", "centre_steps", "train_episodes", "env_steps")
+
+
+class PolicyProblem(Protocol):
+    genome: GenomeSpec
+    sense: str
+    metric_names: tuple[str, ...]
+    obs_dim: int
+    episodes: int  # training episodes per individual
+    eval_episodes: int  # episodes of the centre per generation
+    normalize: bool
+
+    def evaluate(self, rows: np.ndarray) -> Any: ...
+
+
+def policy_rows(params: np.ndarray, mean: np.ndarray, std: np.ndarray, seed: int,
+                episodes: int) -> np.ndarray:
+    """The evaluation rows of ``params[n, P]``: each with the normaliser and its episodes."""
+    n = params.shape[0]
+    tail = np.concatenate([mean, std, [float(seed), float(episodes)]])
+    return np.concatenate([params, np.broadcast_to(tail, (n, tail.size))], axis=1)
+
+
+def split_rows(rows: np.ndarray, n_params: int, obs_dim: int
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Inverse of :func:`policy_rows`: ``(params, mean, std, seeds, episodes)`` per row."""
+    p, o = n_params, obs_dim
+    return (rows[:, :p], rows[:, p:p + o], rows[:, p + o:p + 2 * o],
+            rows[:, p + 2 * o].astype(np.int64), rows[:, p + 2 * o + 1].astype(np.int64))
+
+
+def normaliser(stats: RunningStats, normalize: bool) -> tuple[np.ndarray, np.ndarray]:
+    """The normaliser a generation evaluates with: the running mean and std
+    (:func:`evomotion.core.policies.normalizer.mean_std`), or the identity with normalisation
+    off (ARS V1)."""
+    if not normalize:
+        return np.zeros(stats.obs_dim), np.ones(stats.obs_dim)
+    return mean_std(stats)
+
+
+def valid_moments(ev_metrics: dict[str, np.ndarray], n: int) -> Moments | None:
+    """The observation moments of the first ``n`` rows taken together (rows in order; a failed
+    row, with non-finite moments, left out); ``None`` when the problem gave none."""
+    if not {"obs_count", "obs_mean", "obs_m2"} <= set(ev_metrics):
+        return None
+    counts = np.asarray(ev_metrics["obs_count"][:n], float)
+    means, m2s = ev_metrics["obs_mean"][:n], ev_metrics["obs_m2"][:n]
+    ok = np.isfinite(counts) & np.isfinite(means).all(axis=1) & np.isfinite(m2s).all(axis=1)
+    return combine(np.where(ok, counts, 0).astype(np.int64), np.where(ok[:, None], means, 0.0),
+                   np.where(ok[:, None], m2s, 0.0))
+
+
+@dataclass(frozen=True)
+class PolicySearchState:
+    opt: Any
+    obs: RunningStats  # every observation of the training episodes so far (ARS V2)
+    best_x: np.ndarray  # the centre with the best evaluated return so far
+    best_cost: float  # minus that return
+    best_obs_mean: np.ndarray  # the normaliser it was evaluated with
+    best_obs_std: np.ndarray
+    train_episodes: int = 0
+    env_steps: int = 0
+
+
+class PolicySearchDriver(Driver):
+    """An ES optimizer over ``problem``'s policy parameters (sense: maximise the return)."""
+
+    sense = "max"
+    extra_columns = EXTRA_COLUMNS
+
+    def __init__(self, problem: PolicyProblem, optimizer: Optimizer) -> None:
+        self.problem, self.opt = problem, optimizer
+
+    def init(self, rng: np.random.Generator) -> PolicySearchState:
+        o = self.problem.obs_dim
+        opt_state = self.opt.init(rng)
+        return PolicySearchState(opt_state, normalizer.init(o),
+                                 np.asarray(self.opt.center(opt_state), float).copy(),
+                                 float("inf"), np.zeros(o), np.ones(o))
+
+    def step(self, state: PolicySearchState, rng: np.random.Generator,
+             evaluate: Evaluate) -> tuple[PolicySearchState, StepReport]:
+        p = self.problem
+        genomes, opt_state = self.opt.ask(state.opt, rng)
+        centre = np.asarray(self.opt.center(opt_state), float)[None]
+        mean, std = normaliser(state.obs, p.normalize)
+        train_seed, eval_seed = (int(s) for s in rng.integers(0, SEED_LIMIT, size=2))
+        rows = np.concatenate([policy_rows(genomes, mean, std, train_seed, p.episodes),
+                               policy_rows(centre, mean, std, eval_seed, p.eval_episodes)])
+        ev = evaluate(rows)
+        n = len(genomes)
+        cost = -np.asarray(ev.fitness[:n], float)
+        opt_state = self.opt.tell(opt_state, genomes, cost, rng)
+        batch = valid_moments(ev.metrics, n)
+        obs = state.obs if batch is None else normalizer.merge(state.obs, batch)
+        ret = float(ev.metrics["return"][n]) if "return" in ev.metrics else float("nan")
+        steps = ev.metrics.get("steps", np.zeros(n + 1))
+        new = dataclasses.replace(
+            state, opt=opt_state, obs=obs,
+            train_episodes=state.train_episodes + n * p.episodes,
+            env_steps=state.env_steps + int(np.nansum(steps[:n]) * p.episodes
+                                            + steps[n] * p.eval_episodes))
+        best_metrics = None
+        if np.isfinite(ret) and -ret < state.best_cost:
+            new = dataclasses.replace(new, best_x=centre[0].copy(), best_cost=-ret,
+                                      best_obs_mean=mean, best_obs_std=std)
+            best_metrics = {"return": ret, "steps": float(steps[n])}
+        failed = ev.failed_mask()
+        extras = {"centre_return": ret, "centre_steps": float(steps[n]),
+                  "train_episodes": new.train_episodes, "env_steps": new.env_steps}
+        return new, StepReport(len(rows), cost, genomes, int(failed.sum()), list(ev.errors),
+                               best_metrics, extras)
+
+    def best(self, state: PolicySearchState) -> tuple[np.ndarray, float]:
+        return state.best_x, float(state.best_cost)
+
+    def stop(self, state: PolicySearchState) -> str | None:
+        return self.opt.stop(state.opt)
+
+    def state_type(self) -> type:
+        return PolicySearchState
+
+    def state_arrays(self, state: PolicySearchState
+                     ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        arrays, meta = state_to_arrays(state)
+        return {k: np.array(v, copy=True) for k, v in arrays.items()}, meta
+
+    def restore(self, arrays: dict[str, np.ndarray], meta: dict[str, Any]) -> PolicySearchState:
+        opt_type = type(self.opt.init(np.random.default_rng(0)))
+        opt_state = state_from_arrays(opt_type, arrays, meta, "opt.")
+        obs = state_from_arrays(RunningStats, arrays, meta, "obs.")
+        fields = {f.name: (np.array(arrays[f.name]) if f.name in arrays else meta[f.name])
+                  for f in dataclasses.fields(PolicySearchState) if f.name not in ("opt", "obs")}
+        return PolicySearchState(opt=opt_state, obs=obs, **fields)
+
+    def check_state(self, state: PolicySearchState) -> None:
+        o, d = self.problem.obs_dim, self.problem.genome.dim
+        if np.shape(state.obs.mean) != (o,) or np.shape(state.obs.m2) != (o,):
+            raise ValueError(f"normaliser of {np.shape(state.obs.mean)}, expected ({o},)")
+        if np.shape(state.best_x) != (d,):
+            raise ValueError(f"best policy of {np.shape(state.best_x)}, expected ({d},)")
+
+
+def make_policy_driver(problem: PolicyProblem, config: Any) -> PolicySearchDriver:
+    """The study factory: the registered optimizer ``algorithm.name`` on the policy."""
+    return PolicySearchDriver(problem, make_optimizer(problem, config.algorithm))
