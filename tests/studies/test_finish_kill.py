@@ -14,6 +14,8 @@ from __future__ import annotations
 import hashlib
 import json
 import shutil
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -71,9 +73,26 @@ def _untimed(doc: object) -> object:
     return doc
 
 
+#: runs :func:`check_case` of this file in a fresh interpreter
+RUNNER = ("import importlib.util, pathlib, sys\n"
+          "spec = importlib.util.spec_from_file_location('finish_kill', sys.argv[1])\n"
+          "m = importlib.util.module_from_spec(spec)\n"
+          "spec.loader.exec_module(m)\n"
+          "m.check_case(sys.argv[2], pathlib.Path(sys.argv[3]))\n")
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("case", CASES)
 def test_kill_9_while_finishing_then_resume_completes_identically(case, tmp_path):
+    """Each case in a fresh Python process: the kills fork it, and a fork of a process that
+    other tests left with threads (MuJoCo's rollout pool, a test runner's workers) can hang."""
+    r = subprocess.run([sys.executable, "-c", RUNNER, __file__, case, str(tmp_path)],
+                       capture_output=True, text=True, timeout=900)
+    assert r.returncode == 0, r.stderr[-3000:]
+
+
+def check_case(case: str, tmp_path: Path) -> None:
+    """The test of one case (see the module): raises AssertionError on a difference."""
     s, cfg = _config(case)
 
     def run(out: Path, point: int | None = None, count: Path | None = None, resume=False,

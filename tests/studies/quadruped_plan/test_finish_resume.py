@@ -8,12 +8,12 @@ import json
 import os
 import shutil
 import signal
+import subprocess
 import sys
 from pathlib import Path
 
 import pytest
 
-from evomotion import outfile
 from evomotion.run.config import resolve_config
 from evomotion.run.runner import run_study
 from evomotion.studies import get_study
@@ -67,27 +67,32 @@ def _untimed(doc: object) -> object:
     return doc
 
 
-@pytest.mark.skipif(not hasattr(os, "fork"), reason="needs fork")
+#: a run killed (SIGKILL) by its own write hook once ``at`` is written, in a fresh interpreter
+#: (a fork of the test process, which other tests left with threads, can hang)
+KILLED = """
+import os, signal, sys
+from pathlib import Path
+from evomotion import outfile
+from evomotion.run.config import resolve_config
+from evomotion.run.runner import run_study
+from evomotion.studies import get_study
+out, at, sets = Path(sys.argv[1]), sys.argv[2], sys.argv[3:]
+def hook(event, path):
+    if event == "written" and Path(path).name == at:
+        os.kill(os.getpid(), signal.SIGKILL)
+outfile.WRITE_HOOKS.append(hook)
+s = get_study("quadruped-plan")
+sys.exit(run_study(s, resolve_config(s, None, sets), out, quiet=True).exit_code)
+"""
+
+
 @pytest.mark.parametrize("at", ["mission.json", "plan.gif"])
 def test_killed_while_writing_then_resumed_matches_an_uninterrupted_run(done, tmp_path, at):
     out = tmp_path / "killed"
-
-    def hook(event: str, path: Path) -> None:
-        if event == "written" and Path(path).name == at:
-            os.kill(os.getpid(), signal.SIGKILL)
-
-    sys.stdout.flush()
-    sys.stderr.flush()
-    pid = os.fork()
-    if pid == 0:  # pragma: no cover - the child, killed by its hook
-        code = 70
-        try:
-            outfile.WRITE_HOOKS.append(hook)
-            code = _run(out)
-        finally:
-            os._exit(code)
-    _, status = os.waitpid(pid, 0)
-    assert os.WIFSIGNALED(status) and os.WTERMSIG(status) == signal.SIGKILL
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path))
+    r = subprocess.run([sys.executable, "-c", KILLED, str(out), at, *SETS], env=env,
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == -signal.SIGKILL, r.stderr
     assert json.loads(_latest(out).read_text())["counters"]["finished"] is False
     if at == "mission.json":
         assert not (out / "mission.json").exists()  # nothing half-written took its place
