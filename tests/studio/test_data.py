@@ -7,6 +7,7 @@ import os
 import socket
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -47,11 +48,27 @@ def _lock(pid, host=None, start=None):
                        "boot": boot_id(), "command": "evomotion"}) + "\n"
 
 
+def _exec_done(pid: int, timeout_s: float = 30.0) -> None:
+    """Wait until the child ``pid`` runs its own command line (until its exec, /proc shows
+    the parent's: a busy machine, e.g. a parallel test run, leaves a moment between)."""
+    import time
+
+    end = time.monotonic() + timeout_s
+    while time.monotonic() < end:
+        try:
+            if b"evomotion" in Path(f"/proc/{pid}/cmdline").read_bytes():
+                return
+        except OSError:
+            pass
+        time.sleep(0.01)
+
+
 def test_status_from_lock_and_log(tmp_path):
     d = _run(tmp_path, "a")
     # a live process that is an evomotion command line, named with its start time: running
     live = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)", "evomotion"])
     try:
+        _exec_done(live.pid)
         (d / "run.lock").write_text(_lock(live.pid))
         assert data.run_status(d) == ("running", "", live.pid)
         assert not data.summarize(tmp_path, d).resumable

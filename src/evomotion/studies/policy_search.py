@@ -181,3 +181,68 @@ class PolicySearchDriver(Driver):
 def make_policy_driver(problem: PolicyProblem, config: Any) -> PolicySearchDriver:
     """The study factory: the registered optimizer ``algorithm.name`` on the policy."""
     return PolicySearchDriver(problem, make_optimizer(problem, config.algorithm))
+
+
+@dataclass(frozen=True)
+class EpisodeRows:
+    """The episodes of evaluation rows: ``owner[e]`` (the row of episode ``e``) and its seed
+    ``seeds[e]`` (a row's episodes start from ``seed, seed + 1, ...``)."""
+
+    owner: np.ndarray
+    seeds: np.ndarray
+    n_rows: int
+
+    @classmethod
+    def of(cls, seeds: np.ndarray, episodes: np.ndarray, max_episodes: int) -> EpisodeRows:
+        if (episodes < 1).any() or (episodes > max_episodes).any():
+            raise ValueError("episodes per row out of range")
+        owner = np.repeat(np.arange(len(seeds)), episodes)
+        start = np.repeat(np.cumsum(episodes) - episodes, episodes)
+        return cls(owner, np.repeat(seeds, episodes) + (np.arange(owner.size) - start),
+                   len(seeds))
+
+    def mean(self, values: np.ndarray) -> np.ndarray:
+        """The mean over each row's episodes of per-episode ``values``."""
+        per = np.bincount(self.owner, minlength=self.n_rows).astype(float)
+        return np.bincount(self.owner, np.asarray(values, float), minlength=self.n_rows) / per
+
+    def moments(self, counts: np.ndarray, means: np.ndarray, m2s: np.ndarray
+                ) -> dict[str, np.ndarray]:
+        """The metrics ``obs_count``, ``obs_mean``, ``obs_m2`` per row: its episodes'
+        observation moments taken together in order."""
+        n, o = self.n_rows, means.shape[1]
+        out_c, out_m, out_s = np.zeros(n), np.zeros((n, o)), np.zeros((n, o))
+        for r in range(n):  # usually one or two episodes per row
+            sel = self.owner == r
+            c, m, s = combine(np.asarray(counts[sel]).astype(np.int64), means[sel], m2s[sel])
+            out_c[r], out_m[r], out_s[r] = float(c), m, s
+        return {"obs_count": out_c, "obs_mean": out_m, "obs_m2": out_s}
+
+
+def write_policy_files(ctx: Any, extra: dict[str, Any] | None = None) -> None:
+    """``policy.npz``/``.py``/``.onnx`` of the run's best centre so far (the problem's
+    ``policy`` spec, the normaliser it was evaluated with), and ``extra``'s JSON files
+    (``{name: record}``); ``policy.onnx`` is skipped with one note without the ``onnx``
+    extra. A study's checkpoint hook."""
+    import json
+    from pathlib import Path
+
+    from evomotion.core.policies.export import export_policy
+    from evomotion.outfile import atomic_write_text
+
+    state, problem = ctx.state, ctx.problem
+    if state is None or problem is None or ctx.out_dir is None or \
+            not state.best_cost < float("inf"):
+        return
+    formats: tuple[str, ...] = ("npz", "py", "onnx")
+    try:
+        import onnx  # noqa: F401
+    except ImportError:
+        formats = ("npz", "py")
+        if not ctx.cache.get("onnx_note"):
+            ctx.log("note: policy.onnx not written (pip install 'evomotion[onnx]')")
+            ctx.cache["onnx_note"] = True
+    export_policy(ctx.out_dir, problem.policy, state.best_x, state.best_obs_mean,
+                  state.best_obs_std, formats)
+    for name, record in (extra or {}).items():
+        atomic_write_text(Path(ctx.out_dir) / name, json.dumps(record, indent=1) + "\n")

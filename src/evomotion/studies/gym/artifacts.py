@@ -13,22 +13,9 @@ from typing import Any
 
 def write_policy(ctx: Any) -> None:
     """``policy.npz``/``.py``/``.onnx`` of the best centre so far (every checkpoint)."""
-    from evomotion.core.policies.export import export_policy
+    from evomotion.studies.policy_search import write_policy_files
 
-    state, problem = ctx.state, ctx.problem
-    if state is None or problem is None or ctx.out_dir is None or \
-            not state.best_cost < float("inf"):
-        return
-    formats: tuple[str, ...] = ("npz", "py", "onnx")
-    try:
-        import onnx  # noqa: F401
-    except ImportError:
-        formats = ("npz", "py")
-        if not ctx.cache.get("onnx_note"):
-            ctx.log("note: policy.onnx not written (pip install 'evomotion[onnx]')")
-            ctx.cache["onnx_note"] = True
-    export_policy(ctx.out_dir, problem.policy, state.best_x, state.best_obs_mean,
-                  state.best_obs_std, formats)
+    write_policy_files(ctx)
 
 
 def finalize(ctx: Any) -> int | None:

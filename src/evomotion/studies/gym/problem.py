@@ -22,12 +22,11 @@ from typing import Any
 import numpy as np
 
 from evomotion.core.checks import check_choice, check_fields, check_number, check_text
-from evomotion.core.policies.normalizer import combine
 from evomotion.core.problem import Evaluation, GenomeSpec
 from evomotion.errors import InputError
 from evomotion.studies.gym.envs import BatchedTask, task_of
 from evomotion.studies.gym.episodes import Episodes, run_batched, run_gymnasium
-from evomotion.studies.policy_search import policy_rows, split_rows
+from evomotion.studies.policy_search import EpisodeRows, policy_rows, split_rows
 
 BACKENDS = ("auto", "batched", "gymnasium")
 #: ARS's survival shift per task (their public code), subtracted per step while training
@@ -156,11 +155,7 @@ class GymProblem:
     def evaluate(self, rows: np.ndarray) -> Evaluation:
         params, mean, std, seeds, episodes = split_rows(np.asarray(rows, float),
                                                         self.genome.dim, self.obs_dim)
-        if (episodes < 1).any() or (episodes > MAX_EPISODES).any():
-            raise ValueError("episodes per row out of range")
-        owner = np.repeat(np.arange(len(rows)), episodes)
-        start = np.repeat(np.cumsum(episodes) - episodes, episodes)
-        ep_seeds = np.repeat(seeds, episodes) + (np.arange(owner.size) - start)
+        eps = EpisodeRows.of(seeds, episodes, MAX_EPISODES)
         spec = self.policy
 
         def policy(rows_: np.ndarray, obs: np.ndarray) -> np.ndarray:
@@ -174,18 +169,8 @@ class GymProblem:
                                     uniq[g, self.obs_dim:])
             return out
 
-        ep = self._run(policy, owner, ep_seeds)
-        n = len(rows)
-        per = np.bincount(owner, minlength=n).astype(float)
-        ret = np.bincount(owner, ep.returns, minlength=n) / per
-        steps = np.bincount(owner, ep.steps.astype(float), minlength=n) / per
-        counts, means, m2s = np.zeros(n), np.zeros((n, self.obs_dim)), \
-            np.zeros((n, self.obs_dim))
-        for r in range(n):  # a row's episodes taken together in order (usually one)
-            sel = owner == r
-            c, m, s = combine(ep.obs_count[sel].astype(np.int64), ep.obs_mean[sel],
-                              ep.obs_m2[sel])
-            counts[r], means[r], m2s[r] = float(c), m, s
+        ep = self._run(policy, eps.owner, eps.seeds)
+        ret, steps = eps.mean(ep.returns), eps.mean(ep.steps)
         fitness = ret - self.shift * steps
-        return Evaluation(fitness, {"return": ret, "steps": steps, "obs_count": counts,
-                                    "obs_mean": means, "obs_m2": m2s})
+        return Evaluation(fitness, {"return": ret, "steps": steps,
+                                    **eps.moments(ep.obs_count, ep.obs_mean, ep.obs_m2)})

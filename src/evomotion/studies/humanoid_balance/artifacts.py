@@ -5,8 +5,6 @@ their nominal pose and target bounds (``target = clip(nominal + action, lower, u
 
 from __future__ import annotations
 
-import json
-from pathlib import Path
 from typing import Any
 
 POLICY_JSON = "policy.json"
@@ -41,25 +39,10 @@ def policy_info(problem: Any) -> dict[str, Any]:
 
 def write_policy(ctx: Any) -> None:
     """``policy.npz``/``.py``/``.onnx``/``.json`` of the best centre so far (every checkpoint)."""
-    from evomotion.core.policies.export import export_policy
-    from evomotion.outfile import atomic_write_text
+    from evomotion.studies.policy_search import write_policy_files
 
-    state, problem = ctx.state, ctx.problem
-    if state is None or problem is None or ctx.out_dir is None or \
-            not state.best_cost < float("inf"):
-        return
-    formats: tuple[str, ...] = ("npz", "py", "onnx")
-    try:
-        import onnx  # noqa: F401
-    except ImportError:
-        formats = ("npz", "py")
-        if not ctx.cache.get("onnx_note"):
-            ctx.log("note: policy.onnx not written (pip install 'evomotion[onnx]')")
-            ctx.cache["onnx_note"] = True
-    export_policy(ctx.out_dir, problem.policy, state.best_x, state.best_obs_mean,
-                  state.best_obs_std, formats)
-    atomic_write_text(Path(ctx.out_dir) / POLICY_JSON,
-                      json.dumps(policy_info(problem), indent=1) + "\n")
+    if ctx.problem is not None:
+        write_policy_files(ctx, {POLICY_JSON: policy_info(ctx.problem)})
 
 
 def finalize(ctx: Any) -> int | None:

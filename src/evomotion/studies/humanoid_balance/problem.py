@@ -32,7 +32,7 @@ from evomotion.studies.humanoid_balance.episodes import (
     push_range,
     run_episodes,
 )
-from evomotion.studies.policy_search import policy_rows, split_rows
+from evomotion.studies.policy_search import EpisodeRows, policy_rows, split_rows
 
 MAX_EPISODES = 1000
 MAX_DURATION_S = 600.0
@@ -174,31 +174,15 @@ class HumanoidBalanceProblem:
                            np.ones(self.obs_dim), 0, self.episodes)
 
     def evaluate(self, rows: np.ndarray) -> Evaluation:
-        from evomotion.core.policies.normalizer import combine
-
         params, mean, std, seeds, episodes = split_rows(np.asarray(rows, float),
                                                         self.genome.dim, self.obs_dim)
-        if (episodes < 1).any() or (episodes > MAX_EPISODES).any():
-            raise ValueError("episodes per row out of range")
-        owner = np.repeat(np.arange(len(rows)), episodes)
-        start = np.repeat(np.cumsum(episodes) - episodes, episodes)
-        ep_seeds = np.repeat(seeds, episodes) + (np.arange(owner.size) - start)
-        ep = self.play(params[owner], mean[owner], std[owner], ep_seeds)
-        n = len(rows)
-        per = np.bincount(owner, minlength=n).astype(float)
-
-        def avg(v: np.ndarray) -> np.ndarray:
-            return np.bincount(owner, np.asarray(v, float), minlength=n) / per
-
-        counts, means, m2s = np.zeros(n), np.zeros((n, self.obs_dim)), \
-            np.zeros((n, self.obs_dim))
-        for r in range(n):  # a row's episodes taken together in order
-            sel = owner == r
-            c, m, s = combine(ep.obs_count[sel], ep.obs_mean[sel], ep.obs_m2[sel])
-            counts[r], means[r], m2s[r] = float(c), m, s
+        eps = EpisodeRows.of(seeds, episodes, MAX_EPISODES)
+        o = eps.owner
+        ep = self.play(params[o], mean[o], std[o], eps.seeds)
+        avg = eps.mean
         ret = avg(ep.score)
         control_steps = np.ceil(ep.result.steps / self.control_steps)
         return Evaluation(ret, {"return": ret, "steps": avg(control_steps),
                                 "survived": avg(ep.survived), "time_up_s": avg(ep.time_up_s),
                                 "tilt_rad": avg(ep.tilt_rad), "action_sq": avg(ep.action_sq),
-                                "obs_count": counts, "obs_mean": means, "obs_m2": m2s})
+                                **eps.moments(ep.obs_count, ep.obs_mean, ep.obs_m2)})
