@@ -1,5 +1,5 @@
 """Linear and MLP policies: flat layout, batched forward = per-row forward, the action map,
-initialisation and bounds, the registry."""
+initialisation and bounds, the registry; the conformance every kind in POLICIES passes."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from evomotion.core.policies import POLICIES, LinearSpec, MLPSpec, make_policy
+from evomotion.core.policies import POLICIES, LinearSpec, MLPSpec, StructuredSpec, make_policy
 from evomotion.core.registry import UnknownNameError
 
 
@@ -98,9 +98,12 @@ def test_initialisation_and_bounds() -> None:
 
 
 def test_registry_and_one_line_errors() -> None:
-    assert set(POLICIES) == {"linear", "mlp"}
+    assert set(POLICIES) == {"linear", "mlp", "structured"}
     assert isinstance(make_policy("mlp", 3, 2, hidden=[4]), MLPSpec)
-    with pytest.raises(UnknownNameError, match="unknown policy 'rnn'; available: linear, mlp"):
+    assert isinstance(make_policy("structured", 4, 2, phase_columns=(2, 3), harmonics=1),
+                      StructuredSpec)
+    with pytest.raises(UnknownNameError,
+                       match="unknown policy 'rnn'; available: linear, mlp, structured"):
         make_policy("rnn", 3, 2)
     with pytest.raises(ValueError, match="unknown option 'hidden' for the linear policy"):
         make_policy("linear", 3, 2, hidden=[4])
@@ -116,3 +119,47 @@ def test_registry_and_one_line_errors() -> None:
         LinearSpec(3, 2).act(np.zeros((2, 5)), np.zeros((2, 3)), np.zeros(3), np.ones(3))
     with pytest.raises(ValueError, match="obs"):
         LinearSpec(3, 2).act(np.zeros((2, 6)), np.zeros((2, 4)), np.zeros(3), np.ones(3))
+
+
+#: one example of every registered kind, with a non-trivial action map (no exemptions)
+CONFORMANCE = {
+    "linear": LinearSpec(6, 3, bias=True, scale=0.5, offset=[0.1, 0.2, 0.3], low=-1, high=1,
+                         clip_obs=2.0),
+    "mlp": MLPSpec(6, 3, hidden=(5,), scale=[1, 2, 3], offset=-0.5, low=-2, high=0.5),
+    "structured": StructuredSpec(6, 3, phase_columns=(4, 1), harmonics=2, scale=[1, 2, 3],
+                                 offset=[0.1, 0.0, -0.1], low=-2, high=2, clip_obs=3.0),
+}
+
+
+def test_every_kind_has_a_conformance_example() -> None:
+    assert set(CONFORMANCE) == set(POLICIES)
+    assert all(type(CONFORMANCE[k]) is POLICIES[k] and POLICIES[k].kind == k for k in POLICIES)
+
+
+@pytest.mark.parametrize("kind", sorted(POLICIES))
+def test_conformance(kind) -> None:
+    """Whatever the kind: batched rows = one at a time, per-row normalisers = the shared one
+    row by row, zero parameters = the offset (clipped), flatten inverts unflatten, the start
+    and bounds have P entries, outputs within [low, high]."""
+    spec = CONFORMANCE[kind]
+    rng = np.random.default_rng(8)
+    n, o = 9, spec.obs_dim
+    params = rng.normal(size=(n, spec.n_params))
+    obs = rng.normal(size=(n, o)) * 3
+    means, stds = rng.normal(size=(n, o)), rng.uniform(0.3, 3.0, size=(n, o))
+    out = spec.act(params, obs, means, stds)
+    assert out.shape == (n, spec.act_dim)
+    for i in range(n):
+        one = spec.act_one(params[i], obs[i], means[i], stds[i])
+        np.testing.assert_array_equal(out[i], one)
+        np.testing.assert_array_equal(
+            spec.act(params, obs, means[i], stds[i])[i], one)
+    assert (out >= spec.low).all() and (out <= spec.high).all()
+    zero = spec.act(np.zeros((n, spec.n_params)), obs, means, stds)
+    np.testing.assert_array_equal(zero, np.broadcast_to(
+        np.clip(spec.offset, spec.low, spec.high), zero.shape))
+    assert np.array_equal(spec.flatten(spec.unflatten(params[0])), params[0])
+    assert spec.initial_params(np.random.default_rng(0)).shape == (spec.n_params,)
+    assert spec.genome_bounds()[0].shape == (spec.n_params,)
+    with pytest.raises(ValueError, match="mean/std"):
+        spec.act(params, obs, means[:2], stds[:2])

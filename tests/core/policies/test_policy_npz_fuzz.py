@@ -14,7 +14,7 @@ import numpy as np
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from evomotion.core.policies import LinearSpec, MLPSpec
+from evomotion.core.policies import LinearSpec, MLPSpec, StructuredSpec
 from evomotion.core.policies.export import policy_arrays, read_policy_npz
 from evomotion.errors import FileFormatError
 
@@ -24,7 +24,10 @@ _RNG = np.random.default_rng(0)
 SEEDS = [policy_arrays(s, _RNG.normal(size=s.n_params), _RNG.normal(size=s.obs_dim),
                        _RNG.uniform(0.5, 2, size=s.obs_dim))
          for s in (LinearSpec(4, 2, clip_obs=5.0, low=-1, high=1), LinearSpec(3, 2, bias=True),
-                   MLPSpec(4, 2, hidden=(3,), scale=[1, 2]), MLPSpec(3, 1, hidden=(2, 2)))]
+                   MLPSpec(4, 2, hidden=(3,), scale=[1, 2]), MLPSpec(3, 1, hidden=(2, 2)),
+                   StructuredSpec(5, 2, phase_columns=(3, 4), harmonics=2, low=-1, high=1,
+                                  clip_obs=4.0),
+                   StructuredSpec(2, 1, phase_columns=(1, 0), harmonics=1))]
 VALUES = [np.nan, np.inf, -np.inf, 1e308, -1e308, 0.0, -1.0, 2.0]
 
 
@@ -39,14 +42,15 @@ def mutated_arrays(draw) -> dict[str, np.ndarray]:
         if op == "drop":
             del arrays[key]
         elif op == "add":
-            arrays[draw(st.sampled_from(["layer9_weight", "layer1_bias", "junk"]))] = \
+            arrays[draw(st.sampled_from(["layer9_weight", "layer1_bias", "junk", "n_layers",
+                                         "tape_coef", "harmonics", "phase_columns"]))] = \
                 np.zeros(draw(st.integers(0, 3)))
         elif op == "value" and a.size and a.dtype.kind in "fiub":
             flat = a.astype(np.float64).reshape(-1)
             flat[draw(st.integers(0, flat.size - 1))] = draw(st.sampled_from(VALUES))
             arrays[key] = flat.reshape(a.shape)
         elif op == "shape":
-            shape = draw(st.sampled_from([(0,), (1,), (2, 2), (5,), (3, 4)]))
+            shape = draw(st.sampled_from([(0,), (1,), (2, 2), (5,), (3, 4), (2, 0), (2, 3)]))
             arrays[key] = np.resize(a, shape)
         elif op == "dtype":
             dtype = draw(st.sampled_from([np.float32, np.int8, np.bool_, np.complex64, "U3"]))
@@ -59,7 +63,8 @@ def mutated_arrays(draw) -> dict[str, np.ndarray]:
         elif op == "scalar":
             arrays[key] = np.array(draw(st.sampled_from([0, 1, 2, 65, -1, 1.5])))
         elif op == "text":
-            arrays[key] = np.array(draw(st.sampled_from(["mlp", "linear", "", "x" * 70])))
+            arrays[key] = np.array(draw(st.sampled_from(["mlp", "linear", "structured", "",
+                                                         "x" * 70])))
         else:
             arrays["layer0_wieght"] = arrays.pop(key)
     return arrays

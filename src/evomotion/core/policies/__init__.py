@@ -3,6 +3,7 @@
 - :mod:`.normalizer`: running observation statistics (ARS V2), explicit and mergeable;
 - :mod:`.spec`: the shared action map, parameter layout and batched forward pass;
 - :mod:`.linear`: static linear policies (ARS); :mod:`.mlp`: tanh MLPs;
+- :mod:`.structured`: a gait's phase generator (Fourier tape) plus linear feedback;
 - :mod:`.export`: ``policy.npz``, a numpy-only ``policy.py`` and ``policy.onnx``, and the
   reader of ``policy.npz``.
 
@@ -18,9 +19,11 @@ from typing import Any
 from evomotion.core.policies.linear import LinearSpec
 from evomotion.core.policies.mlp import MLPSpec
 from evomotion.core.policies.spec import PolicySpec
+from evomotion.core.policies.structured import StructuredSpec, fit_tape
 from evomotion.core.registry import lookup
 
-POLICIES: dict[str, type[PolicySpec]] = {"linear": LinearSpec, "mlp": MLPSpec}
+POLICIES: dict[str, type[PolicySpec]] = {"linear": LinearSpec, "mlp": MLPSpec,
+                                          "structured": StructuredSpec}
 
 
 def make_policy(kind: str, obs_dim: int, act_dim: int, **options: Any) -> PolicySpec:
@@ -34,4 +37,5 @@ def make_policy(kind: str, obs_dim: int, act_dim: int, **options: Any) -> Policy
     return cls(obs_dim=obs_dim, act_dim=act_dim, **options)
 
 
-__all__ = ["POLICIES", "LinearSpec", "MLPSpec", "PolicySpec", "make_policy"]
+__all__ = ["POLICIES", "LinearSpec", "MLPSpec", "PolicySpec", "StructuredSpec", "fit_tape",
+           "make_policy"]

@@ -4,12 +4,14 @@ Each takes the raw observation and returns the action (normalisation inside), so
 Gymnasium or robot loop runs it with nothing of evomotion installed.
 
 ``policy.npz`` (format version 1) holds, as named arrays: ``format_version`` (int), ``kind``
-("linear" or "mlp"), ``obs_mean[o]``, ``obs_std[o]``, ``clip_obs`` (+inf: none), ``n_layers``,
-``layer{k}_weight[out, in]`` and ``layer{k}_bias[out]`` (absent for a layer without one),
+("linear", "mlp" or "structured"), ``obs_mean[o]``, ``obs_std[o]``, ``clip_obs`` (+inf: none),
 ``output_tanh`` (0/1), ``action_scale[a]``, ``action_offset[a]``, ``action_low[a]``,
-``action_high[a]`` (±inf: no bound). ``policy.py`` is :mod:`.standalone` as text;
-``policy.onnx`` is built by :mod:`.onnx_graph`. :func:`read_policy_npz` reads a file back with
-one-line errors for whatever is wrong with it.
+``action_high[a]`` (±inf: no bound); then linear and MLP policies ``n_layers``,
+``layer{k}_weight[out, in]`` and ``layer{k}_bias[out]`` (absent for a layer without one), and
+structured ones (:mod:`.structured`) ``harmonics`` (H), ``phase_columns[2]`` (the raw sin and
+cos columns), ``tape_coef[a, 1 + 2H]`` and ``feedback_gain[a, o − 2]``. ``policy.py`` is
+:mod:`.standalone` as text; ``policy.onnx`` is built by :mod:`.onnx_graph`.
+:func:`read_policy_npz` reads a file back with one-line errors for whatever is wrong with it.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ from evomotion.core.policies import POLICIES
 from evomotion.core.policies.linear import LinearSpec
 from evomotion.core.policies.mlp import MLPSpec
 from evomotion.core.policies.spec import PolicySpec
+from evomotion.core.policies.structured import MAX_HARMONICS, StructuredSpec
 from evomotion.errors import FileFormatError
 from evomotion.npzio import read_npz
 from evomotion.outfile import atomic_write_bytes, atomic_write_text
@@ -33,8 +36,9 @@ FORMAT_VERSION = 1
 MAX_POLICY_BYTES = 64 * 1024 * 1024
 MAX_LAYERS = 64
 _KINDS: dict[str, type[PolicySpec]] = POLICIES
-_FIXED = ("format_version", "kind", "obs_mean", "obs_std", "clip_obs", "n_layers",
-          "output_tanh", "action_scale", "action_offset", "action_low", "action_high")
+_FIXED = ("format_version", "kind", "obs_mean", "obs_std", "clip_obs", "output_tanh",
+          "action_scale", "action_offset", "action_low", "action_high")
+_STRUCTURED = ("harmonics", "phase_columns", "tape_coef", "feedback_gain")
 
 
 @dataclass(frozen=True, eq=False)
@@ -66,6 +70,12 @@ def policy_arrays(spec: PolicySpec, params: np.ndarray, obs_mean: np.ndarray,
               "action_scale": np.asarray(spec.scale), "action_offset": np.asarray(spec.offset),
               "action_low": np.asarray(spec.low), "action_high": np.asarray(spec.high)}
     layers = spec.unflatten(p)
+    if isinstance(spec, StructuredSpec):
+        arrays.update(harmonics=np.array(spec.harmonics, dtype=np.int64),
+                      phase_columns=np.array(spec.phase_columns, dtype=np.int64),
+                      tape_coef=np.ascontiguousarray(layers[0][0]),
+                      feedback_gain=np.ascontiguousarray(layers[1][0]))
+        return arrays
     arrays["n_layers"] = np.array(len(layers), dtype=np.int64)
     for k, (W, b) in enumerate(layers):
         arrays[f"layer{k}_weight"] = np.ascontiguousarray(W)
@@ -134,14 +144,23 @@ def read_policy_npz(path: str | Path) -> ExportedPolicy:
     if kind_arr.shape != () or kind_arr.dtype.kind != "U" or str(kind_arr) not in _KINDS:
         raise bad("kind", f"must be one of {', '.join(sorted(_KINDS))}")
     cls = _KINDS[str(kind_arr)]
-    n_layers = _integer(arrays, "n_layers", bad)
-    if not 1 <= n_layers <= MAX_LAYERS or (cls is LinearSpec) != (n_layers == 1):
-        raise bad("n_layers", f"is {n_layers}, impossible for a {cls.kind} policy")
-    layers, known = _layers(arrays, n_layers, cls, bad)
+    if cls is StructuredSpec:
+        layers, known, options = _structured(arrays, bad)
+    else:
+        if "n_layers" not in arrays:
+            raise bad("n_layers", "is missing")
+        n_layers = _integer(arrays, "n_layers", bad)
+        if not 1 <= n_layers <= MAX_LAYERS or (cls is LinearSpec) != (n_layers == 1):
+            raise bad("n_layers", f"is {n_layers}, impossible for a {cls.kind} policy")
+        layers, known = _layers(arrays, n_layers, cls, bad)
+        known.add("n_layers")
+        options = {"bias": layers[0][1] is not None} if cls is LinearSpec else \
+            {"hidden": tuple(W.shape[0] for W, _ in layers[:-1])}
     extra = sorted(set(arrays) - set(_FIXED) - known)
     if extra:
         raise bad(extra[0][:60], "is not a key of a policy file")
-    o, a = layers[0][0].shape[1], layers[-1][0].shape[0]
+    a = layers[-1][0].shape[0]
+    o = layers[-1][0].shape[1] + 2 if cls is StructuredSpec else layers[0][0].shape[1]
     vec = {k: _floats(arrays, k, (o if k.startswith("obs") else a,), bad)
            for k in _FIXED if k.startswith(("obs_", "action_"))}
     for key in ("obs_mean", "obs_std", "action_scale", "action_offset"):
@@ -153,8 +172,6 @@ def read_policy_npz(path: str | Path) -> ExportedPolicy:
     tanh = arrays["output_tanh"]
     if tanh.shape != () or tanh.dtype.kind not in "biu" or bool(tanh) != cls.squash_output:
         raise bad("output_tanh", f"must be {int(cls.squash_output)} for a {cls.kind} policy")
-    options = {"bias": layers[0][1] is not None} if cls is LinearSpec else \
-        {"hidden": tuple(W.shape[0] for W, _ in layers[:-1])}
     try:
         spec = cls(obs_dim=o, act_dim=a, scale=vec["action_scale"],
                    offset=vec["action_offset"], low=vec["action_low"],
@@ -162,6 +179,35 @@ def read_policy_npz(path: str | Path) -> ExportedPolicy:
     except ValueError as e:
         raise FileFormatError(path, None, f"expected a valid policy file: {e}") from None
     return ExportedPolicy(spec, spec.flatten(layers), vec["obs_mean"], vec["obs_std"])
+
+
+def _structured(arrays: dict[str, np.ndarray], bad
+                ) -> tuple[list[tuple[np.ndarray, np.ndarray | None]], set[str], dict]:
+    """The checked tape and gains of a structured policy, its keys and its options."""
+    for key in _STRUCTURED:
+        if key not in arrays:
+            raise bad(key, "is missing")
+    h = _integer(arrays, "harmonics", bad)
+    if not 0 <= h <= MAX_HARMONICS:
+        raise bad("harmonics", f"is {h}, expected 0..{MAX_HARMONICS}")
+    cols = arrays["phase_columns"]
+    if cols.shape != (2,) or cols.dtype.kind not in "iu":
+        raise bad("phase_columns", f"must be two whole numbers, got {cols.dtype} of shape "
+                  f"{cols.shape}")
+    tape, gain = arrays["tape_coef"], arrays["feedback_gain"]
+    if tape.ndim != 2 or tape.shape[0] < 1 or tape.shape[1] != 1 + 2 * h:
+        raise bad("tape_coef", f"must be a matrix [a, {1 + 2 * h}], got shape {tape.shape}")
+    if gain.ndim != 2 or gain.shape[0] != tape.shape[0]:
+        raise bad("feedback_gain", f"must be a matrix [{tape.shape[0]}, o - 2], got shape "
+                  f"{gain.shape}")
+    layers: list[tuple[np.ndarray, np.ndarray | None]] = []
+    for key in ("tape_coef", "feedback_gain"):
+        W = _floats(arrays, key, arrays[key].shape, bad)
+        if not np.isfinite(W).all():
+            raise bad(key, "holds a non-finite number")
+        layers.append((W, None))
+    options = {"harmonics": h, "phase_columns": tuple(int(c) for c in cols)}
+    return layers, set(_STRUCTURED), options
 
 
 def _integer(arrays: dict[str, np.ndarray], key: str, bad) -> int:

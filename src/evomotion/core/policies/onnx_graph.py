@@ -8,6 +8,12 @@ Input ``observation`` float32 ``[batch, obs_dim]``, output ``action`` float32
     Mul(action_scale) -> Add(action_offset) -> Max(action_low) -> Min(action_high) -> action
 
 (``Clip`` takes scalar bounds only, hence ``Max``/``Min`` for the per-joint action bounds.)
+A structured policy (:mod:`.structured`) replaces the layers by its tape and gains::
+
+    Gather(observation, sin/cos column) -> s_1, c_1 [batch, 1]         (raw, not normalised)
+    s_{k+1} = Add(Mul(s_k, c_1), Mul(c_k, s_1)), c_{k+1} = Sub(Mul(c_k, c_1), Mul(s_k, s_1))
+    tape = a_0 + Σ_k Add(Mul(s_k, a_k), Mul(c_k, b_k))                  ([batch, act])
+    Gather(normalised, other columns) -> MatMul(Kᵀ) -> Add(tape)        (the feedback)
 Built with ``onnx.helper``; needs the ``onnx`` extra (``pip install evomotion[onnx]``).
 """
 
@@ -18,7 +24,8 @@ from typing import Any
 
 import numpy as np
 
-from evomotion.core.policies.spec import PolicySpec
+from evomotion.core.policies.spec import Layer, PolicySpec
+from evomotion.core.policies.structured import StructuredSpec
 
 OPSET = 17
 IR_VERSION = 8  # the IR version of opset 17 (ONNX 1.12): readable by older runtimes too
@@ -37,7 +44,9 @@ def policy_model(spec: PolicySpec, params: np.ndarray, obs_mean: np.ndarray,
     nodes: list[Any] = []
 
     def const(name: str, value) -> str:
-        inits.append(numpy_helper.from_array(np.asarray(value, dtype=np.float32), name))
+        a = np.asarray(value)  # indices stay int64, numbers become float32
+        inits.append(numpy_helper.from_array(
+            a if a.dtype == np.int64 else a.astype(np.float32), name))
         return name
 
     def node(op: str, inputs: list[str], output: str, **attrs) -> str:
@@ -50,6 +59,9 @@ def policy_model(spec: PolicySpec, params: np.ndarray, obs_mean: np.ndarray,
         h = node("Clip", [h, const("clip_low", -spec.clip_obs),
                           const("clip_high", spec.clip_obs)], "clipped")
     layers = spec.unflatten(np.asarray(params, dtype=np.float64))
+    if isinstance(spec, StructuredSpec):
+        h = _structured(spec, layers, h, const, node)
+        layers = []
     for k, (W, b) in enumerate(layers):
         if b is not None:
             h = node("Gemm", [h, const(f"layer{k}_weight", W), const(f"layer{k}_bias", b)],
@@ -73,3 +85,33 @@ def policy_model(spec: PolicySpec, params: np.ndarray, obs_mean: np.ndarray,
     model.ir_version = IR_VERSION
     onnx.checker.check_model(model)
     return model
+
+
+def _structured(spec: StructuredSpec, layers: list[Layer], normalised: str, const, node) -> str:
+    """The nodes of ``tape(φ) + K x`` (see the module doc); returns the output's name."""
+    (C, _), (K, _) = layers
+    i, j = spec.phase_columns  # type: ignore[misc]
+    s1 = node("Gather", ["observation", const("phase_sin_column", np.array([i], np.int64))],
+              "phase_sin_1", axis=1)
+    c1 = node("Gather", ["observation", const("phase_cos_column", np.array([j], np.int64))],
+              "phase_cos_1", axis=1)
+    y = const("tape_a0", C[:, 0])
+    s, c = s1, c1
+    for k in range(1, spec.harmonics + 1):
+        if k > 1:
+            sc, cs = node("Mul", [s, c1], f"sc_{k}"), node("Mul", [c, s1], f"cs_{k}")
+            cc, ss = node("Mul", [c, c1], f"cc_{k}"), node("Mul", [s, s1], f"ss_{k}")
+            s, c = node("Add", [sc, cs], f"phase_sin_{k}"), node("Sub", [cc, ss], f"phase_cos_{k}")
+        term_a = node("Mul", [s, const(f"tape_a{k}", C[:, 2 * k - 1])], f"tape_sin_{k}")
+        term_b = node("Mul", [c, const(f"tape_b{k}", C[:, 2 * k])], f"tape_cos_{k}")
+        y = node("Add", [y, node("Add", [term_a, term_b], f"tape_term_{k}")], f"tape_{k}")
+    if spec.harmonics == 0:  # a constant: broadcast it to [batch, act] through the clock
+        y = node("Add", [node("Mul", [s1, const("zero", np.zeros(1))], "zero_batch"), y],
+                 "tape_0")
+    if K.shape[1] == 0:
+        return y
+    x = node("Gather", [normalised, const("feedback_columns",
+                                          spec.feedback_columns.astype(np.int64))],
+             "feedback_input", axis=1)
+    fb = node("MatMul", [x, const("feedback_gain_t", K.T)], "feedback")
+    return node("Add", [y, fb], "structured_output")

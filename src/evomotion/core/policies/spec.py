@@ -1,5 +1,5 @@
 """What linear and MLP policies share: the action map, the flat parameter layout, the batched
-forward pass.
+forward pass (the structured policy, :mod:`.structured`, keeps the first two and has its own).
 
 A policy is a small frozen spec; its parameters are one flat float64 vector ``params[P]`` (what
 the optimizers see), laid out layer by layer as ``W[out, in]`` (row-major) then, where the layer
@@ -127,16 +127,9 @@ class PolicySpec:
 
     def act(self, params: np.ndarray, obs: np.ndarray, mean: np.ndarray, std: np.ndarray
             ) -> np.ndarray:
-        """``actions[n, a]`` of ``n`` policies ``params[n, P]`` on their ``obs[n, o]``."""
-        obs = np.asarray(obs, dtype=np.float64)
-        if obs.ndim != 2 or obs.shape[1] != self.obs_dim:
-            raise ValueError(f"obs has shape {obs.shape}, expected (n, {self.obs_dim})")
-        if np.shape(params)[:-1] != obs.shape[:1]:
-            raise ValueError(f"{np.shape(params)[0] if np.ndim(params) else 0} parameter rows "
-                             f"for {obs.shape[0]} observations")
-        if np.shape(mean) != (self.obs_dim,) or np.shape(std) != (self.obs_dim,):
-            raise ValueError(f"mean/std have shapes {np.shape(mean)}/{np.shape(std)}, "
-                             f"expected ({self.obs_dim},)")
+        """``actions[n, a]`` of ``n`` policies ``params[n, P]`` on their ``obs[n, o]``
+        (``mean``/``std``: one normaliser ``(o,)`` or one per row ``(n, o)``)."""
+        obs = self._check_act(params, obs, mean, std)
         h = self.normalise(obs, mean, std)
         layers = self.unflatten(params)
         for k, (W, b) in enumerate(layers):
@@ -146,6 +139,21 @@ class PolicySpec:
             if k < len(layers) - 1 or self.squash_output:
                 h = np.tanh(h)
         return np.clip(self.offset + self.scale * h, self.low, self.high)
+
+    def _check_act(self, params: np.ndarray, obs: np.ndarray, mean: np.ndarray,
+                   std: np.ndarray) -> np.ndarray:
+        """``obs`` as float64 ``[n, o]`` once the shapes of :meth:`act`'s arguments agree."""
+        obs = np.asarray(obs, dtype=np.float64)
+        if obs.ndim != 2 or obs.shape[1] != self.obs_dim:
+            raise ValueError(f"obs has shape {obs.shape}, expected (n, {self.obs_dim})")
+        if np.shape(params)[:-1] != obs.shape[:1]:
+            raise ValueError(f"{np.shape(params)[0] if np.ndim(params) else 0} parameter rows "
+                             f"for {obs.shape[0]} observations")
+        shapes = ((self.obs_dim,), obs.shape)
+        if np.shape(mean) not in shapes or np.shape(std) not in shapes:
+            raise ValueError(f"mean/std have shapes {np.shape(mean)}/{np.shape(std)}, "
+                             f"expected ({self.obs_dim},) or {obs.shape}")
+        return obs
 
     def act_one(self, params: np.ndarray, obs: np.ndarray, mean: np.ndarray, std: np.ndarray
                 ) -> np.ndarray:

@@ -9,8 +9,12 @@ standard input, one per line, numbers separated by commas or spaces): one action
 
 The observation is normalised with the stored running mean and std, clipped to ``±clip_obs``,
 passed through the layers (tanh between layers, and after the last one when ``output_tanh``),
-mapped to ``offset + scale * y`` and clipped to ``[low, high]``. Only numpy and the standard
-library are imported.
+mapped to ``offset + scale * y`` and clipped to ``[low, high]``. A "structured" policy's ``y``
+is instead ``tape(phi) + K x``: a Fourier series of the phase read from the RAW sin/cos
+columns ``phase_columns`` (``tape_coef[a, 1 + 2H]`` on ``1, sin phi, cos phi, ...,
+sin H phi, cos H phi``, the multiples by angle addition) plus the gains ``feedback_gain`` on the
+normalised observation without those two columns. Only numpy and the standard library are
+imported.
 """
 
 from __future__ import annotations
@@ -32,9 +36,13 @@ class Policy:
         self.mean = np.asarray(arrays["obs_mean"], dtype=np.float64)
         self.std = np.asarray(arrays["obs_std"], dtype=np.float64)
         self.clip_obs = float(arrays["clip_obs"])
-        n_layers = int(arrays["n_layers"])
         self.layers = []
-        for k in range(n_layers):
+        if self.kind == "structured":
+            self.harmonics = int(arrays["harmonics"])
+            self.phase_columns = [int(c) for c in arrays["phase_columns"]]
+            self.tape = np.asarray(arrays["tape_coef"], dtype=np.float64)
+            self.gain = np.asarray(arrays["feedback_gain"], dtype=np.float64)
+        for k in range(0 if self.kind == "structured" else int(arrays["n_layers"])):
             W = np.asarray(arrays[f"layer{k}_weight"], dtype=np.float64)
             b = arrays.get(f"layer{k}_bias")
             self.layers.append((W, None if b is None else np.asarray(b, dtype=np.float64)))
@@ -54,6 +62,9 @@ class Policy:
         h = (x - self.mean) / self.std
         if math.isfinite(self.clip_obs):
             h = np.clip(h, -self.clip_obs, self.clip_obs)
+        if self.kind == "structured":
+            h = self._structured(np.atleast_2d(x), np.atleast_2d(h)).reshape(
+                x.shape[:-1] + (self.act_dim,))
         for k, (W, b) in enumerate(self.layers):
             h = h @ W.T
             if b is not None:
@@ -61,6 +72,30 @@ class Policy:
             if k < len(self.layers) - 1 or self.output_tanh:
                 h = np.tanh(h)
         return np.clip(self.offset + self.scale * h, self.low, self.high)
+
+    def _structured(self, x, h):
+        """``tape(phi) + K h`` for raw ``x[n, o]`` and normalised ``h[n, o]``."""
+        i, j = self.phase_columns
+        s1, c1 = x[:, i], x[:, j]
+        features = [np.ones_like(s1)]
+        s, c = s1, c1
+        for k in range(1, self.harmonics + 1):
+            features += [s, c]
+            if k < self.harmonics:
+                s, c = s * c1 + c * s1, c * c1 - s * s1
+        y = _row_dot(self.tape, np.stack(features, axis=-1))
+        if self.gain.shape[1]:
+            keep = [k for k in range(self.obs_dim) if k not in (i, j)]
+            y = y + _row_dot(self.gain, h[:, keep])
+        return y
+
+
+def _row_dot(W, v):
+    """``sum_m W[a, m] v[n, m]`` summed in column order (``[n, a]``): the training code's bits."""
+    y = W[..., 0] * v[..., None, 0]
+    for m in range(1, W.shape[-1]):
+        y = y + W[..., m] * v[..., None, m]
+    return y
 
 
 def load(path="policy.npz") -> Policy:

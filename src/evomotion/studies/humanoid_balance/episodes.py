@@ -93,8 +93,9 @@ def run_episodes(sim: ClosedLoopSimulator, spec: PolicySpec, params: np.ndarray,
     acts = np.zeros(n, dtype=np.int64)
 
     def policy(rows: np.ndarray, obs: np.ndarray) -> np.ndarray:
-        x = (obs - mean[rows]) / std[rows]  # each row's own normaliser (ARS V2 line 5)
-        a = spec.act(params[rows], x, np.zeros(spec.obs_dim), np.ones(spec.obs_dim))
+        # each row's own normaliser (ARS V2 line 5); the raw obs, as a structured policy
+        # reads its phase columns unnormalised
+        a = spec.act(params[rows], obs, mean[rows], std[rows])
         sq[rows] += np.einsum("na,na->n", a, a) / a.shape[1]
         acts[rows] += 1
         return a

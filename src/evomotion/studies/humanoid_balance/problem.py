@@ -49,7 +49,9 @@ class HumanoidBalanceConfig:
     control_period_s: float = 0.02  # the policy's period (s), a whole number of physics steps
     #: the observation channels (sim/observations.py), comma-separated
     observations: str = "joint_pos,joint_vel,gravity,gyro,foot_contact"
-    policy: str = "linear"  # "linear" (ARS) or "mlp" (tanh hidden layers)
+    policy: str = "linear"  # "linear" (ARS), "mlp" (tanh hidden layers) or "structured"
+    harmonics: int = 2  # structured: sin/cos pairs of the phase tape per joint
+    phase_period_s: float = 1.0  # the phase observation's clock period (s)
     hidden: int = 32  # MLP: units per hidden layer
     layers: int = 2  # MLP: hidden layers
     normalize: bool = True  # ARS V2 observation normalisation (false: V1)
@@ -76,7 +78,13 @@ class HumanoidBalanceConfig:
                      lo_open=True)
         check_number("problem.control_period_s", self.control_period_s, lo=0.0, hi=1.0,
                      lo_open=True)
-        check_choice("problem.policy", self.policy, ("linear", "mlp"))
+        check_choice("problem.policy", self.policy, ("linear", "mlp", "structured"))
+        if self.policy == "structured" and "phase" not in self.channels():
+            raise InputError("problem.policy: the structured policy needs the phase "
+                             "observation: add phase to problem.observations")
+        check_number("problem.harmonics", self.harmonics, lo=0, hi=64, integer=True)
+        check_number("problem.phase_period_s", self.phase_period_s, lo=0.0, hi=MAX_DURATION_S,
+                     lo_open=True)
         check_number("problem.hidden", self.hidden, lo=1, hi=4096, integer=True)
         check_number("problem.layers", self.layers, lo=1, hi=8, integer=True)
         check_number("problem.action_scale", self.action_scale, lo=0.0, hi=10.0, lo_open=True)
@@ -132,7 +140,7 @@ class HumanoidBalanceProblem:
                              f"number of {r.name}'s {self.dt} s physics steps")
         self.control_steps = int(round(k))
         self.nstep = int(math.ceil(cfg.duration_s / self.dt))
-        self.obs_spec = ObservationSpec(cfg.channels())
+        self.obs_spec = ObservationSpec(cfg.channels(), phase_period_s=cfg.phase_period_s)
         threads = cfg.threads or max(1, min(os.cpu_count() or 1, 8))
         self.sim = ClosedLoopSimulator(r, self.obs_spec, self.control_steps, threads)
         self.obs_names = self.sim.observe.names
@@ -141,6 +149,10 @@ class HumanoidBalanceProblem:
         low, high = self.sim.lower - nominal, self.sim.upper - nominal
         options: dict[str, Any] = ({"hidden": (cfg.hidden,) * cfg.layers}
                                    if cfg.policy == "mlp" else {})
+        if cfg.policy == "structured":
+            names = list(self.obs_names)
+            options = {"harmonics": cfg.harmonics,
+                       "phase_columns": (names.index("phase:sin"), names.index("phase:cos"))}
         self.policy = make_policy(cfg.policy, self.obs_dim, self.act_dim,
                                   scale=cfg.action_scale, low=low, high=high,
                                   clip_obs=cfg.clip_obs, **options)

@@ -1,0 +1,165 @@
+"""Structured policies: a gait's phase generator (a Fourier tape) plus linear feedback.
+
+Phase-driven joint trajectories are how sinusoidal/CPG gaits are evolved: Yu et al. 2014
+("A survey on CPG-inspired control models and system implementation", ISRN Robotics), as
+summarised in ``/work/shared/reference/walking.md`` [P5], set each joint to
+``θ_j = θ_j⁰ + A_j sin(2πt/T + φ_j)`` and evolve ``T, A_j, φ_j, θ_j⁰``; walk engines close
+the loop by adding sensor terms to the phase-driven targets (B-Human [B1]: the low-passed pitch
+gyro x 0.05 added to the support ankle's pitch). Here both parts are one flat vector:
+
+    tape(φ)_j = a_j0 + Σ_{k=1..H} (a_jk sin kφ + b_jk cos kφ)      (a Fourier series in φ;
+                                                                   A sin(φ + φ_j) is H = 1)
+    y = tape(φ) + K x
+    action = clip(offset + scale * y, low, high)                   (no squashing, as linear)
+
+``φ = 2πt / phase_period_s`` is read from the observation's RAW ``phase:sin``/``phase:cos``
+columns (:mod:`evomotion.sim.observations`; ``phase_columns``), not normalised, and ``sin kφ``,
+``cos kφ`` follow by the angle-addition recurrence ``sin (k+1)φ = sin kφ cos φ + cos kφ sin φ``,
+``cos (k+1)φ = cos kφ cos φ − sin kφ sin φ`` (products and sums only, so numpy, ``policy.py``
+and ONNX compute the same thing). ``x`` is the ARS V2 normalised observation (Mania et al.
+2018, Algorithm 2 line 5, clipped to ``±clip_obs``) without the two phase columns; ``K`` the
+``act_dim x (obs_dim − 2)`` feedback gains.
+
+Parameters (``n_params = a (1 + 2H) + a (o − 2)``): the tape coefficients first, ``C[a, 1 + 2H]``
+row-major with row ``j = (a_j0, a_j1, b_j1, ..., a_jH, b_jH)`` (the weights of the features
+``f(φ) = (1, sin φ, cos φ, ..., sin Hφ, cos Hφ)``), then ``K`` row-major. Zero parameters give
+the nominal pose ``offset``. :func:`fit_tape` fits ``C`` to an open-loop gait's keyframe
+trajectory by least squares, :meth:`StructuredSpec.params_from_tape` makes it a start (K = 0).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+
+from evomotion.core.policies.spec import Layer, PolicySpec
+
+MAX_HARMONICS = 64
+
+
+def phase_features(sin_phi: np.ndarray, cos_phi: np.ndarray, harmonics: int) -> np.ndarray:
+    """``f[..., 1 + 2H] = (1, sin φ, cos φ, ..., sin Hφ, cos Hφ)`` by the angle-addition
+    recurrence from ``sin φ``, ``cos φ`` (any shape, broadcast)."""
+    s1, c1 = np.broadcast_arrays(np.asarray(sin_phi, np.float64), np.asarray(cos_phi, np.float64))
+    out = [np.ones_like(s1)]
+    s, c = s1, c1
+    for k in range(1, harmonics + 1):
+        out += [s, c]
+        if k < harmonics:
+            s, c = s * c1 + c * s1, c * c1 - s * s1
+    return np.stack(out, axis=-1)
+
+
+def _row_dot(W: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """``Σ_m W[..., a, m] v[..., m]`` summed in column order (not BLAS, whose order depends on
+    shapes and threads): the same bits whether ``W`` is one policy's or one per row, in any
+    memory layout (``policy.py`` sums alike); a loop over columns, never over individuals."""
+    y = W[..., 0] * v[..., None, 0]
+    for m in range(1, W.shape[-1]):
+        y = y + W[..., m] * v[..., None, m]
+    return y
+
+
+@dataclass(frozen=True, eq=False)
+class StructuredSpec(PolicySpec):
+    """``clip(offset + scale * (tape(φ) + K x), low, high)`` (see the module doc)."""
+
+    phase_columns: tuple[int, int] | None = None  # the (sin, cos) columns of the observation
+    harmonics: int = 2  # H: sin/cos pairs of the tape per action
+
+    kind: ClassVar[str] = "structured"
+    squash_output: ClassVar[bool] = False
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        h = self.harmonics
+        if isinstance(h, bool) or not isinstance(h, int | np.integer) or \
+                not 0 <= h <= MAX_HARMONICS:
+            raise ValueError(f"harmonics must be a whole number in 0..{MAX_HARMONICS}, got {h!r}")
+        object.__setattr__(self, "harmonics", int(h))
+        cols = self.phase_columns
+        if cols is None:
+            raise ValueError("the structured policy needs phase_columns: the observation's "
+                             "phase:sin and phase:cos columns")
+        try:
+            pair: tuple = tuple(cols)
+        except TypeError:
+            pair = (cols,)
+        if len(pair) != 2 or any(isinstance(c, bool) or not isinstance(c, int | np.integer)
+                                 for c in pair):
+            raise ValueError(f"phase_columns must be two column numbers (sin, cos), got {cols!r}")
+        i, j = int(pair[0]), int(pair[1])
+        if not (0 <= i < self.obs_dim and 0 <= j < self.obs_dim) or i == j:
+            raise ValueError(f"phase_columns must be two different columns in 0..{self.obs_dim - 1}"
+                             f", got {(i, j)}")
+        object.__setattr__(self, "phase_columns", (i, j))
+
+    @property
+    def n_features(self) -> int:
+        """``1 + 2H``: the tape's features per action."""
+        return 1 + 2 * self.harmonics
+
+    @property
+    def feedback_columns(self) -> np.ndarray:
+        """The observation columns ``x`` is made of: all but the two phase columns, in order."""
+        return np.setdiff1d(np.arange(self.obs_dim), np.asarray(self.phase_columns))
+
+    def layer_shapes(self) -> list[tuple[int, int]]:
+        """The tape ``C[a, 1 + 2H]`` then the gains ``K[a, o − 2]`` (no biases)."""
+        return [(self.act_dim, self.n_features), (self.act_dim, self.obs_dim - 2)]
+
+    def layer_has_bias(self, i: int) -> bool:
+        return False
+
+    def act(self, params: np.ndarray, obs: np.ndarray, mean: np.ndarray, std: np.ndarray
+            ) -> np.ndarray:
+        """``actions[n, a]``: each row's tape at its raw phase plus its gains on its normalised
+        observation (``mean``/``std``: ``(o,)`` or one per row ``(n, o)``)."""
+        obs = self._check_act(params, obs, mean, std)
+        (C, _), (K, _) = self.unflatten(params)
+        i, j = self.phase_columns  # type: ignore[misc]
+        f = phase_features(obs[:, i], obs[:, j], self.harmonics)
+        y = _row_dot(C, f)
+        if K.shape[-1]:
+            x = self.normalise(obs, mean, std)[:, self.feedback_columns]
+            y = y + _row_dot(K, x)
+        return np.clip(self.offset + self.scale * y, self.low, self.high)
+
+    def params_from_tape(self, coeffs: np.ndarray) -> np.ndarray:
+        """The flat parameters of the tape ``coeffs[a, 1 + 2H]`` with zero feedback gains."""
+        C = np.asarray(coeffs, dtype=np.float64)
+        if C.shape != (self.act_dim, self.n_features) or not np.isfinite(C).all():
+            raise ValueError(f"tape coefficients must be finite, of shape "
+                             f"({self.act_dim}, {self.n_features}), got {C.shape}")
+        layers: list[Layer] = [(C, None), (np.zeros((self.act_dim, self.obs_dim - 2)), None)]
+        return self.flatten(layers)
+
+
+def fit_tape(times_s: np.ndarray, targets: np.ndarray, period_s: float, harmonics: int
+             ) -> np.ndarray:
+    """Least-squares tape ``coeffs[a, 1 + 2H]`` (rows as in the module doc) through the samples
+    ``targets[T, a]`` at ``times_s[T]``, with ``φ = 2π t / period_s``. Fit the policy's output
+    ``y``: for a pose trajectory ``q`` that is ``(q − offset) / scale``."""
+    t = np.asarray(times_s, dtype=np.float64)
+    q = np.asarray(targets, dtype=np.float64)
+    if isinstance(harmonics, bool) or not isinstance(harmonics, int | np.integer) or \
+            not 0 <= harmonics <= MAX_HARMONICS:
+        raise ValueError(f"harmonics must be a whole number in 0..{MAX_HARMONICS}, "
+                         f"got {harmonics!r}")
+    if not (math.isfinite(period_s) and period_s > 0):
+        raise ValueError(f"period_s must be finite and > 0, got {period_s!r}")
+    if t.ndim != 1 or q.ndim != 2 or q.shape[0] != t.size:
+        raise ValueError(f"times_s[T] and targets[T, a] expected, got shapes {t.shape}, "
+                         f"{q.shape}")
+    if not (np.isfinite(t).all() and np.isfinite(q).all()):
+        raise ValueError("times_s and targets must be finite")
+    phi = 2.0 * np.pi * t / float(period_s)
+    F = phase_features(np.sin(phi), np.cos(phi), int(harmonics))
+    if np.linalg.matrix_rank(F) < F.shape[1]:
+        raise ValueError(f"{t.size} samples do not determine {F.shape[1]} tape coefficients "
+                         f"(need at least {F.shape[1]} distinct phases)")
+    coeffs, *_ = np.linalg.lstsq(F, q, rcond=None)
+    return np.ascontiguousarray(coeffs.T)
