@@ -106,6 +106,29 @@ def test_run_writes_the_policy_and_its_description(run_dir):
     assert info["control_period_s"] == 0.02 and info["control_steps"] == 5
 
 
+def test_run_writes_the_naoqi_runner_beside_the_policy(run_dir):
+    """``naoqi/``: the runner and its policy.json, whose policy is ``policy.py``'s."""
+    import importlib.util
+
+    folder = run_dir / "naoqi"
+    record = json.loads((folder / "policy.json").read_text())
+    info = json.loads((run_dir / "policy.json").read_text())
+    assert [c["name"] for c in record["observation"]] == info["observations"]
+    assert record["joints"] == info["joints"] and record["control_period_s"] == 0.02
+    assert "joint_vel" in record["approximated"]  # the NAO has no joint velocity sensor
+    mods = []
+    for name, path in (("run_policy", run_dir / "policy.py"),
+                       ("run_runner", folder / "policy_runner.py")):
+        spec = importlib.util.spec_from_file_location(name, path)
+        mods.append(importlib.util.module_from_spec(spec))
+        spec.loader.exec_module(mods[-1])
+    standalone = mods[0].load(run_dir / "policy.npz")
+    runner = mods[1].Policy(record)
+    obs = np.random.default_rng(0).normal(0.0, 1.0, (10, len(record["obs_mean"])))
+    np.testing.assert_allclose([runner(list(x)) for x in obs], standalone(obs), rtol=0,
+                               atol=1e-12)
+
+
 def test_compare_prints_a_table_and_json(run_dir):
     text = compare_command(run_dir, worlds=3, push_ns=4.0)
     assert "| evolved policy |" in text and "| stand still (open loop) |" in text

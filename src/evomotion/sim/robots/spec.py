@@ -83,6 +83,8 @@ CAPABILITIES = {
     "speed_limits": "its motors' no-load speeds (motions checked against them)",
     "webots_names": "Webots/NAOqi joint names (Webots .motion files as the robot plays them)",
     "naoqi_export": "export of motions to NAOqi (a Python script for the real robot)",
+    "naoqi_policy": "export of closed-loop policies to NAOqi (a runner script for the real "
+                    "robot)",
 }
 #: the walk study's gait roles per kind: required, optional; each lists one channel per leg
 #: (biped: left, right; quadruped: front left, front right, hind left, hind right), a

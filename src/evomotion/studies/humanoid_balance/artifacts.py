@@ -45,8 +45,35 @@ def write_policy(ctx: Any) -> None:
         write_policy_files(ctx, {POLICY_JSON: policy_info(ctx.problem)})
 
 
+def write_naoqi(ctx: Any) -> None:
+    """``naoqi/`` beside ``policy.npz`` (``policy_runner.py`` + its ``policy.json``) through the
+    robot's ``naoqi_policy`` capability (the NAO); a policy the NAO cannot run (it reads a
+    channel no NAO sensor measures) is one log line, not a failed run."""
+    from evomotion.core.policies.export import read_policy_npz
+    from evomotion.errors import InputError
+
+    p = ctx.problem
+    npz = ctx.out_dir / "policy.npz" if ctx.out_dir is not None else None
+    if p is None or npz is None or not npz.is_file() or not p.robot.has("naoqi_policy"):
+        return
+    info = policy_info(p)
+    export = p.robot.capability("naoqi_policy", "humanoid-balance's NAOqi export")
+    try:
+        export.write_naoqi_policy(ctx.out_dir / "naoqi", read_policy_npz(npz), p.obs_names,
+                                  info["joints"], info["nominal_rad"], info["lower_rad"],
+                                  info["upper_rad"], p.cfg.control_period_s,
+                                  p.obs_spec.phase_period_s, info["nominal_pose_all_actuators"])
+    except InputError as e:
+        ctx.log(f"naoqi/ not written: {e}")
+        return
+    notes = export.approximations(p.obs_names)
+    ctx.log("naoqi/policy_runner.py + policy.json: run the policy on a NAO (Python 2.7 or 3)"
+            + (f"; approximated on the robot: {'; '.join(notes)}" if notes else ""))
+
+
 def finalize(ctx: Any) -> int | None:
     write_policy(ctx)
+    write_naoqi(ctx)
     s = ctx.state
     if s is not None and s.best_cost < float("inf"):
         ctx.log(f"humanoid-balance: best centre score {-s.best_cost:.3f} after "

@@ -1,8 +1,8 @@
 """The NAO H25 robot in one folder: MJCF (``nao_h25.xml``, sources in ``README.md``), spec
-(``nao.toml``), constants, leg kinematics, Webots motions, replay, NAOqi export.
+(``nao.toml``), constants, leg kinematics, Webots motions, replay, NAOqi exports.
 
 The spec declares this folder's code as the NAO's capabilities (``leg_ik``, ``speed_limits``,
-``webots_names``, ``naoqi_export``; :mod:`evomotion.sim.robots`).
+``webots_names``, ``naoqi_export``, ``naoqi_policy``; :mod:`evomotion.sim.robots`).
 
 - :mod:`.constants`: joint names, initial pose, leg lengths, masses, fall thresholds (SI);
 - :mod:`.model`: loading the MJCF, initial pose/state, ``qpos``/``qvel`` addresses by name;
@@ -10,7 +10,9 @@ The spec declares this folder's code as the NAO's capabilities (``leg_ik``, ``sp
 - :mod:`.leg_ik`: closed-form leg inverse/forward kinematics;
 - :mod:`.joint_limits`: the motors' no-load speeds, motions checked against them;
 - :mod:`.replay`: open-loop replay of a ``.motion`` (``evomotion replay``);
-- :mod:`.export`: motions exported to NAOqi; ``motions/``: Webots' NAO motions (Apache-2.0).
+- :mod:`.export`: motions exported to NAOqi; ``motions/``: Webots' NAO motions (Apache-2.0);
+- :mod:`.policy_export`: closed-loop policies exported to NAOqi (``naoqi/``), run by
+  :mod:`.policy_runner` (a standard-library script for the robot's Python 2.7 or Python 3).
 
 The constants and the model functions are re-exported here (``from evomotion.sim.robots
 import nao; nao.load_model()``); the other modules are imported by name.

@@ -1,0 +1,190 @@
+"""Closed-loop policies exported for a real NAO: ``naoqi/policy_runner.py`` + ``policy.json``.
+
+:func:`write_naoqi_policy` takes an exported policy (``policy.npz`` read back with
+:func:`~evomotion.core.policies.export.read_policy_npz`), the run's observation names
+(:func:`~evomotion.sim.observations.observation_names`: ``channel:item``) and the driven
+joints with their nominal pose and target bounds, and writes a folder with
+:mod:`.policy_runner` (a standard-library script for NAOqi 2.8's Python 2.7 or Python 3) and
+the ``policy.json`` it reads (:data:`FORMAT`):
+
+- the policy as a generic layer list (``policy.npz``'s arrays: ``{"weight": [[out][in]],
+  "bias": [out] | null, "activation": "tanh" | "none"}``), normaliser, ``clip_obs``, action map
+  (``null``: no bound / no clipping);
+- per observation column its source on the NAO: an ALMemory key (``joint_pos``:
+  ``Device/SubDeviceList/<J>/Position/Sensor/Value``; ``gyro``:
+  ``.../InertialSensor/Gyroscope{X,Y,Z}/Sensor/Value``; ``roll_pitch``: ``.../AngleX``,
+  ``.../AngleY``), ``gravity`` (from AngleX/AngleY), ``contact`` (the foot's
+  ``FSR/TotalWeight`` above :data:`CONTACT_THRESHOLD_KG`), ``diff`` (``joint_vel``: the NAO
+  measures no joint velocity; a finite difference of the positions, an approximation),
+  the runner's clock (``phase``), ``--command`` (``command``);
+- the joints (DCM ``Position/Actuator`` keys), nominal pose, bounds, control period, and the
+  whole nominal pose (ALMotion names) the robot goes to before the loop.
+
+A policy reading ``torso_velocity`` or ``torso_height`` (no NAO sensor measures them) is
+refused with one :class:`~evomotion.errors.InputError` line naming them, and so is an action
+on ``RHipYawPitch`` (the NAO has one hip yaw-pitch motor, driven as ``LHipYawPitch``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from evomotion.core.policies.export import ExportedPolicy, policy_arrays
+from evomotion.errors import InputError
+from evomotion.outfile import atomic_write_text, write_json
+from evomotion.textio import decode_utf8, read_file_bytes
+
+FORMAT = "evomotion-naoqi-policy/1"
+RUNNER = "policy_runner.py"
+POLICY_JSON = "policy.json"
+#: a foot touches the floor when its FSRs carry more than this (kg; an assumption: the NAO
+#: standing puts ~2.6 kg on each foot, a swing foot ~0)
+CONTACT_THRESHOLD_KG = 0.3
+UNMEASURED = {"torso_velocity": "the torso's linear velocity",
+              "torso_height": "the torso's height above the floor"}
+APPROXIMATED = {"joint_vel": "finite difference of the joint angles over the measured period "
+                             "(the NAO has no joint velocity sensor)"}
+_DEV = "Device/SubDeviceList"
+_IMU = f"{_DEV}/InertialSensor"
+#: the NAO's feet (its spec's ``[feet]`` roles, or the FSR groups' names) -> FSR group
+FEET = {"left": "LFoot", "right": "RFoot", "LFoot": "LFoot", "RFoot": "RFoot"}
+ROLL_KEY, PITCH_KEY = f"{_IMU}/AngleX/Sensor/Value", f"{_IMU}/AngleY/Sensor/Value"
+
+
+def joint_key(joint: str) -> str:
+    """The ALMemory key of a joint's measured angle (rad)."""
+    return f"{_DEV}/{joint}/Position/Sensor/Value"
+
+
+def fsr_key(foot: str) -> str:
+    """The ALMemory key of a foot's FSR total weight (kg); ``foot``: ``LFoot``/``RFoot``."""
+    return f"{_DEV}/{foot}/FSR/TotalWeight/Sensor/Value"
+
+
+def observation_sources(names: Sequence[str]) -> list[dict[str, Any]]:
+    """Each observation column's source on the NAO (see the module doc)."""
+    bad = sorted({n.split(":", 1)[0] for n in names} & set(UNMEASURED))
+    if bad:
+        raise InputError(f"NAOqi export: the policy reads {', '.join(bad)}, which no NAO sensor "
+                         f"measures ({'; '.join(UNMEASURED[b] for b in bad)}); evolve it "
+                         "without them")
+    out = []
+    for name in names:
+        channel, _, item = name.partition(":")
+        col: dict[str, Any] = {"name": name}
+        if channel == "joint_pos":
+            col.update(source="memory", key=joint_key(item))
+        elif channel == "joint_vel":
+            col.update(source="diff", key=joint_key(item))
+        elif channel == "gyro" and item in ("x", "y", "z"):
+            col.update(source="memory", key=f"{_IMU}/Gyroscope{item.upper()}/Sensor/Value")
+        elif channel == "roll_pitch" and item in ("roll", "pitch"):
+            col.update(source="memory", key=ROLL_KEY if item == "roll" else PITCH_KEY)
+        elif channel == "gravity" and item in ("x", "y", "z"):
+            col.update(source="gravity", axis="xyz".index(item))
+        elif channel == "foot_contact" and item in FEET:
+            col.update(source="contact", key=fsr_key(FEET[item]))
+        elif channel == "phase" and item in ("sin", "cos"):
+            col.update(source=f"phase_{item}")
+        elif channel == "command" and item.isdigit():
+            col.update(source="command", index=int(item))
+        else:
+            raise InputError(f"NAOqi export: observation {name!r} has no NAO source")
+        out.append(col)
+    return out
+
+
+def policy_layers(policy: ExportedPolicy) -> tuple[dict[str, Any], list[dict[str, Any]]]:
+    """(normaliser and action map, generic layer list) of ``policy`` from the arrays of
+    ``policy.npz`` (:func:`~evomotion.core.policies.export.policy_arrays`)."""
+    a = policy_arrays(policy.spec, policy.params, policy.obs_mean, policy.obs_std)
+    if "n_layers" not in a:
+        raise InputError(f"NAOqi export: the runner runs layered policies (linear, MLP); a "
+                         f"{policy.spec.kind} policy has no layer list")
+    n, tanh_last = int(a["n_layers"]), bool(a["output_tanh"])
+    layers = [{"weight": a[f"layer{k}_weight"],
+               "bias": a.get(f"layer{k}_bias"),
+               "activation": "tanh" if k < n - 1 or tanh_last else "none"} for k in range(n)]
+    head = {"obs_mean": a["obs_mean"], "obs_std": a["obs_std"],
+            "clip_obs": float(a["clip_obs"]), "action_scale": a["action_scale"],
+            "action_offset": a["action_offset"], "action_low": a["action_low"],
+            "action_high": a["action_high"]}
+    return head, layers
+
+
+def naoqi_policy_record(policy: ExportedPolicy, observation_names: Sequence[str],
+                        joints: Sequence[str], nominal_rad: Sequence[float],
+                        lower_rad: Sequence[float], upper_rad: Sequence[float],
+                        control_period_s: float, phase_period_s: float = 0.0,
+                        nominal_pose: dict[str, float] | None = None,
+                        contact_threshold_kg: float = CONTACT_THRESHOLD_KG) -> dict[str, Any]:
+    """The runner's ``policy.json`` record (see the module doc); one InputError line for a
+    policy the NAO cannot run."""
+    names, joints = list(observation_names), list(joints)
+    if len(names) != policy.spec.obs_dim:
+        raise InputError(f"NAOqi export: {len(names)} observation names for a policy of "
+                         f"{policy.spec.obs_dim} inputs")
+    if len(joints) != policy.spec.act_dim or not (len(nominal_rad) == len(lower_rad) ==
+                                                  len(upper_rad) == len(joints)):
+        raise InputError(f"NAOqi export: the policy sets {policy.spec.act_dim} joints; got "
+                         f"{len(joints)} joints and {len(nominal_rad)}/{len(lower_rad)}/"
+                         f"{len(upper_rad)} nominal/lower/upper angles")
+    if "RHipYawPitch" in joints:
+        raise InputError("NAOqi export: the policy drives RHipYawPitch; the NAO has one hip "
+                         "yaw-pitch motor (LHipYawPitch)")
+    if not 0.01 - 1e-9 <= float(control_period_s) <= 0.02 + 1e-9:
+        raise InputError(f"NAOqi export: control period {control_period_s} s; the runner "
+                         "sends targets every 10-20 ms")
+    head, layers = policy_layers(policy)
+    pose = dict(nominal_pose) if nominal_pose else dict(zip(joints, map(float, nominal_rad)))
+    pose.pop("RHipYawPitch", None)
+    used = sorted({n.split(":", 1)[0] for n in names} & set(APPROXIMATED))
+    return {"format": FORMAT, **head, "layers": layers,
+            "observation": observation_sources(names),
+            "approximated": {c: APPROXIMATED[c] for c in used},
+            "roll_key": ROLL_KEY, "pitch_key": PITCH_KEY,
+            "contact_threshold_kg": float(contact_threshold_kg),
+            "phase_period_s": float(phase_period_s),
+            "control_period_s": float(control_period_s),
+            "joints": joints, "nominal_rad": np.asarray(nominal_rad, float),
+            "lower_rad": np.asarray(lower_rad, float), "upper_rad": np.asarray(upper_rad, float),
+            "nominal_pose": pose}
+
+
+def runner_source() -> str:
+    """The text of :mod:`.policy_runner` (written out as ``policy_runner.py``)."""
+    src = Path(__file__).with_name(RUNNER)
+    return decode_utf8(read_file_bytes(src, "NAOqi policy runner"), src)
+
+
+def write_naoqi_policy(folder: str | Path, policy: ExportedPolicy,
+                       observation_names: Sequence[str], joints: Sequence[str],
+                       nominal_rad: Sequence[float], lower_rad: Sequence[float],
+                       upper_rad: Sequence[float], control_period_s: float,
+                       phase_period_s: float = 0.0,
+                       nominal_pose: dict[str, float] | None = None) -> dict[str, Path]:
+    """``folder/policy_runner.py`` and ``folder/policy.json`` (made with its parent's
+    permission, i.e. ``folder`` may be new); everything is checked before anything is
+    written."""
+    record = naoqi_policy_record(policy, observation_names, joints, nominal_rad, lower_rad,
+                                 upper_rad, control_period_s, phase_period_s, nominal_pose)
+    folder = Path(folder)
+    return {"json": write_json(folder / POLICY_JSON, record, "NAOqi policy file", mkdir=True,
+                               indent=1),
+            "runner": atomic_write_text(folder / RUNNER, runner_source(),
+                                        "NAOqi policy runner", mkdir=True)}
+
+
+def approximations(observation_names: Sequence[str]) -> list[str]:
+    """One note per channel the NAO approximates (``joint_vel``), for logs and reports."""
+    used = sorted({n.split(":", 1)[0] for n in observation_names} & set(APPROXIMATED))
+    return [f"{c}: {APPROXIMATED[c]}" for c in used]
+
+
+__all__ = ["APPROXIMATED", "CONTACT_THRESHOLD_KG", "FEET", "FORMAT", "UNMEASURED", "approximations",
+           "fsr_key", "joint_key", "naoqi_policy_record", "observation_sources",
+           "policy_layers", "runner_source", "write_naoqi_policy"]

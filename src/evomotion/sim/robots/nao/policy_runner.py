@@ -1,0 +1,268 @@
+#!/usr/bin/env python
+# -*- coding: utf-8 -*-
+# ruff: noqa: UP004, UP009, UP010, UP024, UP025, UP031, UP032, SIM108
+"""Run an evomotion closed-loop policy on a real NAO through NAOqi (written by evomotion).
+
+    python policy_runner.py [policy.json] [--ip 127.0.0.1] [--port 9559] [--seconds 10]
+                            [--period-ms 20] [--command vx,vy,w] [--dry-run]
+
+One file, the standard library only (no numpy, no evomotion): it runs under NAOqi 2.8's own
+Python 2.7 on the robot and under Python 3 with the ``naoqi`` SDK module on a PC. Every control
+period it reads the sensors with ONE ``ALMemory.getListData(keys)`` call, builds the
+observation as evomotion's simulator does (``policy.json`` lists each column's source), runs
+the policy (normalise, clip, layers with tanh, ``offset + scale * y``, clip) and sends
+``clip(nominal + action, lower, upper)`` to the joints through a DCM "timed commands" alias
+(``setAlias``, time ``dcm.getTime(delay_ms)``).
+
+Sources per observation column: ``memory`` (an ALMemory value as it is: joint angles, gyro,
+AngleX/AngleY), ``diff`` (joint velocity: the NAO has no velocity sensor, so the change of the
+position over the measured period; 0 on the first step), ``gravity`` (``R^T (0, 0, -1)`` from
+AngleX = roll, AngleY = pitch, ZYX convention: ``(sin p, -sin r cos p, -cos r cos p)``),
+``contact`` (1 when a foot's FSR total weight in kg is above ``contact_threshold_kg``, else
+0), ``phase_sin``/``phase_cos`` (the runner's own clock from the loop's start), ``command``
+(``--command``).
+
+Before the loop: the stiffness of the driven joints is set to 1 and the robot goes to the
+nominal pose (ALMotion); ``--dry-run`` sends nothing and prints the targets. Ctrl-C ends the
+loop holding the last targets: the stiffness is NOT released, a standing NAO without
+stiffness falls (use Choregraphe or ``ALMotion.rest()`` to sit it down).
+"""
+
+from __future__ import division, print_function
+
+import argparse
+import json
+import math
+import os
+import sys
+import time
+
+FORMAT = "evomotion-naoqi-policy/1"
+ALIAS = "evomotion_policy_targets"
+_now = getattr(time, "monotonic", time.time)  # Python 2.7 has no time.monotonic
+
+
+def _finite(x):
+    return not (math.isinf(x) or math.isnan(x))
+
+
+def _bound(values, default):
+    """JSON numbers with ``null`` for "no bound" (``default``: -inf or +inf)."""
+    return [default if v is None else float(v) for v in values]
+
+
+class Policy(object):
+    """``policy(obs) -> action``: normalise, clip, layers (tanh between, and after the last
+    with ``output_tanh``), ``offset + scale * y``, clipped to ``[low, high]``."""
+
+    def __init__(self, record):
+        self.mean = [float(v) for v in record["obs_mean"]]
+        self.std = [float(v) for v in record["obs_std"]]
+        clip = record.get("clip_obs")
+        self.clip_obs = None if clip is None else float(clip)
+        self.layers = []
+        for layer in record["layers"]:
+            W = [[float(v) for v in row] for row in layer["weight"]]
+            b = layer.get("bias")
+            self.layers.append((W, None if b is None else [float(v) for v in b],
+                                layer["activation"]))
+        self.scale = [float(v) for v in record["action_scale"]]
+        self.offset = [float(v) for v in record["action_offset"]]
+        self.low = _bound(record["action_low"], -float("inf"))
+        self.high = _bound(record["action_high"], float("inf"))
+
+    def __call__(self, obs):
+        h = [(x - m) / s for x, m, s in zip(obs, self.mean, self.std)]
+        if self.clip_obs is not None:
+            c = self.clip_obs
+            h = [min(max(v, -c), c) for v in h]
+        for W, b, activation in self.layers:
+            out = [math.fsum(w * v for w, v in zip(row, h)) for row in W]
+            if b is not None:
+                out = [o + bi for o, bi in zip(out, b)]
+            if activation == "tanh":
+                out = [math.tanh(o) for o in out]
+            elif activation != "none":
+                raise ValueError("unknown activation %r" % (activation,))
+            h = out
+        return [min(max(o + s * y, lo), hi) for o, s, y, lo, hi
+                in zip(self.offset, self.scale, h, self.low, self.high)]
+
+
+class Observer(object):
+    """Builds the observation from one ``getListData`` answer (see the module doc)."""
+
+    def __init__(self, record, command=None):
+        self.columns = record["observation"]
+        self.roll_key, self.pitch_key = record["roll_key"], record["pitch_key"]
+        self.threshold = float(record["contact_threshold_kg"])
+        self.phase_period = float(record.get("phase_period_s") or 0.0)
+        self.command = list(command or [])
+        keys = []
+        for col in self.columns:
+            if col["source"] in ("memory", "diff", "contact") and str(col["key"]) not in keys:
+                keys.append(str(col["key"]))
+        if any(c["source"] == "gravity" for c in self.columns):
+            for k in (str(self.roll_key), str(self.pitch_key)):
+                if k not in keys:
+                    keys.append(k)
+        self.keys = keys
+        self.index = dict((k, i) for i, k in enumerate(keys))
+        need = 1 + max([int(c["index"]) for c in self.columns if c["source"] == "command"]
+                       or [-1])
+        if len(self.command) < need:
+            raise ValueError("the policy reads %d command values: give --command" % need)
+        self.last = None  # (time s, positions by key) of the previous step
+
+    def __call__(self, values, t):
+        """The observation of sensor ``values`` (in :attr:`keys` order) at time ``t`` (s)."""
+        v = [float(x) for x in values]
+        if len(v) != len(self.keys):
+            raise ValueError("ALMemory returned %d values for %d keys" % (len(v), len(self.keys)))
+        prev = self.last
+        dt = None if prev is None else t - prev[0]
+        g = None
+        obs = []
+        for col in self.columns:
+            src = col["source"]
+            if src == "memory":
+                obs.append(v[self.index[col["key"]]])
+            elif src == "diff":
+                i = self.index[col["key"]]
+                obs.append(0.0 if prev is None or dt <= 0 else (v[i] - prev[1][i]) / dt)
+            elif src == "contact":
+                obs.append(1.0 if v[self.index[col["key"]]] > self.threshold else 0.0)
+            elif src == "gravity":
+                if g is None:
+                    g = gravity(v[self.index[self.roll_key]], v[self.index[self.pitch_key]])
+                obs.append(g[int(col["axis"])])
+            elif src in ("phase_sin", "phase_cos"):
+                angle = 2.0 * math.pi * t / self.phase_period
+                obs.append(math.sin(angle) if src == "phase_sin" else math.cos(angle))
+            elif src == "command":
+                obs.append(float(self.command[int(col["index"])]))
+            else:
+                raise ValueError("unknown observation source %r" % (src,))
+        self.last = (t, v)
+        return obs
+
+
+def gravity(roll, pitch):
+    """``R^T (0, 0, -1)`` for ``R = Rz(yaw) Ry(pitch) Rx(roll)`` (yaw drops out)."""
+    cp = math.cos(pitch)
+    return [math.sin(pitch), -math.sin(roll) * cp, -math.cos(roll) * cp]
+
+
+class Runner(object):
+    """One control loop: ``memory`` (ALMemory), ``dcm`` (DCM), ``motion`` (ALMotion) proxies,
+    ``clock()`` in seconds, ``sleep(s)``; :meth:`step` is one control period."""
+
+    def __init__(self, record, memory, dcm, motion, command=None, clock=_now,
+                 sleep=time.sleep, dry_run=False, delay_ms=0):
+        if record.get("format") != FORMAT:
+            raise ValueError("policy.json: format %r, this runner reads %r"
+                             % (record.get("format"), FORMAT))
+        self.record = record
+        self.policy = Policy(record)
+        self.observe = Observer(record, command)
+        self.joints = [str(j) for j in record["joints"]]
+        self.nominal = [float(v) for v in record["nominal_rad"]]
+        self.lower = _bound(record["lower_rad"], -float("inf"))
+        self.upper = _bound(record["upper_rad"], float("inf"))
+        self.memory, self.dcm, self.motion = memory, dcm, motion
+        self.clock, self.sleep = clock, sleep
+        self.dry_run, self.delay_ms = dry_run, int(delay_ms)
+        self.t0 = None
+        self.last_targets = None
+
+    def start(self, pose_speed=0.1):
+        """Stiffness on, the nominal pose, the DCM alias (nothing sent with ``dry_run``)."""
+        if not self.dry_run:
+            pose = self.record["nominal_pose"]
+            names = [str(n) for n in pose]
+            self.motion.setStiffnesses(names, 1.0)
+            self.motion.angleInterpolationWithSpeed(names, [float(pose[n]) for n in pose],
+                                                    float(pose_speed))
+            keys = ["Device/SubDeviceList/%s/Position/Actuator/Value" % j for j in self.joints]
+            self.dcm.createAlias([ALIAS, keys])
+        self.t0 = self.clock()
+
+    def step(self):
+        """Read the sensors, run the policy, send (and return) the joint targets."""
+        values = self.memory.getListData(self.observe.keys)
+        obs = self.observe(values, self.clock() - self.t0)
+        action = self.policy(obs)
+        targets = [min(max(n + (0.0 if math.isnan(a) else a), lo), hi) for n, a, lo, hi
+                   in zip(self.nominal, action, self.lower, self.upper)]
+        if not self.dry_run:
+            when = self.dcm.getTime(self.delay_ms)
+            self.dcm.setAlias([ALIAS, "ClearAll", "time-separate", 0, [when],
+                               [[t] for t in targets]])
+        self.last_targets = targets
+        return targets
+
+    def run(self, seconds, period_s, on_step=None):
+        """``step`` every ``period_s`` for ``seconds`` (Ctrl-C: stop, holding the last
+        targets); the number of steps and of late ones."""
+        steps = late = 0
+        deadline = self.clock()
+        try:
+            while steps * period_s < seconds:
+                targets = self.step()
+                steps += 1
+                if on_step is not None:
+                    on_step(targets)
+                deadline += period_s
+                wait = deadline - self.clock()
+                if wait > 0:
+                    self.sleep(wait)
+                else:
+                    late += 1
+                    deadline = self.clock()
+        except KeyboardInterrupt:
+            print("stopped: holding the last targets, stiffness on", file=sys.stderr)
+        return steps, late
+
+
+def load(path):
+    with open(path) as fh:
+        return json.load(fh)
+
+
+def main(argv=None):
+    here = os.path.dirname(os.path.abspath(__file__))
+    p = argparse.ArgumentParser(description="Run an evomotion policy on a NAO (NAOqi DCM).")
+    p.add_argument("policy", nargs="?", default=os.path.join(here, "policy.json"))
+    p.add_argument("--ip", default="127.0.0.1")
+    p.add_argument("--port", type=int, default=9559)
+    p.add_argument("--seconds", type=float, default=10.0)
+    p.add_argument("--period-ms", type=float, default=None,
+                   help="control period (10-20 ms; default the policy's)")
+    p.add_argument("--command", default="", help="vx,vy,w: the command channel's values")
+    p.add_argument("--dry-run", action="store_true", help="print targets, send nothing")
+    args = p.parse_args(argv)
+    try:
+        record = load(args.policy)
+        period = (args.period_ms / 1000.0 if args.period_ms is not None
+                  else float(record["control_period_s"]))
+        if not 0.01 <= period <= 0.02 + 1e-9 or not args.seconds > 0:
+            raise ValueError("--period-ms must be 10 to 20 and --seconds > 0")
+        command = [float(x) for x in args.command.split(",") if x.strip()]
+        from naoqi import ALProxy
+        memory = ALProxy("ALMemory", args.ip, args.port)
+        dcm = ALProxy("DCM", args.ip, args.port)
+        motion = ALProxy("ALMotion", args.ip, args.port)
+        runner = Runner(record, memory, dcm, motion, command, dry_run=args.dry_run)
+        runner.start()
+        show = (lambda t: print(",".join(repr(x) for x in t))) if args.dry_run else None
+        steps, late = runner.run(args.seconds, period, show)
+    except (IOError, OSError, ValueError, KeyError, ImportError, RuntimeError) as e:
+        print("error: %s" % (e,), file=sys.stderr)
+        return 1
+    print("%d control steps of %.1f ms, %d late" % (steps, period * 1000.0, late),
+          file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
