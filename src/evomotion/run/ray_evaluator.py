@@ -99,10 +99,10 @@ class RayEvaluator:
                 # "local": always a fresh local cluster, never one found in /tmp/ray
                 # a local cluster started here listens on 127.0.0.1 only (docs/cluster.md
                 # says how to open one up with token authentication)
-                local = {} if address else {"_node_ip_address": "127.0.0.1"}
+                local: dict[str, Any] = {} if address else {"_node_ip_address": "127.0.0.1"}
                 ray.init(address=address or "local",
                          num_cpus=None if address else (workers or None),
-                         include_dashboard=False, logging_level="WARNING",
+                         include_dashboard=False, logging_level=logging.WARNING,
                          log_to_driver=False, runtime_env={"env_vars": WORKER_ENV}, **local)
             except ConnectionError as e:
                 raise ClusterError(f"cannot reach the Ray cluster at {address}: {e}") from e

@@ -6,8 +6,11 @@ tanh MLP); an evaluation row also carries the observation normaliser and its epi
 survival shift (Mania et al. 2018, section 4: the per-step alive bonus subtracted while training
 only; 1 for Hopper, Walker2d and Ant, 5 for Humanoid, 0 otherwise, as their public code); the
 metric ``return`` is the plain return, which is what ``stats.csv``'s ``centre_return`` and the
-thresholds compare. Actions are clipped to the action space before the environment sees them
-(the exported policy clips alike).
+thresholds compare. ``problem.clip_actions = false`` (default) hands the policy's raw action to
+the environment, as ARS's public code does with Gym: MuJoCo clamps the controls to the
+actuators' ``ctrlrange`` and the control cost sees the raw action, which keeps a linear policy
+out of saturation, where a perturbation changes nothing; ``true`` clips the action to the action
+space first (the policy, and the exported policy, clip alike).
 
 ``problem.backend``: ``"batched"`` steps the v5 Hopper, Walker2d, HalfCheetah and Swimmer
 without Gymnasium, bit-identical to it (:mod:`.envs`); ``"gymnasium"`` runs any environment
@@ -49,10 +52,15 @@ class GymConfig:
     max_episode_steps: int = 0  # 0: the environment's own limit (1000 for MuJoCo v5)
     backend: str = "auto"
     param_bound: float = 100.0  # the genome box +- this (the ES starts at its middle, 0)
+    clip_actions: bool = False  # clip to the action space before the env (false: ARS's code)
 
     def validate(self) -> None:
         check_fields(self, "problem")
         check_text("problem.env", self.env)
+        if self.policy == "structured":
+            raise InputError("problem.policy: the structured policy needs a phase observation "
+                             "(sin/cos of a gait clock), which Gymnasium tasks lack; use linear "
+                             "or mlp")
         check_choice("problem.policy", self.policy, ("linear", "mlp"))
         check_choice("problem.backend", self.backend, BACKENDS)
         check_number("problem.hidden", self.hidden, lo=1, hi=4096, integer=True)
@@ -64,9 +72,10 @@ class GymConfig:
         check_number("problem.max_episode_steps", self.max_episode_steps, lo=0, hi=10**7,
                      integer=True)
         check_number("problem.param_bound", self.param_bound, lo=1e-6, hi=1e6)
-        if not isinstance(self.normalize, bool):
-            raise InputError(f"problem.normalize: expected true or false, got "
-                             f"{self.normalize!r}")
+        for key in ("normalize", "clip_actions"):
+            if not isinstance(getattr(self, key), bool):
+                raise InputError(f"problem.{key}: expected true or false, got "
+                                 f"{getattr(self, key)!r}")
 
 
 def make_env(env_id: str) -> Any:
@@ -110,8 +119,10 @@ class GymProblem:
             raise InputError(f"problem.env: {cfg.env} needs a flat Box observation and action "
                              "space")
         self.obs_dim, self.act_dim = int(space_o.shape[0]), int(space_a.shape[0])
-        self.low = np.asarray(space_a.low, float)
-        self.high = np.asarray(space_a.high, float)
+        # the policy's (and the episodes') action bounds: the action space, or none
+        unbounded = np.full(self.act_dim, np.inf)
+        self.low = np.asarray(space_a.low, float) if cfg.clip_actions else -unbounded
+        self.high = np.asarray(space_a.high, float) if cfg.clip_actions else unbounded
         options = {"hidden": (cfg.hidden,) * cfg.layers} if cfg.policy == "mlp" else {}
         self.policy = make_policy(cfg.policy, self.obs_dim, self.act_dim, low=self.low,
                                   high=self.high, **options)
