@@ -32,6 +32,8 @@ from evomotion.sim.state import QPOS_OFFSET
 from evomotion.studies.humanoid_balance.episodes import WorldDraw, episode_world
 
 CHANNELS = ("joint_pos", "gyro", "gravity", "roll_pitch", "foot_contact", "phase")
+#: the structured policy's test reads these (its tape reads phase raw, its gains the rest)
+STRUCTURED_CHANNELS = ("joint_pos", "gyro", "gravity", "foot_contact", "phase")
 PERIOD_S, K, PHASE_S = 0.02, 5, 0.5
 IMU = "Device/SubDeviceList/InertialSensor"
 
@@ -49,10 +51,14 @@ def _episode(kind: str, seed: int, tmp_path):
     folder, per control step the ALMemory frame, the simulator's targets)."""
     robot = load_robot("nao")
     m = robot.model
-    spec_obs = ObservationSpec(CHANNELS, phase_period_s=PHASE_S)
+    channels = STRUCTURED_CHANNELS if kind == "structured" else CHANNELS
+    spec_obs = ObservationSpec(channels, phase_period_s=PHASE_S)
     sim = ClosedLoopSimulator(robot, spec_obs, K, 1)
     nominal = np.asarray(robot.pose, float)[sim.columns]
-    options = {"hidden": (8, 6)} if kind == "mlp" else {}
+    options: dict = {"hidden": (8, 6)} if kind == "mlp" else {}
+    if kind == "structured":
+        phase = sim.observe.slices["phase"]
+        options = {"harmonics": 2, "phase_columns": (phase.start, phase.start + 1)}
     policy = make_policy(kind, sim.observation_size, sim.action_size, scale=0.3,
                          low=sim.lower - nominal, high=sim.upper - nominal, clip_obs=5.0,
                          **options)
@@ -99,7 +105,7 @@ def _frame(m, joints, state, contacts) -> dict[str, float]:
     return frame
 
 
-@pytest.mark.parametrize("kind, seed", [("linear", 3), ("mlp", 4)])
+@pytest.mark.parametrize("kind, seed", [("linear", 3), ("mlp", 4), ("structured", 7)])
 def test_runner_sends_the_simulators_targets(kind, seed, tmp_path, monkeypatch):
     folder, frames, targets, contacts = _episode(kind, seed, tmp_path)
     assert len(frames) >= 20 and contacts.min() == 0 and contacts.max() == 1
@@ -108,6 +114,7 @@ def test_runner_sends_the_simulators_targets(kind, seed, tmp_path, monkeypatch):
     monkeypatch.setitem(sys.modules, "naoqi", naoqi)
     runner_mod = _load_runner(folder)
     record = json.loads((folder / "policy.json").read_text())
+    assert record["kind"] == kind and ("layers" in record) == (kind != "structured")
     runner = runner_mod.Runner(record, naoqi.memory, naoqi.dcm, naoqi.motion,
                                clock=clock, sleep=clock.sleep)
     runner.start()
@@ -194,3 +201,36 @@ def test_a_policy_the_nao_cannot_run_is_one_log_line_not_a_failed_run(tmp_path):
                         "no NAO sensor measures (the torso's height above the floor); evolve "
                         "it without them")
     assert lines[1].startswith("naoqi/policy_runner.py + policy.json") and "approx" not in lines[1]
+
+
+def test_a_structured_run_writes_its_naoqi_folder(tmp_path):
+    """humanoid-balance's own export path: a structured policy's naoqi/ is written (no longer
+    refused) with the problem's phase columns, and its runner runs it on the fake NAOqi."""
+    from types import SimpleNamespace
+
+    from evomotion.studies.humanoid_balance.artifacts import write_naoqi
+    from evomotion.studies.humanoid_balance.problem import (
+        HumanoidBalanceConfig,
+        HumanoidBalanceProblem,
+    )
+
+    p = HumanoidBalanceProblem(HumanoidBalanceConfig(
+        policy="structured", observations="joint_pos,gyro,phase", harmonics=1,
+        phase_period_s=0.5, threads=1))
+    params = np.random.default_rng(8).normal(0, 0.1, p.policy.n_params)
+    export_policy(tmp_path, p.policy, params, np.zeros(p.obs_dim), np.ones(p.obs_dim), ("npz",))
+    lines: list[str] = []
+    write_naoqi(SimpleNamespace(problem=p, out_dir=tmp_path, log=lines.append))
+    assert lines[0].startswith("naoqi/policy_runner.py + policy.json")
+    record = json.loads((tmp_path / "naoqi" / "policy.json").read_text())
+    names = [c["name"] for c in record["observation"]]
+    assert record["kind"] == "structured" and record["harmonics"] == 1
+    assert [names[c] for c in record["phase_columns"]] == ["phase:sin", "phase:cos"]
+    naoqi = fake_naoqi.install({k: 0.0 for k in _load_runner(tmp_path / "naoqi").Observer(
+        record).keys})
+    runner = _load_runner(tmp_path / "naoqi").Runner(record, naoqi.memory, naoqi.dcm,
+                                                     naoqi.motion, clock=naoqi.clock,
+                                                     sleep=naoqi.clock.sleep)
+    runner.start()
+    assert runner.run(0.1, record["control_period_s"]) == (5, 0)
+    assert len(naoqi.dcm.sent) == 5 and len(naoqi.dcm.sent[0][1]) == p.act_dim

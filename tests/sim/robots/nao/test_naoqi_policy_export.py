@@ -52,10 +52,14 @@ def _runner_module():
     return module
 
 
-def _policy(kind: str = "mlp", names=NAMES, seed: int = 0) -> ExportedPolicy:
+def _policy(kind: str = "mlp", names=NAMES, seed: int = 0, harmonics: int = 3
+            ) -> ExportedPolicy:
     rng = np.random.default_rng(seed)
     o, a = len(names), len(JOINTS)
-    opts = {"hidden": (5, 4)} if kind == "mlp" else {}
+    opts: dict = {"hidden": (5, 4)} if kind == "mlp" else {}
+    if kind == "structured":
+        opts = {"harmonics": harmonics, "phase_columns": (names.index("phase:sin"),
+                                                          names.index("phase:cos"))}
     spec = make_policy(kind, o, a, scale=0.3, low=-0.2 * np.ones(a), high=np.full(a, np.inf),
                        clip_obs=3.0, **opts)
     return ExportedPolicy(spec, rng.normal(0, 0.5, spec.n_params), rng.normal(0, 0.1, o),
@@ -184,11 +188,12 @@ print(json.dumps(out))
 """
 
 
-def test_python_2_7_runs_the_runner_like_python_3(tmp_path):
+@pytest.mark.parametrize("kind", ["mlp", "structured"])
+def test_python_2_7_runs_the_runner_like_python_3(kind, tmp_path):
     py2 = _python2()
     if py2 is None:
         pytest.skip("no Python 2.7 on this machine")
-    paths = write_naoqi_policy(tmp_path / "naoqi", _policy(), NAMES, JOINTS,
+    paths = write_naoqi_policy(tmp_path / "naoqi", _policy(kind), NAMES, JOINTS,
                                [-0.5, 1.0, -0.5], [-1.5, 0.0, -1.2], [0.4, 2.1, 0.8], 0.02,
                                0.5)
     record = json.loads(paths["json"].read_text())
@@ -214,7 +219,7 @@ def test_python_2_7_runs_the_runner_like_python_3(tmp_path):
 
 def test_the_runner_policy_is_the_exported_policy():
     mod = _runner_module()
-    for kind in ("linear", "mlp"):
+    for kind in ("linear", "mlp", "structured"):
         p = _policy(kind, seed=3)
         runner_policy = mod.Policy(json.loads(json.dumps(_jsonable(_record(p)))))
         obs = np.random.default_rng(2).normal(0, 2.0, (20, len(NAMES)))

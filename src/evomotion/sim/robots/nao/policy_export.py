@@ -7,9 +7,12 @@ joints with their nominal pose and target bounds, and writes a folder with
 :mod:`.policy_runner` (a standard-library script for NAOqi 2.8's Python 2.7 or Python 3) and
 the ``policy.json`` it reads (:data:`FORMAT`):
 
-- the policy as a generic layer list (``policy.npz``'s arrays: ``{"weight": [[out][in]],
-  "bias": [out] | null, "activation": "tanh" | "none"}``), normaliser, ``clip_obs``, action map
-  (``null``: no bound / no clipping);
+- the policy's ``kind``, normaliser, ``clip_obs``, action map (``null``: no bound / no
+  clipping) and, for linear and MLP policies, a generic layer list (``policy.npz``'s arrays:
+  ``{"weight": [[out][in]], "bias": [out] | null, "activation": "tanh" | "none"}``), for a
+  structured one (a Fourier tape of the raw phase plus linear feedback) its ``harmonics``,
+  ``phase_columns`` (the observation's ``phase:sin``/``phase:cos``), ``tape_coef`` and
+  ``feedback_gain`` (:func:`structured_record`);
 - per observation column its source on the NAO: an ALMemory key (``joint_pos``:
   ``Device/SubDeviceList/<J>/Position/Sensor/Value``; ``gyro``:
   ``.../InertialSensor/Gyroscope{X,Y,Z}/Sensor/Value``; ``roll_pitch``: ``.../AngleX``,
@@ -98,22 +101,74 @@ def observation_sources(names: Sequence[str]) -> list[dict[str, Any]]:
     return out
 
 
+def _arrays(policy: ExportedPolicy) -> dict[str, np.ndarray]:
+    """``policy.npz``'s arrays of ``policy``; a bad shape is one InputError line."""
+    try:
+        return policy_arrays(policy.spec, policy.params, policy.obs_mean, policy.obs_std)
+    except ValueError as e:
+        raise InputError(f"NAOqi export: {e}") from None
+
+
+def _head(a: dict[str, np.ndarray]) -> dict[str, Any]:
+    """Normaliser and action map of ``policy.npz``'s arrays ``a``."""
+    return {"kind": str(a["kind"]), "obs_mean": a["obs_mean"], "obs_std": a["obs_std"],
+            "clip_obs": float(a["clip_obs"]), "action_scale": a["action_scale"],
+            "action_offset": a["action_offset"], "action_low": a["action_low"],
+            "action_high": a["action_high"]}
+
+
 def policy_layers(policy: ExportedPolicy) -> tuple[dict[str, Any], list[dict[str, Any]]]:
     """(normaliser and action map, generic layer list) of ``policy`` from the arrays of
     ``policy.npz`` (:func:`~evomotion.core.policies.export.policy_arrays`)."""
-    a = policy_arrays(policy.spec, policy.params, policy.obs_mean, policy.obs_std)
+    return _layers(_arrays(policy))
+
+
+def _layers(a: dict[str, np.ndarray]) -> tuple[dict[str, Any], list[dict[str, Any]]]:
     if "n_layers" not in a:
-        raise InputError(f"NAOqi export: the runner runs layered policies (linear, MLP); a "
-                         f"{policy.spec.kind} policy has no layer list")
+        raise InputError(f"NAOqi export: a {a['kind']} policy has no layer list")
     n, tanh_last = int(a["n_layers"]), bool(a["output_tanh"])
     layers = [{"weight": a[f"layer{k}_weight"],
                "bias": a.get(f"layer{k}_bias"),
                "activation": "tanh" if k < n - 1 or tanh_last else "none"} for k in range(n)]
-    head = {"obs_mean": a["obs_mean"], "obs_std": a["obs_std"],
-            "clip_obs": float(a["clip_obs"]), "action_scale": a["action_scale"],
-            "action_offset": a["action_offset"], "action_low": a["action_low"],
-            "action_high": a["action_high"]}
-    return head, layers
+    return _head(a), layers
+
+
+def structured_record(arrays: dict[str, np.ndarray], observation_names: Sequence[str]
+                      ) -> dict[str, Any]:
+    """The ``policy.json`` part of a structured policy (:mod:`evomotion.core.policies.structured`)
+    from ``policy.npz``'s arrays: normaliser, action map, ``harmonics`` H, ``phase_columns``
+    (which must be the observation's ``phase:sin``, ``phase:cos``: the runner's clock),
+    ``tape_coef[a][1 + 2H]``, ``feedback_gain[a][o - 2]``; a bad shape is one InputError
+    line."""
+    names = list(observation_names)
+    o, act = len(names), int(np.shape(arrays["action_scale"])[0])
+    h = int(arrays["harmonics"])
+    cols = [int(c) for c in np.ravel(arrays["phase_columns"])]
+    tape, gain = np.asarray(arrays["tape_coef"]), np.asarray(arrays["feedback_gain"])
+    if len(cols) != 2 or [names[c] if 0 <= c < o else None for c in cols] != \
+            ["phase:sin", "phase:cos"]:
+        raise InputError(f"NAOqi export: the structured policy's phase columns {cols} must be "
+                         "the observation's phase:sin and phase:cos (the runner's clock)")
+    for key, arr, shape in (("tape_coef", tape, (act, 1 + 2 * h)),
+                            ("feedback_gain", gain, (act, o - 2))):
+        if arr.shape != shape or not np.isfinite(arr).all():
+            raise InputError(f"NAOqi export: the structured policy's {key} must be finite "
+                             f"numbers of shape {shape}, got shape {arr.shape}")
+    if int(np.shape(arrays["obs_mean"])[0]) != o:
+        raise InputError(f"NAOqi export: {o} observation names for a normaliser of "
+                         f"{np.shape(arrays['obs_mean'])[0]} columns")
+    return {**_head(arrays), "harmonics": h, "phase_columns": cols, "tape_coef": tape,
+            "feedback_gain": gain}
+
+
+def policy_model(policy: ExportedPolicy, observation_names: Sequence[str]) -> dict[str, Any]:
+    """The policy's part of ``policy.json``: its ``kind``, normaliser and action map, and the
+    generic ``layers`` (linear, MLP) or the structured record (:func:`structured_record`)."""
+    a = _arrays(policy)
+    if str(a["kind"]) == "structured":
+        return structured_record(a, observation_names)
+    head, layers = _layers(a)
+    return {**head, "layers": layers}
 
 
 def naoqi_policy_record(policy: ExportedPolicy, observation_names: Sequence[str],
@@ -139,11 +194,14 @@ def naoqi_policy_record(policy: ExportedPolicy, observation_names: Sequence[str]
     if not 0.01 - 1e-9 <= float(control_period_s) <= 0.02 + 1e-9:
         raise InputError(f"NAOqi export: control period {control_period_s} s; the runner "
                          "sends targets every 10-20 ms")
-    head, layers = policy_layers(policy)
+    if float(phase_period_s) <= 0 and any(n.startswith("phase:") for n in names):
+        raise InputError(f"NAOqi export: the policy reads phase; phase_period_s must be > 0, "
+                         f"got {phase_period_s}")
+    model = policy_model(policy, names)
     pose = dict(nominal_pose) if nominal_pose else dict(zip(joints, map(float, nominal_rad)))
     pose.pop("RHipYawPitch", None)
     used = sorted({n.split(":", 1)[0] for n in names} & set(APPROXIMATED))
-    return {"format": FORMAT, **head, "layers": layers,
+    return {"format": FORMAT, **model,
             "observation": observation_sources(names),
             "approximated": {c: APPROXIMATED[c] for c in used},
             "roll_key": ROLL_KEY, "pitch_key": PITCH_KEY,
@@ -187,4 +245,5 @@ def approximations(observation_names: Sequence[str]) -> list[str]:
 
 __all__ = ["APPROXIMATED", "CONTACT_THRESHOLD_KG", "FEET", "FORMAT", "UNMEASURED", "approximations",
            "fsr_key", "joint_key", "naoqi_policy_record", "observation_sources",
-           "policy_layers", "runner_source", "write_naoqi_policy"]
+           "policy_layers", "policy_model", "runner_source", "structured_record",
+           "write_naoqi_policy"]

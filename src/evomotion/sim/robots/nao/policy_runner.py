@@ -10,7 +10,8 @@ One file, the standard library only (no numpy, no evomotion): it runs under NAOq
 Python 2.7 on the robot and under Python 3 with the ``naoqi`` SDK module on a PC. Every control
 period it reads the sensors with ONE ``ALMemory.getListData(keys)`` call, builds the
 observation as evomotion's simulator does (``policy.json`` lists each column's source), runs
-the policy (normalise, clip, layers with tanh, ``offset + scale * y``, clip) and sends
+the policy (normalise, clip, layers with tanh or a structured policy's phase tape plus
+linear feedback, ``offset + scale * y``, clip) and sends
 ``clip(nominal + action, lower, upper)`` to the joints through a DCM "timed commands" alias
 (``setAlias``, time ``dcm.getTime(delay_ms)``).
 
@@ -51,31 +52,91 @@ def _bound(values, default):
     return [default if v is None else float(v) for v in values]
 
 
+def _sum_products(weights, values):
+    """``w0 v0 + w1 v1 + ...`` summed left to right (evomotion's ``_row_dot`` order)."""
+    total = weights[0] * values[0]
+    for w, v in zip(weights[1:], values[1:]):
+        total = total + w * v
+    return total
+
+
+def _matrix(record, key, rows, cols):
+    """``record[key]`` as ``rows`` lists of ``cols`` floats; a bad shape is one ValueError."""
+    m = [[float(v) for v in row] for row in record[key]]
+    if len(m) != rows or any(len(row) != cols for row in m):
+        raise ValueError("policy.json: %s must be %d x %d numbers" % (key, rows, cols))
+    return m
+
+
 class Policy(object):
-    """``policy(obs) -> action``: normalise, clip, layers (tanh between, and after the last
-    with ``output_tanh``), ``offset + scale * y``, clipped to ``[low, high]``."""
+    """``policy(obs) -> action``: normalise, clip, then the layers (tanh between, and after the
+    last with ``output_tanh``) or the structured tape plus feedback, ``offset + scale * y``,
+    clipped to ``[low, high]``."""
 
     def __init__(self, record):
+        self.kind = str(record.get("kind", "layers"))
+        if self.kind not in ("layers", "linear", "mlp", "structured"):
+            raise ValueError("policy.json: a %r policy; this runner runs linear, mlp and "
+                             "structured ones" % (self.kind,))
         self.mean = [float(v) for v in record["obs_mean"]]
         self.std = [float(v) for v in record["obs_std"]]
         clip = record.get("clip_obs")
         self.clip_obs = None if clip is None else float(clip)
+        self.scale = [float(v) for v in record["action_scale"]]
+        self.offset = [float(v) for v in record["action_offset"]]
+        self.low = _bound(record["action_low"], -float("inf"))
+        self.high = _bound(record["action_high"], float("inf"))
         self.layers = []
+        if self.kind == "structured":
+            self._init_structured(record)
+            return
         for layer in record["layers"]:
             W = [[float(v) for v in row] for row in layer["weight"]]
             b = layer.get("bias")
             self.layers.append((W, None if b is None else [float(v) for v in b],
                                 layer["activation"]))
-        self.scale = [float(v) for v in record["action_scale"]]
-        self.offset = [float(v) for v in record["action_offset"]]
-        self.low = _bound(record["action_low"], -float("inf"))
-        self.high = _bound(record["action_high"], float("inf"))
+
+    def _init_structured(self, record):
+        """The tape ``tape_coef[a][1 + 2H]``, gains ``feedback_gain[a][o - 2]`` and the raw
+        phase columns (sin, cos), checked against the normaliser and action map."""
+        o, a = len(self.mean), len(self.scale)
+        self.harmonics = int(record["harmonics"])
+        cols = [int(c) for c in record["phase_columns"]]
+        if self.harmonics < 0 or len(cols) != 2 or cols[0] == cols[1] or \
+                not all(0 <= c < o for c in cols):
+            raise ValueError("policy.json: harmonics %r, phase_columns %r for %d observations"
+                             % (record["harmonics"], record["phase_columns"], o))
+        self.phase_columns = cols
+        self.keep = [m for m in range(o) if m not in cols]
+        self.tape = _matrix(record, "tape_coef", a, 1 + 2 * self.harmonics)
+        self.gain = _matrix(record, "feedback_gain", a, o - 2)
+
+    def structured(self, obs, h):
+        """``tape(phi) + K x`` of the raw ``obs`` and normalised ``h``: ``1, sin phi, cos phi,
+        ..., sin H phi, cos H phi`` from the raw phase columns by angle addition, as
+        evomotion's ``structured.py`` and ``policy.py`` compute them."""
+        i, j = self.phase_columns
+        s1, c1 = obs[i], obs[j]
+        features = [1.0]
+        s, c = s1, c1
+        for k in range(1, self.harmonics + 1):
+            features += [s, c]
+            if k < self.harmonics:
+                s, c = s * c1 + c * s1, c * c1 - s * s1
+        x = [h[m] for m in self.keep]
+        y = []
+        for tape, gain in zip(self.tape, self.gain):
+            t = _sum_products(tape, features)
+            y.append(t + _sum_products(gain, x) if x else t)
+        return y
 
     def __call__(self, obs):
         h = [(x - m) / s for x, m, s in zip(obs, self.mean, self.std)]
         if self.clip_obs is not None:
             c = self.clip_obs
             h = [min(max(v, -c), c) for v in h]
+        if self.kind == "structured":
+            h = self.structured([float(v) for v in obs], h)
         for W, b, activation in self.layers:
             out = [math.fsum(w * v for w, v in zip(row, h)) for row in W]
             if b is not None:
@@ -98,6 +159,9 @@ class Observer(object):
         self.threshold = float(record["contact_threshold_kg"])
         self.phase_period = float(record.get("phase_period_s") or 0.0)
         self.command = list(command or [])
+        if self.phase_period <= 0 and any(c["source"] in ("phase_sin", "phase_cos")
+                                          for c in self.columns):
+            raise ValueError("policy.json: the policy reads phase; phase_period_s must be > 0")
         keys = []
         for col in self.columns:
             if col["source"] in ("memory", "diff", "contact") and str(col["key"]) not in keys:
