@@ -292,6 +292,34 @@ def test_grid_path_run_identical_to_serial(backend, tmp_path):
     assert_same_run(tmp_path / "serial", tmp_path / backend.name)
 
 
+def test_policy_search_optimizers_identical_to_serial(backend, tmp_path):
+    """Every policy-search optimizer (ARS, OpenAI-ES, PGPE, SNES, CMA-ES) through the gym study,
+    and the NAO closed loop of humanoid-balance: the normaliser and the episode seeds travel in
+    the rows, so the cluster gives the serial run bit for bit."""
+    pytest.importorskip("gymnasium")
+    from evomotion.studies.gym.study import POLICY_OPTIMIZERS
+
+    gym = get_study("gym")
+    base = ["problem.max_episode_steps=20", "problem.eval_episodes=2", "run.generations=3",
+            "run.seed=3", "algorithm.pop_size=6"]
+    for opt in POLICY_OPTIMIZERS:
+        extra = ["algorithm.top_directions=0"] if opt == "ars" else []
+        for name in ("serial", backend.name):
+            over = [*base, f"algorithm.name={opt}", *extra, f"run.evaluator={name}"]
+            if name != "serial":
+                over += backend.overrides
+            run_study(gym, resolve_config(gym, None, over), tmp_path / opt / name, quiet=True)
+        assert_same_run(tmp_path / opt / "serial", tmp_path / opt / backend.name)
+    balance = get_study("humanoid-balance")
+    for name in ("serial", backend.name):
+        over = [*balance.smoke, "run.generations=2", f"run.evaluator={name}"]
+        if name != "serial":
+            over += backend.overrides
+        run_study(balance, resolve_config(balance, None, over), tmp_path / "bal" / name,
+                  quiet=True)
+    assert_same_run(tmp_path / "bal" / "serial", tmp_path / "bal" / backend.name)
+
+
 def test_worker_killed_mid_generation_run_completes_identically(backend, tmp_path,
                                                                 monkeypatch, caplog):
     overrides = ["run.generations=4", "problem.sleep_s=0.1", "problem.raise_above=9"]
