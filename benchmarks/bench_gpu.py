@@ -16,17 +16,26 @@ Measures, on one machine:
    1,000 physics steps per rollout) at the paper's scale, population 100 x 100 generations,
    and at population 4,096, on warp and on cpu (run loop only: the ``wall_s`` of the last row
    of stats.csv). With ``--generations G < 100`` the figure is also given per generation and
-   times 100 (marked "x100 from G").
+   times 100 (marked "x100 from G");
+4. the closed loop (issue 33): NAO steps/s of a population of standing NAOs under a linear
+   balance-sized policy (28 observations: joint angles and velocities, gravity, gyro, foot
+   contacts -> 10 joint offsets) acting every 20 ms (5 physics steps), at 1,024 ... 8,192
+   worlds on the device (``WarpClosedLoopSimulator``), the policy evaluated on the device
+   and, for comparison, on the host (numpy, a copy each way every control step), against the
+   CPU closed loop (``ClosedLoopSimulator``, ``mujoco.rollout`` threads) at population 64.
 
 Usage on a GPU machine (target: >= 1 M NAO steps/s on one H200-class GPU)::
 
     python benchmarks/bench_gpu.py --out gpu.json                 # everything (~15-20 min)
     python benchmarks/bench_gpu.py --generations 5 --out gpu.json # fits a 10-minute slot
+    python benchmarks/bench_gpu.py --closed-loop-only --out cl.json  # part 4 alone (minutes)
 
 Check on a machine without a GPU (Warp's CPU device; minutes)::
 
     python benchmarks/bench_gpu.py --device cpu --batches 8,16 --nstep 50 --generations 2 \\
         --pops 8 --cpu-batches 8,16
+    python benchmarks/bench_gpu.py --device cpu --closed-loop-only --cl-batches 4,8 \\
+        --cl-nstep 50 --cl-cpu-pop 8           # the closed-loop part alone
 
 MuJoCo Warp and Warp come with ``pip install 'evomotion[gpu]'``. The benchmark prints one
 table per part and writes every figure to ``--out`` (JSON).
@@ -170,6 +179,53 @@ def step_runs(args, device: str) -> list[dict]:
     return rows
 
 
+def closed_loop(args, device: str) -> list[dict]:
+    """Closed-loop NAO steps/s: device vs host policy on Warp, and the CPU closed loop."""
+    from evomotion.core.policies import make_policy
+    from evomotion.sim.closed_loop import ClosedLoopSimulator
+    from evomotion.sim.observations import ObservationSpec
+    from evomotion.sim.robots import load_robot
+    from evomotion.sim.warp_closed_loop import WarpClosedLoopSimulator
+    from evomotion.sim.warp_policy import PopulationPolicy
+
+    robot = load_robot("nao")
+    spec = ObservationSpec(("joint_pos", "joint_vel", "gravity", "gyro", "foot_contact"))
+    k, nstep = 5, args.cl_nstep
+    warp = WarpClosedLoopSimulator(robot, spec, k, device=device)
+    nominal = np.asarray(robot.pose)[warp.columns]
+    policy_spec = make_policy("linear", warp.observation_size, warp.action_size, scale=0.3,
+                              low=warp.lower - nominal, high=warp.upper - nominal, clip_obs=5.0)
+    rng = np.random.default_rng(0)
+
+    def population(n: int) -> PopulationPolicy:
+        return PopulationPolicy(policy_spec, 0.01 * rng.standard_normal((n, policy_spec.n_params)),
+                                np.zeros(warp.observation_size), np.ones(warp.observation_size))
+
+    def rate(sim, policy, n: int) -> tuple[float, float, int]:
+        sim.run(policy, n, nstep)  # compile, then capture the graphs (CUDA)
+        wall, res = timed(lambda: sim.run(policy, n, nstep))
+        return float(res.steps.sum()) / wall, wall, int(res.fell.sum())
+
+    rows = []
+    for n in args.cl_batches:
+        pol = population(n)
+        dev, dev_wall, dev_fell = rate(warp, pol, n)
+        host, host_wall, _ = rate(warp, lambda r, o, p=pol: p(r, o), n)
+        rows.append({"worlds": n, "nstep": nstep, "control_steps": k,
+                     "device_policy_steps_per_s": dev, "host_policy_steps_per_s": host,
+                     "device_over_host": dev / host, "wall_device_s": dev_wall,
+                     "fell": dev_fell})
+        print(_fmt(rows[-1]), flush=True)
+    pop = args.cl_cpu_pop
+    with ClosedLoopSimulator(robot, spec, k, args.threads or os.cpu_count() or 1) as cpu:
+        steps, wall, _ = rate(cpu, population(pop), pop)
+    best = max(r["device_policy_steps_per_s"] for r in rows)
+    rows.append({"cpu_closed_loop_pop": pop, "cpu_steps_per_s": steps, "cpu_wall_s": wall,
+                 "best_device_over_cpu": best / steps})
+    print(_fmt(rows[-1]), flush=True)
+    return rows
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ints = lambda s: [int(v) for v in s.split(",") if v]  # noqa: E731
@@ -184,6 +240,11 @@ def main() -> None:
     p.add_argument("--memory-pops", type=ints, default=[1024, 2048, 4096, 8192])
     p.add_argument("--skip-runs", action="store_true")
     p.add_argument("--only-memory", action="store_true")
+    p.add_argument("--cl-batches", type=ints, default=[1024, 2048, 4096, 8192],
+                   help="closed loop: worlds on the device")
+    p.add_argument("--cl-nstep", type=int, default=500, help="closed loop: physics steps")
+    p.add_argument("--cl-cpu-pop", type=int, default=64, help="closed loop: CPU population")
+    p.add_argument("--closed-loop-only", action="store_true")
     p.add_argument("--out", default="")
     args = p.parse_args()
     wp, mjw = import_warp()
@@ -196,6 +257,11 @@ def main() -> None:
             "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())}
     print(_fmt(info), flush=True)
     model = nao.load_model()
+    if args.closed_loop_only:
+        result = {"info": info, "closed_loop": closed_loop(args, device)}
+        if args.out:
+            Path(args.out).write_text(json.dumps(result, indent=1) + "\n", encoding="utf-8")
+        return
     result = {"info": info, "memory": memory(args, device)}
     if args.only_memory:
         print(json.dumps(result, indent=1)) if not args.out else None
@@ -205,6 +271,7 @@ def main() -> None:
     result["physics"] = physics(args, model, device)
     if not args.skip_runs:
         result["humanoid_step_runs"] = step_runs(args, device)
+    result["closed_loop"] = closed_loop(args, device)
     best = max(r["warp_steps_per_s"] for r in result["physics"])
     print(f"peak warp NAO steps/s: {best:,.0f} (target >= 1,000,000 on one H200-class GPU)")
     if args.out:

@@ -70,6 +70,8 @@ class HumanoidBalanceConfig:
     action_weight: float = 0.1  # score lost per rad^2 of mean squared action
     param_bound: float = 100.0  # the genome box +- this (the ES starts at 0: stand still)
     threads: int = 0  # mujoco.rollout threads; 0 = all cores (1 in a worker process)
+    backend: str = "cpu"  # physics: cpu (mujoco.rollout, float64) | warp (MuJoCo Warp, float32)
+    warp_device: str = ""  # backend warp: "cuda:0", "cpu", ...; "" = the first GPU, else the CPU
 
     def validate(self) -> None:
         check_fields(self, "problem")
@@ -102,6 +104,8 @@ class HumanoidBalanceConfig:
         check_number("problem.clip_obs", self.clip_obs, lo=0.0, lo_open=True, allow_inf=True)
         check_number("problem.param_bound", self.param_bound, lo=1e-6, hi=1e6)
         check_number("problem.threads", self.threads, lo=0, hi=1024, integer=True)
+        check_choice("problem.backend", self.backend, ("cpu", "warp"))
+        check_text("problem.warp_device", self.warp_device)
         for key in ("normalize", "perturb"):
             if not isinstance(getattr(self, key), bool):
                 raise InputError(f"problem.{key}: expected true or false, got "
@@ -142,7 +146,13 @@ class HumanoidBalanceProblem:
         self.nstep = int(math.ceil(cfg.duration_s / self.dt))
         self.obs_spec = ObservationSpec(cfg.channels(), phase_period_s=cfg.phase_period_s)
         threads = cfg.threads or max(1, min(os.cpu_count() or 1, 8))
-        self.sim = ClosedLoopSimulator(r, self.obs_spec, self.control_steps, threads)
+        if cfg.backend == "warp":  # the same loop on MuJoCo Warp (sim/warp_closed_loop.py)
+            from evomotion.sim.warp_closed_loop import WarpClosedLoopSimulator
+
+            self.sim = WarpClosedLoopSimulator(r, self.obs_spec, self.control_steps,
+                                               device=cfg.warp_device)
+        else:
+            self.sim = ClosedLoopSimulator(r, self.obs_spec, self.control_steps, threads)
         self.obs_names = self.sim.observe.names
         self.obs_dim, self.act_dim = self.sim.observation_size, self.sim.action_size
         nominal = np.asarray(r.pose, float)[self.sim.columns]
