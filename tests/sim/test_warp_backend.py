@@ -170,6 +170,20 @@ def test_perturbed_worlds_agree_with_the_cpu_engine(model, warp_sim, batch):
     assert np.linalg.norm(d_c - d_w, axis=1).max() < DISP_TOL_M
 
 
+def test_one_perturbed_world_alone_keeps_its_fields(model, warp_sim, batch):
+    """All trajectories in one heavy, weak, slippery world: no field differs between the
+    worlds, but every one differs from the simulator's model, and must still be applied."""
+    inits, ctrl = batch
+    heavy = make_world(model, friction_scale=0.5, mass_scale=1.1, motor_scale=0.7)
+    c = ctrl[1, :150]
+    sc = simulate_worlds([heavy], inits[1], c, 1)
+    sw = simulate_worlds([heavy], inits[1], c, 1, simulator=warp_sim)
+    nominal = simulate_worlds([World(model)], inits[1], c, 1, simulator=warp_sim)
+    err = np.abs(sc[:, :EARLY, 1:8] - sw[:, :EARLY, 1:8]).max()
+    assert err < 1e-3
+    assert np.abs(nominal[:, :EARLY, 1:8] - sw[:, :EARLY, 1:8]).max() > 10 * max(err, 1e-6)
+
+
 def test_memory_is_estimated_before_allocation(model, warp_sim):
     small, big = warp_sim.memory(1024, 1000), warp_sim.memory(8192, 1000)
     assert 7.5 < big.needed / small.needed < 8.5  # linear in the worlds

@@ -52,15 +52,18 @@ def differing_fields(models: list) -> tuple[dict[str, np.ndarray], np.ndarray]:
 
 
 def _cached_fields(sim, models: list) -> tuple[dict[str, np.ndarray], np.ndarray]:
-    """:func:`differing_fields` of ``models``, kept on ``sim`` for the same worlds (every
-    generation of a run evaluates the same K worlds, repeated per genome)."""
+    """:func:`differing_fields` of ``models`` and ``sim``'s own model, that model's row
+    dropped, kept on ``sim`` for the same worlds (every generation of a run evaluates the same
+    K worlds, repeated per genome). Comparing with the simulator's model too: worlds that all
+    agree on a field that differs from it (one perturbed world alone) still get their value."""
     distinct = list({id(m): m for m in models}.values())
     key = tuple(id(m) for m in distinct)
     cache = getattr(sim, "_world_fields", None)
     if cache is None or cache[0] != key or any(a is not b for a, b in zip(cache[1], distinct,
                                                                           strict=True)):
         with sim.wp.ScopedDevice(sim.device):
-            fields, _ = differing_fields(distinct)  # distinct: its own order
+            fields, rows = differing_fields([sim.model, *distinct])
+        fields = {name: v[rows[1:]] for name, v in fields.items()}  # distinct: its own order
         sim._world_fields = cache = (key, distinct, fields)
     fields = cache[2]
     position = {id(m): i for i, m in enumerate(cache[1])}
