@@ -34,7 +34,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from evomotion.core.es.common import GaussianES, check_pop_size, check_positive, half_differences
+from evomotion.core.es.common import (
+    GaussianES,
+    check_noise_table,
+    check_pop_size,
+    check_positive,
+    half_differences,
+)
 from evomotion.core.optimizer import MutateFn
 from evomotion.core.problem import GenomeSpec
 from evomotion.core.state import replaced as replace
@@ -49,6 +55,7 @@ class ARSConfig:
     step_size: float = 0.02  # α
     noise_std: float = 0.03  # ν, genome units
     top_directions: int = 0  # b (the "-t" variants); 0 -> b = N (V1/V2)
+    noise_table: int = 0  # > 0: perturbations from a shared table of this many N(0, 1) numbers
 
     @property
     def directions(self) -> int:
@@ -57,6 +64,7 @@ class ARSConfig:
 
     def validate(self) -> None:
         check_pop_size(self, even=True)
+        check_noise_table(self)
         check_positive(self, "step_size", "noise_std")
         if not isinstance(self.top_directions, int) or \
                 not 0 <= self.top_directions <= self.directions:

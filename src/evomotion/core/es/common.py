@@ -12,10 +12,20 @@ Every ``tell`` estimates from the genomes it is told (not from noise kept since 
 what enters an update is what was evaluated. For the mirrored methods, rows ``k`` and
 ``k + N`` of a population of ``2N`` are the pair ``centre ± perturbation``; a clipped pair is
 mirrored only inside the bounds and enters as its half-difference.
+
+Shared noise table (``noise_table = M > 0``; Salimans et al. 2017, section 2.1, and Mania et
+al. 2018's code): the perturbations are windows of one table of ``M`` standard normal numbers
+drawn once from the fixed seed :data:`NOISE_TABLE_SEED`, ``ε_k = table[o_k : o_k + d]`` with
+the offsets ``o_k`` drawn from the passed generator at every ``ask``. An ``ask`` then copies
+``N d`` numbers instead of drawing them (drawing is most of an ``ask``'s time at large ``d``);
+windows overlap, as in the papers. The table is a pure function of ``M``, so a resumed run,
+another process or another machine rebuilds the same one; it is kept per process, one per size
+(``M`` float64: 8 bytes each). ``0`` (the default) draws fresh numbers at every ``ask``.
 """
 
 from __future__ import annotations
 
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -34,6 +44,29 @@ def check_pop_size(cfg: Any, *, even: bool, allow_zero: bool = False) -> None:
         raise ValueError(f"algorithm.pop_size must be >= 2, got {cfg.pop_size}")
     if even and cfg.pop_size % 2:
         raise ValueError(f"algorithm.pop_size must be even (mirrored pairs), got {cfg.pop_size}")
+
+
+#: the seed of every shared noise table (a constant: the table depends on its size only)
+NOISE_TABLE_SEED = 20170310
+#: the largest table accepted (2**27 numbers = 1 GiB)
+MAX_NOISE_TABLE = 2**27
+
+
+def check_noise_table(cfg: Any, dim: int | None = None) -> None:
+    """``cfg.noise_table``: 0 (fresh noise) or a table size; with ``dim``, at least ``dim``."""
+    check_number("algorithm.noise_table", cfg.noise_table, lo=0, hi=MAX_NOISE_TABLE,
+                 integer=True)
+    if dim is not None and 0 < cfg.noise_table < dim:
+        raise ValueError(f"algorithm.noise_table must be 0 or at least the genome's {dim} "
+                         f"genes, got {cfg.noise_table}")
+
+
+@lru_cache(maxsize=2)
+def noise_table(size: int) -> np.ndarray:
+    """The shared table of ``size`` standard normal numbers (read-only)."""
+    table = np.random.default_rng(NOISE_TABLE_SEED).standard_normal(int(size))
+    table.setflags(write=False)
+    return table
 
 
 def check_positive(cfg: Any, *keys: str) -> None:
@@ -61,6 +94,8 @@ class GaussianES(Optimizer):
                              "replace; a mutate hook is not supported")
         super().__init__(genome)
         cfg.validate()
+        if hasattr(cfg, "noise_table"):
+            check_noise_table(cfg, genome.dim)
         self.cfg = cfg
         self.lower, self.upper = genome.lower, genome.upper
         self.bounded = bool(np.isfinite(self.lower).any() or np.isfinite(self.upper).any())
@@ -99,14 +134,30 @@ class GaussianES(Optimizer):
 
     def mirrored(self, rng: np.random.Generator, center: np.ndarray, scale: Any,
                  n: int) -> np.ndarray:
-        """``[center + p; center - p]`` with ``p = scale * N(0, I)[n, d]`` drawn in one call
-        (rows ``k`` and ``k + n`` a pair), clipped; built in one fresh array."""
-        x = np.empty((2 * n, self.genome.dim))
-        p = rng.standard_normal(out=x[:n])
-        p *= scale
+        """``[center + p; center - p]`` with ``p = scale * N(0, I)[n, d]`` drawn in one call,
+        or taken from the shared noise table (``cfg.noise_table``; see the module), rows ``k``
+        and ``k + n`` a pair, clipped; built in one fresh array."""
+        d = self.genome.dim
+        x = np.empty((2 * n, d))
+        size = int(getattr(self.cfg, "noise_table", 0))
+        p = x[:n]
+        if size:
+            offsets = rng.integers(0, size - d + 1, size=n)
+            windows = np.lib.stride_tricks.sliding_window_view(noise_table(size), d)
+            np.multiply(windows[offsets], scale, out=p)
+        else:
+            rng.standard_normal(out=p)
+            p *= scale
+        inside = not self.bounded or self._inside(center, p)
         np.subtract(center, p, out=x[n:])
         p += center
-        return self.clip(x)
+        return x if inside else self.clip(x)
+
+    def _inside(self, center: np.ndarray, p: np.ndarray) -> bool:
+        """Whether every ``center ± p`` row is inside the bounds already (then clipping, two
+        passes over the population, changes nothing and is skipped): one pass over ``p``."""
+        reach = max(float(p.max()), -float(p.min()))  # rounding is monotone: c - p >= c - reach
+        return bool(np.all(center - reach >= self.lower) and np.all(center + reach <= self.upper))
 
 
 def half_differences(genomes: np.ndarray) -> np.ndarray:

@@ -31,6 +31,7 @@ import numpy as np
 from evomotion.core.es.adam import adam_step
 from evomotion.core.es.common import (
     GaussianES,
+    check_noise_table,
     check_nonneg,
     check_pop_size,
     check_positive,
@@ -56,9 +57,11 @@ class OpenAIESConfig:
     beta1: float = 0.9
     beta2: float = 0.999
     eps: float = 1e-8
+    noise_table: int = 0  # > 0: perturbations from a shared table of this many N(0, 1) numbers
 
     def validate(self) -> None:
         check_pop_size(self, even=True)
+        check_noise_table(self)
         check_positive(self, "sigma", "learning_rate", "eps")
         check_nonneg(self, "weight_decay")
         check_unit(self, "beta1", "beta2")

@@ -38,6 +38,7 @@ import numpy as np
 from evomotion.core.es.clipup import clipup_step
 from evomotion.core.es.common import (
     GaussianES,
+    check_noise_table,
     check_nonneg,
     check_pop_size,
     check_positive,
@@ -62,9 +63,11 @@ class PGPEConfig:
     stdev_init: float = 0.1  # initial σ of every parameter, genome units
     stdev_learning_rate: float = 0.1
     stdev_max_change: float = 0.2  # σ changes by at most this fraction per generation
+    noise_table: int = 0  # > 0: perturbations from a shared table of this many N(0, 1) numbers
 
     def validate(self) -> None:
         check_pop_size(self, even=True)
+        check_noise_table(self)
         check_positive(self, "max_speed", "stdev_init", "stdev_max_change")
         check_nonneg(self, "center_learning_rate", "stdev_learning_rate")
         check_unit(self, "momentum", "stdev_max_change")
