@@ -58,6 +58,13 @@ def policy_rows(params: np.ndarray, mean: np.ndarray, std: np.ndarray, seed: int
     return np.concatenate([params, np.broadcast_to(tail, (n, tail.size))], axis=1)
 
 
+def neutral_rows(genomes: np.ndarray, obs_dim: int, episodes: int) -> np.ndarray:
+    """``genomes`` as rows with no normalisation (mean 0, std 1) and the episodes from seed 0:
+    a policy problem's ``evaluation_rows`` (:class:`evomotion.run.contracts.ContextRows`)."""
+    return policy_rows(np.asarray(genomes, float), np.zeros(obs_dim), np.ones(obs_dim), 0,
+                       episodes)
+
+
 def split_rows(rows: np.ndarray, n_params: int, obs_dim: int
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Inverse of :func:`policy_rows`: ``(params, mean, std, seeds, episodes)`` per row."""

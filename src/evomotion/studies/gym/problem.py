@@ -29,7 +29,7 @@ from evomotion.core.problem import Evaluation, GenomeSpec
 from evomotion.errors import InputError
 from evomotion.studies.gym.envs import BatchedTask, task_of
 from evomotion.studies.gym.episodes import Episodes, run_batched, run_gymnasium
-from evomotion.studies.policy_search import EpisodeRows, policy_rows, split_rows
+from evomotion.studies.policy_search import EpisodeRows, neutral_rows, split_rows
 
 BACKENDS = ("auto", "batched", "gymnasium")
 #: ARS's survival shift per task (their public code), subtracted per step while training
@@ -160,8 +160,7 @@ class GymProblem:
 
     def evaluation_rows(self, genomes: np.ndarray) -> np.ndarray:
         """``genomes`` as rows with no normalisation and the episodes from seed 0."""
-        return policy_rows(np.asarray(genomes, float), np.zeros(self.obs_dim),
-                           np.ones(self.obs_dim), 0, self.episodes)
+        return neutral_rows(genomes, self.obs_dim, self.episodes)
 
     def evaluate(self, rows: np.ndarray) -> Evaluation:
         params, mean, std, seeds, episodes = split_rows(np.asarray(rows, float),

@@ -32,7 +32,7 @@ from evomotion.studies.humanoid_balance.episodes import (
     push_range,
     run_episodes,
 )
-from evomotion.studies.policy_search import EpisodeRows, policy_rows, split_rows
+from evomotion.studies.policy_search import EpisodeRows, neutral_rows, split_rows
 
 MAX_EPISODES = 1000
 MAX_DURATION_S = 600.0
@@ -192,8 +192,7 @@ class HumanoidBalanceProblem:
 
     def evaluation_rows(self, genomes: np.ndarray) -> np.ndarray:
         """``genomes`` as rows with no normalisation and the episodes from seed 0."""
-        return policy_rows(np.asarray(genomes, float), np.zeros(self.obs_dim),
-                           np.ones(self.obs_dim), 0, self.episodes)
+        return neutral_rows(genomes, self.obs_dim, self.episodes)
 
     def evaluate(self, rows: np.ndarray) -> Evaluation:
         params, mean, std, seeds, episodes = split_rows(np.asarray(rows, float),
