@@ -1,11 +1,12 @@
 """The balance task as a policy-search problem (``evomotion run humanoid-balance``).
 
 The robot (``problem.robot``: "" = the NAO, or any biped spec) starts standing in its nominal
-pose; a policy (:mod:`evomotion.core.policies`: linear as in ARS, or a tanh MLP) reads its
-sensors every ``control_period_s`` (20 ms: 5 NAO physics steps) and sets offsets (rad) from the
-nominal pose of its ``[evolve]`` joints, for ``duration_s`` = 10 s. Every episode is one
-perturbed world with a push of up to ``push_max_ns`` N s in a random horizontal direction
-(:mod:`.episodes`); a robot that falls ends its episode.
+pose; a policy (:mod:`evomotion.core.policies`: linear as in ARS, a tanh MLP, or structured:
+a phase tape plus feedback) reads its sensors every ``control_period_s`` (20 ms: 5 NAO physics
+steps) and sets offsets (rad) from the nominal pose of its ``[evolve]`` joints, for
+``duration_s`` = 10 s. Every episode is one perturbed world with a push of up to
+``push_max_ns`` N s in a random horizontal direction (:mod:`.episodes`); a robot that falls
+ends its episode.
 
 An evaluation row is ``[params | obs mean | obs std | seed | episodes]``
 (:mod:`evomotion.studies.policy_search`); the fitness (maximised) is the mean episode score
