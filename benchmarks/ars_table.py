@@ -15,6 +15,7 @@ figure beside. ``--json`` keeps every run.
 from __future__ import annotations
 
 import argparse
+import concurrent.futures
 import csv
 import json
 import os
@@ -51,22 +52,28 @@ def settings(task: str, method: str) -> list[str]:
     raise SystemExit(f"unknown method {method!r}; available: ars, openai_es")
 
 
-def one_run(task: str, method: str, seed: int, budget_s: float, workers: int) -> dict:
+def one_run(task: str, method: str, seed: int, budget_s: float, workers: int,
+            extra: tuple[str, ...] = ()) -> dict:
     threshold = TASKS[task][0]
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "run"
         cmd = [sys.executable, "-m", "evomotion.cli", "run", "gym", "--out", str(out),
                "--set", f"run.seed={seed}", "--set", f"run.target={threshold}",
                "--set", f"run.wall_seconds={budget_s}", "--set", "run.generations=100000000"]
-        if workers > 1:
-            cmd += ["--set", "run.evaluator=process", "--set", f"run.workers={workers}"]
-        for s in settings(task, method):
+        cmd += ["--set", "run.evaluator=process", "--set", f"run.workers={workers}"] \
+            if workers > 1 else ["--set", "run.evaluator=serial"]
+        for s in [*settings(task, method), *extra]:
             cmd += ["--set", s]
-        t0, c0 = time.perf_counter(), os.times()
-        proc = subprocess.run(cmd, capture_output=True, text=True)
-        c1 = os.times()
+        t0 = time.perf_counter()
+        with tempfile.TemporaryFile() as err:
+            proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=err)
+            # this run's own CPU (with its evaluation processes), even with runs in parallel
+            _, status, usage = os.wait4(proc.pid, 0)
+            proc.returncode = os.waitstatus_to_exitcode(status)
+            err.seek(0)
+            stderr = err.read().decode(errors="replace")
         wall = time.perf_counter() - t0
-        cpu = (c1.children_user + c1.children_system) - (c0.children_user + c0.children_system)
+        cpu = usage.ru_utime + usage.ru_stime
         rows = []
         if (out / "stats.csv").is_file():
             with open(out / "stats.csv") as f:
@@ -77,7 +84,7 @@ def one_run(task: str, method: str, seed: int, budget_s: float, workers: int) ->
             "reached": reached is not None, "best_return": best,
             "episodes": int(reached["train_episodes"]) if reached else None,
             "episodes_run": int(rows[-1]["train_episodes"]) if rows else 0,
-            "wall_s": wall, "cpu_s": cpu, "stderr": proc.stderr[-500:] if proc.returncode
+            "wall_s": wall, "cpu_s": cpu, "stderr": stderr[-500:] if proc.returncode
             not in (0, 3) else ""}
 
 
@@ -96,33 +103,55 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=5)
     ap.add_argument("--budget", type=float, default=900.0, help="wall seconds per run")
     ap.add_argument("--workers", type=int, default=2, help="evaluation processes per run")
+    ap.add_argument("--jobs", type=int, default=1, help="runs at the same time")
+    ap.add_argument("--first-seed", type=int, default=0)
+    ap.add_argument("--set", action="append", default=[], dest="extra",
+                    help="another KEY=VALUE for every run (e.g. problem.eval_episodes=1)")
     ap.add_argument("--json", type=Path, default=None)
+    ap.add_argument("--report", nargs="+", type=Path, default=None,
+                    help="print the table of these --json files (no runs)")
     a = ap.parse_args()
-    runs = []
+    if a.report:
+        print_table([r for f in a.report for r in json.loads(f.read_text())])
+        return
+    cases = []
     for task in a.tasks.split(","):
         if task not in TASKS:
             raise SystemExit(f"unknown task {task!r}; available: {', '.join(TASKS)}")
         for method in a.methods.split(","):
-            for seed in range(a.seeds):
-                runs.append(one_run(task, method, seed, a.budget, a.workers))
-                r = runs[-1]
-                print(f"{task} {method} seed {seed}: {'reached' if r['reached'] else 'not'} "
-                      f"(best {r['best_return']:.0f}, episodes {r['episodes']}, "
-                      f"{r['wall_s']:.0f} s)", file=sys.stderr, flush=True)
-                if a.json:
-                    a.json.write_text(json.dumps(runs, indent=1))
-    print("| task (v5) | threshold | method | reached | episodes: median (range) | wall s | "
-          "CPU s | best return: median (range) | paper V2-t episodes |")
-    print("|---|---|---|---|---|---|---|---|---|")
-    for task in a.tasks.split(","):
-        for method in a.methods.split(","):
-            rs = [r for r in runs if r["task"] == task and r["method"] == method]
-            ok = [r for r in rs if r["reached"]]
-            print(f"| {task} | {TASKS[task][0]} | {method} | {len(ok)}/{len(rs)} | "
-                  f"{med_range([r['episodes'] for r in ok])} | "
-                  f"{med_range([r['wall_s'] for r in ok])} | "
-                  f"{med_range([r['cpu_s'] for r in ok])} | "
-                  f"{med_range([r['best_return'] for r in rs])} | {TASKS[task][2]:,} |")
+            cases += [(task, method, a.first_seed + s) for s in range(a.seeds)]
+    runs = []
+    with concurrent.futures.ThreadPoolExecutor(max(1, a.jobs)) as pool:
+        futures = [pool.submit(one_run, t, m, s, a.budget, a.workers, tuple(a.extra))
+                   for t, m, s in cases]
+        for f in concurrent.futures.as_completed(futures):
+            r = f.result()
+            runs.append(r)
+            print(f"{r['task']} {r['method']} seed {r['seed']}: "
+                  f"{'reached' if r['reached'] else 'not'} (best {r['best_return']:.0f}, "
+                  f"episodes {r['episodes']}, {r['wall_s']:.0f} s)", file=sys.stderr, flush=True)
+            if a.json:
+                a.json.write_text(json.dumps(runs, indent=1))
+    print_table(runs)
+
+
+def print_table(runs: list[dict]) -> None:
+    """The markdown table of ``runs`` (several invocations' JSON files may be merged)."""
+    print("| task (v5) | threshold | method | reached | episodes to threshold: median (range) "
+          "| wall s | CPU s | episodes run (not reached) | best return: median (range) "
+          "| paper V2-t episodes |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    keys = list(dict.fromkeys((r["task"], r["method"]) for r in runs))
+    for task, method in keys:
+        rs = [r for r in runs if r["task"] == task and r["method"] == method]
+        ok = [r for r in rs if r["reached"]]
+        not_ok = [r["episodes_run"] for r in rs if not r["reached"]]
+        print(f"| {task} | {TASKS[task][0]} | {method} | {len(ok)}/{len(rs)} | "
+              f"{med_range([r['episodes'] for r in ok])} | "
+              f"{med_range([r['wall_s'] for r in ok])} | "
+              f"{med_range([r['cpu_s'] for r in ok])} | "
+              f"{', '.join(f'{e:,}' for e in sorted(not_ok)) or '–'} | "
+              f"{med_range([r['best_return'] for r in rs])} | {TASKS[task][2]:,} |")
 
 
 if __name__ == "__main__":
