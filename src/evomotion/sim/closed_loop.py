@@ -107,19 +107,8 @@ class ClosedLoopSimulator:
                  nominal: np.ndarray | None = None, push_steps: int = 1,
                  fall_height_m: float | None = None,
                  fall_tilt_rad: float | None = None) -> None:
-        if int(control_steps) < 1 or int(push_steps) < 1 or int(nthread) < 1:
-            raise InputError("closed loop: control_steps, push_steps and nthread must be >= 1, "
-                             f"got {control_steps}, {push_steps}, {nthread}")
-        self.robot, self.model = robot, robot.model
-        self.k, self.push_steps = int(control_steps), int(push_steps)
-        self.observe = ObservationBuilder(observations, robot)
-        self.columns = np.asarray(robot.columns if columns is None else columns, np.int64)
-        self.nominal = np.array(robot.pose if nominal is None else nominal, dtype=np.float64)
-        if self.nominal.shape != (self.model.nu,):
-            raise InputError(f"closed loop: nominal must hold {self.model.nu} targets")
-        self.lower, self.upper = target_bounds(robot, self.columns)
-        self.fall_height_m = robot.fall_height_m if fall_height_m is None else fall_height_m
-        self.fall_tilt_rad = robot.fall_tilt_rad if fall_tilt_rad is None else fall_tilt_rad
+        configure(self, robot, observations, control_steps, nthread, columns, nominal,
+                  push_steps, fall_height_m, fall_tilt_rad)
         self.nthread = int(nthread)
         self.datas = [mujoco.MjData(self.model) for _ in range(self.nthread)]
         self._runner = mj_rollout.Rollout(nthread=self.nthread) if self.nthread > 1 else None
@@ -237,6 +226,27 @@ class ClosedLoopSimulator:
                              f"{(m, int(self.columns.size))}")
         a = np.where(np.isnan(a), 0.0, a)
         return np.clip(self.nominal[self.columns] + a, self.lower, self.upper)
+
+
+def configure(sim, robot, observations: ObservationSpec, control_steps: int, nthread: int,
+              columns: Sequence[int] | None, nominal: np.ndarray | None, push_steps: int,
+              fall_height_m: float | None, fall_tilt_rad: float | None) -> None:
+    """The settings every closed loop (CPU, MuJoCo Warp) checks and keeps on ``sim``: the robot
+    and model, ``k`` physics steps per control step, the observation builder, the driven
+    columns, their nominal targets and bounds, the push length and the fall thresholds."""
+    if int(control_steps) < 1 or int(push_steps) < 1 or int(nthread) < 1:
+        raise InputError("closed loop: control_steps, push_steps and nthread must be >= 1, "
+                         f"got {control_steps}, {push_steps}, {nthread}")
+    sim.robot, sim.model = robot, robot.model
+    sim.k, sim.push_steps = int(control_steps), int(push_steps)
+    sim.observe = ObservationBuilder(observations, robot)
+    sim.columns = np.asarray(robot.columns if columns is None else columns, np.int64)
+    sim.nominal = np.array(robot.pose if nominal is None else nominal, dtype=np.float64)
+    if sim.nominal.shape != (sim.model.nu,):
+        raise InputError(f"closed loop: nominal must hold {sim.model.nu} targets")
+    sim.lower, sim.upper = target_bounds(robot, sim.columns)
+    sim.fall_height_m = robot.fall_height_m if fall_height_m is None else fall_height_m
+    sim.fall_tilt_rad = robot.fall_tilt_rad if fall_tilt_rad is None else fall_tilt_rad
 
 
 def _check_sizes(model: mujoco.MjModel, models: np.ndarray) -> None:

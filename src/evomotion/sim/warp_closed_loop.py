@@ -35,9 +35,15 @@ from typing import Any
 import numpy as np
 
 from evomotion.errors import InputError
-from evomotion.sim.closed_loop import ClosedLoopResult, Policy, _check_sizes, _rows
-from evomotion.sim.closed_loop_parts import PushSchedule, initial_sensors, target_bounds
-from evomotion.sim.observations import ObservationBuilder, ObservationSpec
+from evomotion.sim.closed_loop import (
+    ClosedLoopResult,
+    Policy,
+    _check_sizes,
+    _rows,
+    configure,
+)
+from evomotion.sim.closed_loop_parts import PushSchedule, initial_sensors
+from evomotion.sim.observations import ObservationSpec
 from evomotion.sim.state import QPOS_OFFSET
 from evomotion.sim.warp_batch import ClosedLoopBatch, Layout, column_table
 from evomotion.sim.warp_memory import bucket_size
@@ -82,21 +88,10 @@ class WarpClosedLoopSimulator:
                  fall_height_m: float | None = None, fall_tilt_rad: float | None = None, *,
                  device: str = "", deterministic: bool = True, nconmax: int = 16,
                  njmax: int = 0) -> None:
-        if int(control_steps) < 1 or int(push_steps) < 1 or int(nthread) < 1:
-            raise InputError("closed loop: control_steps, push_steps and nthread must be >= 1, "
-                             f"got {control_steps}, {push_steps}, {nthread}")
-        self.robot, self.model = robot, robot.model
+        configure(self, robot, observations, control_steps, nthread, columns, nominal,
+                  push_steps, fall_height_m, fall_tilt_rad)
         self.physics = WarpSimulator(self.model, device, deterministic, nconmax, njmax)
         self.wp, self.device = self.physics.wp, self.physics.device
-        self.k, self.push_steps = int(control_steps), int(push_steps)
-        self.observe = ObservationBuilder(observations, robot)
-        self.columns = np.asarray(robot.columns if columns is None else columns, np.int64)
-        self.nominal = np.array(robot.pose if nominal is None else nominal, dtype=np.float64)
-        if self.nominal.shape != (self.model.nu,):
-            raise InputError(f"closed loop: nominal must hold {self.model.nu} targets")
-        self.lower, self.upper = target_bounds(robot, self.columns)
-        self.fall_height_m = robot.fall_height_m if fall_height_m is None else fall_height_m
-        self.fall_tilt_rad = robot.fall_tilt_rad if fall_tilt_rad is None else fall_tilt_rad
         self.nthread = 1
         self.nstate = self.physics.nstate
         self.dt = float(self.model.opt.timestep)
