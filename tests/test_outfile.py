@@ -210,3 +210,24 @@ def test_a_write_into_a_users_subfolder_claims_nothing(tmp_path):
     atomic_write_bytes(tmp_path / "analysis" / "fit.png", b"x")
     atomic_write_bytes(tmp_path / "made" / "a.png", b"x", mkdir=True)
     assert set(read_marker(tmp_path)["files"]) == {"config.toml", "made"}
+
+
+def test_a_folder_made_by_a_write_killed_before_its_claim_is_still_the_runs(tmp_path):
+    """humanoid-balance's naoqi/: a kill after the folder's first file was written but before
+    the claim left naoqi/ existing and unclaimed, and the resume (the folder now there) never
+    claimed it, so the marker differed from an uninterrupted run's."""
+    write_marker(tmp_path, "functions", ["config.toml"])
+
+    def killed(event, path):
+        if event == "written":
+            raise KeyboardInterrupt  # stands for the kill: the file is complete, not renamed
+
+    outfile.WRITE_HOOKS.append(killed)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            atomic_write_bytes(tmp_path / "naoqi" / "policy.json", b"x", mkdir=True)
+    finally:
+        outfile.WRITE_HOOKS.remove(killed)
+    assert (tmp_path / "naoqi").is_dir()
+    atomic_write_bytes(tmp_path / "naoqi" / "policy.json", b"x", mkdir=True)  # the resume
+    assert set(read_marker(tmp_path)["files"]) == {"config.toml", "naoqi"}

@@ -119,6 +119,8 @@ def atomic_output(path: str | Path, what: str = "file", mkdir: bool = False,
     chooses its format by extension see one (``".tmp.mp4"``)."""
     run_dir = run_folder_of(path) if mkdir else None
     made = run_dir is not None and not _top(path, run_dir).exists()  # a folder this makes
+    if made:  # claimed before it is made: a kill between the two must not orphan it
+        claim(path, run_dir, made_folder=True)
     path = check_target(path, what, mkdir)
     for hook in WRITE_HOOKS:
         hook("begin", path)
