@@ -118,8 +118,9 @@ def atomic_output(path: str | Path, what: str = "file", mkdir: bool = False,
     ``path`` (made durable), on any failure it is removed. ``suffix`` lets a writer that
     chooses its format by extension see one (``".tmp.mp4"``)."""
     run_dir = run_folder_of(path) if mkdir else None
-    made = run_dir is not None and not _top(path, run_dir).exists()  # a folder this makes
-    if made:  # claimed before it is made: a kill between the two must not orphan it
+    if run_dir is not None and not _top(path, run_dir).exists():
+        # a folder this write makes is claimed before it is made: a kill between the two
+        # must not leave it there unclaimed (its resume finds it and claims nothing)
         claim(path, run_dir, made_folder=True)
     path = check_target(path, what, mkdir)
     for hook in WRITE_HOOKS:
@@ -149,7 +150,7 @@ def atomic_output(path: str | Path, what: str = "file", mkdir: bool = False,
         tmp.unlink(missing_ok=True)
         raise
     _fsync_dir(path.parent)
-    claim(path, made_folder=made)
+    claim(path)  # a file directly in a run folder (a folder this made is claimed above)
 
 
 def open_append(path: str | Path, what: str = "file", binary: bool = False):
