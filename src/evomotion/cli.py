@@ -189,6 +189,11 @@ def replay_cmd(
         "--from", help="Initial state: standing, face-down or face-up")] = None,
     stress: Annotated[int | None, typer.Option(
         help="A policy: play it in N unseen perturbed worlds and print its survival")] = None,
+    command: Annotated[str | None, typer.Option(
+        help="A walk controller: vx,vy,w (m/s, m/s, rad/s) or a file of lines 't_s, vx, vy, "
+             "w'; default the run's random commands")] = None,
+    duration: Annotated[float | None, typer.Option(
+        help="A walk controller: seconds walked (default 20)")] = None,
 ) -> None:
     """Play a Webots .motion on the NAO model: displacement, heading change, fall;
     optionally in perturbed worlds or from lying (docs/humanoid-step.md). A policy run
@@ -210,10 +215,18 @@ def replay_cmd(
         if study.replay_run is None:
             raise InputError(f"replay {motion}: a {study.name} run has nothing to replay here "
                              "(a .motion file of it can be given instead)")
+        walk = {k: v for k, v in (("command", command), ("duration_s", duration))
+                if v is not None}
+        if walk and study.name != "humanoid-omniwalk":
+            raise InputError("replay: --command and --duration are for a walk controller run "
+                             f"(humanoid-omniwalk), not a {study.name} run")
         study.replay_run(motion, json_out=json_out, video=video,
                          stress=stress if stress is not None else trials, seed=seed,
-                         push_ns=push)
+                         push_ns=push, **walk)
         return
+    if command is not None or duration is not None:
+        raise InputError("replay: --command and --duration are for a walk controller run "
+                         "folder, not a .motion")
     if stress is not None:
         raise InputError("--stress is for a policy run folder; a .motion takes --trials N")
     stress = StressOptions(friction=friction, mass_scale=mass_scale, push_ns=push,

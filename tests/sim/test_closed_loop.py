@@ -284,3 +284,53 @@ def test_worlds_of_another_robot_are_refused(robot):
     other = make_world(load_robot("op3").model)
     with ClosedLoopSimulator(robot, SPEC, 5) as sim, pytest.raises(InputError, match="world 1"):
         sim.run(zero, [make_world(robot.model), other], 10)
+
+
+def test_a_command_schedule_feeds_each_control_step_its_command(robot):
+    """commands[n, C, m]: control step c observes commands[:, c]; a held [n, m] command is the
+    same as that schedule repeated."""
+    spec = ObservationSpec(("gyro", "command"), command_size=2)
+    n, k, nstep = 2, 3, 12
+    C = nstep // k
+    sched = np.arange(n * C * 2, dtype=float).reshape(n, C, 2)
+    seen = []
+
+    def policy(rows, obs):
+        seen.append(obs[:, -2:].copy())
+        return np.zeros((rows.size, 10))
+
+    with ClosedLoopSimulator(robot, spec, k) as sim:
+        sim.run(policy, n, nstep, commands=sched)
+        np.testing.assert_array_equal(np.stack(seen, axis=1), sched)
+        seen.clear()
+        sim.run(policy, n, nstep, commands=sched[:, 0])
+        np.testing.assert_array_equal(np.stack(seen, axis=1),
+                                      np.repeat(sched[:, :1], C, axis=1))
+        with pytest.raises(InputError, match="command schedule"):
+            sim.run(policy, n, nstep, commands=sched[:, :-1])
+
+
+def test_a_follower_actuator_copies_its_leader(robot):
+    """followers=[(f, l)]: actuator f gets actuator l's target (the NAO's hip yaw-pitch is one
+    motor); the targets the servos receive equal an open-loop run with that copy made."""
+    from evomotion.sim.robots import nao
+
+    col = {j: i for i, j in enumerate(nao.JOINTS)}
+    lead, follow = col["LHipYawPitch"], col["RHipYawPitch"]
+    cols = [*robot.columns, lead]
+    n, k, nstep = 2, 4, 40
+
+    def policy(rows, obs):
+        a = np.zeros((rows.size, len(cols)))
+        a[:, -1] = -0.3
+        return a
+
+    with ClosedLoopSimulator(robot, SPEC, k, columns=cols,
+                             followers=[(follow, lead)]) as sim:
+        res = sim.run(policy, n, nstep, record_states=True)
+    ctrl = np.broadcast_to(robot.pose, (n, nstep, robot.model.nu)).copy()
+    ctrl[..., lead] = ctrl[..., follow] = robot.pose[lead] - 0.3
+    states = open_loop_segments(robot, ctrl, k)
+    np.testing.assert_array_equal(res.states[:, -1], states[:, -1])
+    with pytest.raises(InputError, match="followers"):
+        ClosedLoopSimulator(robot, SPEC, k, columns=cols, followers=[(lead, follow)])

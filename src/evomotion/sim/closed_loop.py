@@ -13,6 +13,8 @@ one ``mujoco.rollout`` call (persistent threads, one model per world).
   default the robot's evolved joints); the simulator clips ``nominal + action`` to the joint
   ranges (the robot's ``[evolve]`` ranges, else the model's joint and control ranges); a NaN
   action counts as 0 (the nominal pose). Undriven actuators hold the nominal pose.
+- ``followers``: (follower, leader) actuator pairs whose follower copies the leader's target
+  (two actuators of one motor: the NAO's hip yaw-pitch joints).
 - Latency: an individual's targets take effect ``latency_steps`` physics steps late (the
   world's servo delay, :mod:`evomotion.sim.worlds`): a FIFO of its last targets, read at
   physics-step resolution (step ``t`` uses the target sent at control step
@@ -106,9 +108,11 @@ class ClosedLoopSimulator:
                  nthread: int = 1, columns: Sequence[int] | None = None,
                  nominal: np.ndarray | None = None, push_steps: int = 1,
                  fall_height_m: float | None = None,
-                 fall_tilt_rad: float | None = None) -> None:
+                 fall_tilt_rad: float | None = None,
+                 followers: Sequence[tuple[int, int]] = ()) -> None:
         configure(self, robot, observations, control_steps, nthread, columns, nominal,
                   push_steps, fall_height_m, fall_tilt_rad)
+        self.followers = _followers(followers, self.model.nu, self.columns)
         self.nthread = int(nthread)
         self.datas = [mujoco.MjData(self.model) for _ in range(self.nthread)]
         self._runner = mj_rollout.Rollout(nthread=self.nthread) if self.nthread > 1 else None
@@ -158,7 +162,9 @@ class ClosedLoopSimulator:
         """Run ``worlds`` (perturbed :class:`~evomotion.sim.worlds.World` s, one per
         individual, or a count ``n`` of individuals in the robot's own model) for ``nstep``
         physics steps under ``policy`` (see the module doc). ``commands[n, command_size]``
-        feed the ``command`` channel; ``initial_state``: ``[nstate]`` or ``[n, nstate]``
+        (held for the whole run) or ``commands[n, C, command_size]`` (one per control step,
+        ``C = ceil(nstep / k)``: a command schedule) feed the ``command`` channel;
+        ``initial_state``: ``[nstate]`` or ``[n, nstate]``
         (default the robot's ``state0``)."""
         worlds = list(worlds) if not isinstance(worlds, int | np.integer) else int(worlds)
         n = len(worlds) if isinstance(worlds, list) else worlds
@@ -178,9 +184,9 @@ class ClosedLoopSimulator:
                       (n, self.nstate), "initial_state")
         sensors = (initial_sensors(self.model, state) if self.observe.needs_sensors
                    else np.zeros((n, self.model.nsensordata)))
-        cmd = None if commands is None else _rows(commands, (n, self.spec_command_size),
-                                                  "commands")
         nctrl = math.ceil(nstep / self.k)
+        cmd = None if commands is None else _schedule(commands, n, nctrl,
+                                                      self.spec_command_size)
         rec = _Records(n, nctrl, self.observe.size, state, self.model.nq, self.action_size,
                        record_states, record_targets)
         fifo = TargetFifo(n, self.nominal, latency, self.k)
@@ -189,7 +195,7 @@ class ClosedLoopSimulator:
         for c in range(nctrl):
             t0, kk = c * self.k, min(self.k, nstep - c * self.k)
             obs = self.observe(state[alive], sensors[alive],
-                               None if cmd is None else cmd[alive])
+                               None if cmd is None else cmd[alive, c])
             rec.observed(alive, obs)
             rows = alive.view()
             rows.flags.writeable = False  # the policy reads the rows, cannot edit ours
@@ -197,6 +203,8 @@ class ClosedLoopSimulator:
             rec.sent(alive, c, targets)
             full = np.broadcast_to(self.nominal, (alive.size, self.model.nu)).copy()
             full[:, self.columns] = targets
+            if self.followers.size:  # one motor behind two actuators (the NAO's hip yaw)
+                full[:, self.followers[:, 0]] = full[:, self.followers[:, 1]]
             fifo.push(alive, c, full)
             ctrl = fifo.controls(alive, t0, kk)
             if pushes.any:
@@ -258,6 +266,31 @@ def _check_sizes(model: mujoco.MjModel, models: np.ndarray) -> None:
         if not isinstance(m, mujoco.MjModel) or tuple(getattr(m, s) for s in sizes) != want:
             raise InputError(f"closed loop: world {i}'s model is not the robot's "
                              f"(sizes {', '.join(sizes)} must be {want})")
+
+
+def _followers(pairs, nu: int, columns: np.ndarray) -> np.ndarray:
+    """``[k, 2]`` (follower, leader) actuator pairs: the follower's target is the leader's."""
+    a = np.asarray(list(pairs), dtype=np.int64).reshape(-1, 2)
+    if a.size and (((a < 0) | (a >= nu)).any() or np.isin(a[:, 0], columns).any()
+                   or np.isin(a[:, 0], a[:, 1]).any()):
+        raise InputError(f"closed loop: followers must be (follower, leader) actuators in "
+                         f"0..{nu - 1}, a follower neither driven nor a leader, got "
+                         f"{a.tolist()}")
+    return a
+
+
+def _schedule(commands, n: int, nctrl: int, size: int) -> np.ndarray:
+    """``commands`` (``[size]``, ``[n, size]`` or a schedule ``[n, nctrl, size]``) as a
+    float64 ``[n, nctrl, size]`` schedule."""
+    a = np.asarray(commands, dtype=np.float64)
+    if a.ndim == 3:
+        if a.shape != (n, nctrl, size):
+            raise InputError(f"closed loop: a command schedule must have shape "
+                             f"{(n, nctrl, size)}, got {a.shape}")
+        if not np.isfinite(a).all():
+            raise InputError("closed loop: commands must be finite")
+        return a
+    return np.repeat(_rows(a, (n, size), "commands")[:, None], nctrl, axis=1)
 
 
 def _rows(values, shape: tuple[int, int], name: str) -> np.ndarray:

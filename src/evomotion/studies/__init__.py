@@ -22,6 +22,7 @@ STUDIES: dict[str, str] = {
     "quadruped-plan": "evomotion.studies.quadruped_plan.study:STUDY",
     "gym": "evomotion.studies.gym.study:STUDY",
     "humanoid-balance": "evomotion.studies.humanoid_balance.study:STUDY",
+    "humanoid-omniwalk": "evomotion.studies.humanoid_omniwalk.study:STUDY",
 }
 
 

@@ -117,7 +117,8 @@ class PolicySearchDriver(Driver):
 
     def init(self, rng: np.random.Generator) -> PolicySearchState:
         o = self.problem.obs_dim
-        opt_state = self.opt.init(rng)
+        start = getattr(self.problem, "initial_population", None)  # e.g. a fitted gait tape
+        opt_state = self.opt.init(rng) if start is None else self.opt.init(rng, start(1, rng))
         return PolicySearchState(opt_state, normalizer.init(o),
                                  np.asarray(self.opt.center(opt_state), float).copy(),
                                  float("inf"), np.zeros(o), np.ones(o))

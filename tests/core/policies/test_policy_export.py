@@ -35,6 +35,8 @@ SPECS = {
                                  offset=[0.0, 0.5, -0.5], low=[-0.8, -1.0, -1.0],
                                  high=[0.8, 2.5, 0.0], clip_obs=3.0),
     "structured-tape-only": StructuredSpec(2, 2, phase_columns=(1, 0), harmonics=0),
+    "structured-commanded": StructuredSpec(7, 3, phase_columns=(5, 2), harmonics=2,
+                                           command_columns=(6, 0, 3), clip_obs=4.0),
 }
 
 
@@ -191,9 +193,15 @@ def test_bad_structured_files_are_one_line_errors(tmp_path, change, message) -> 
 def test_structured_policy_py_is_exactly_the_numpy_policy(tmp_path) -> None:
     """On observations whose phase columns lie on the unit circle (as the simulator's do), the
     numpy-only policy.py returns exactly spec.act's numbers, one row or a batch."""
+
+    for name in ("structured", "structured-commanded"):
+        _exactly_the_numpy_policy(tmp_path / name, SPECS[name])
+
+
+def _exactly_the_numpy_policy(tmp_path, spec) -> None:
     import importlib.util
 
-    spec = SPECS["structured"]
+    tmp_path.mkdir()
     params, mean, std = _policy(spec, seed=2)
     paths = export_policy(tmp_path, spec, params, mean, std, ("npz", "py"))
     module_spec = importlib.util.spec_from_file_location("exported_policy", paths["py"])

@@ -144,3 +144,41 @@ def test_fit_tape_errors_are_one_line(args, message) -> None:
     spec = StructuredSpec(3, 2, phase_columns=(0, 1), harmonics=1)
     with pytest.raises(ValueError, match=r"shape \(2, 3\)"):
         spec.params_from_tape(np.zeros((2, 5)))
+
+
+def test_a_command_modulates_every_harmonic_affinely() -> None:
+    """tape(phi, c) = C_0 f(phi) + sum_i c_i C_i f(phi): the columns of c_i f after those of f,
+    the command read raw; zero command = the plain tape."""
+    rng = np.random.default_rng(3)
+    spec = StructuredSpec(6, 2, phase_columns=(0, 1), harmonics=1, command_columns=(4, 2))
+    assert spec.n_features == 3 * 3 and spec.n_params == 2 * 9 + 2 * 4
+    C = rng.normal(size=(2, 9))
+    p = spec.params_from_tape(C)
+    phi, c = 0.7, np.array([0.3, -1.2])
+    obs = np.array([[np.sin(phi), np.cos(phi), c[1], 9.0, c[0], 5.0]])
+    f = np.array([1.0, np.sin(phi), np.cos(phi)])
+    want = C[:, :3] @ f + c[0] * (C[:, 3:6] @ f) + c[1] * (C[:, 6:] @ f)
+    got = spec.act(p[None], obs, np.full(6, 2.0), np.full(6, 3.0))[0]
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)
+    obs[0, [4, 2]] = 0.0
+    np.testing.assert_allclose(spec.act(p[None], obs, np.zeros(6), np.ones(6))[0],
+                               C[:, :3] @ f, rtol=0, atol=1e-12)
+
+
+def test_fit_tape_with_commands_recovers_a_commanded_gait() -> None:
+    rng = np.random.default_rng(5)
+    true = rng.normal(size=(3, 5 * 3))  # H = 2, m = 2
+    t = np.linspace(0, 4, 401)
+    cmd = rng.uniform(-1, 1, size=(t.size, 2))
+    phi = 2 * np.pi * t / 0.5
+    f = phase_features(np.sin(phi), np.cos(phi), 2)
+    g = np.concatenate([f, cmd[:, :1] * f, cmd[:, 1:] * f], axis=1)
+    coeffs = fit_tape(t, g @ true.T, 0.5, 2, commands=cmd)
+    np.testing.assert_allclose(coeffs, true, atol=1e-9)
+
+
+@pytest.mark.parametrize("cols", [(0,), (1, 3, 1), (9,), (True,), ("a",)])
+def test_bad_command_columns_are_one_line(cols) -> None:
+    with pytest.raises(ValueError, match="command_columns") as e:
+        StructuredSpec(4, 1, phase_columns=(0, 1), command_columns=cols)
+    assert "\n" not in str(e.value)

@@ -9,7 +9,8 @@ Gymnasium or robot loop runs it with nothing of evomotion installed.
 ``action_high[a]`` (±inf: no bound); then linear and MLP policies ``n_layers``,
 ``layer{k}_weight[out, in]`` and ``layer{k}_bias[out]`` (absent for a layer without one), and
 structured ones (:mod:`.structured`) ``harmonics`` (H), ``phase_columns[2]`` (the raw sin and
-cos columns), ``tape_coef[a, 1 + 2H]`` and ``feedback_gain[a, o − 2]``. ``policy.py`` is
+cos columns), ``command_columns[m]`` (the raw command columns that modulate the tape; may be
+absent: none), ``tape_coef[a, (1 + 2H)(1 + m)]`` and ``feedback_gain[a, o − 2]``. ``policy.py`` is
 :mod:`.standalone` as text; ``policy.onnx`` is built by :mod:`.onnx_graph`.
 :func:`read_policy_npz` reads a file back with one-line errors for whatever is wrong with it.
 """
@@ -39,6 +40,7 @@ _KINDS: dict[str, type[PolicySpec]] = POLICIES
 _FIXED = ("format_version", "kind", "obs_mean", "obs_std", "clip_obs", "output_tanh",
           "action_scale", "action_offset", "action_low", "action_high")
 _STRUCTURED = ("harmonics", "phase_columns", "tape_coef", "feedback_gain")
+_OPTIONAL = ("command_columns",)  # absent: no command (files written before it existed)
 
 
 @dataclass(frozen=True, eq=False)
@@ -73,6 +75,7 @@ def policy_arrays(spec: PolicySpec, params: np.ndarray, obs_mean: np.ndarray,
     if isinstance(spec, StructuredSpec):
         arrays.update(harmonics=np.array(spec.harmonics, dtype=np.int64),
                       phase_columns=np.array(spec.phase_columns, dtype=np.int64),
+                      command_columns=np.array(spec.command_columns, dtype=np.int64),
                       tape_coef=np.ascontiguousarray(layers[0][0]),
                       feedback_gain=np.ascontiguousarray(layers[1][0]))
         return arrays
@@ -194,9 +197,14 @@ def _structured(arrays: dict[str, np.ndarray], bad
     if cols.shape != (2,) or cols.dtype.kind not in "iu":
         raise bad("phase_columns", f"must be two whole numbers, got {cols.dtype} of shape "
                   f"{cols.shape}")
+    cmd = arrays.get("command_columns", np.zeros(0, np.int64))
+    if cmd.ndim != 1 or (cmd.size and cmd.dtype.kind not in "iu"):
+        raise bad("command_columns", f"must be whole numbers, got {cmd.dtype} of shape "
+                  f"{cmd.shape}")
+    width = (1 + 2 * h) * (1 + cmd.size)
     tape, gain = arrays["tape_coef"], arrays["feedback_gain"]
-    if tape.ndim != 2 or tape.shape[0] < 1 or tape.shape[1] != 1 + 2 * h:
-        raise bad("tape_coef", f"must be a matrix [a, {1 + 2 * h}], got shape {tape.shape}")
+    if tape.ndim != 2 or tape.shape[0] < 1 or tape.shape[1] != width:
+        raise bad("tape_coef", f"must be a matrix [a, {width}], got shape {tape.shape}")
     if gain.ndim != 2 or gain.shape[0] != tape.shape[0]:
         raise bad("feedback_gain", f"must be a matrix [{tape.shape[0]}, o - 2], got shape "
                   f"{gain.shape}")
@@ -206,8 +214,9 @@ def _structured(arrays: dict[str, np.ndarray], bad
         if not np.isfinite(W).all():
             raise bad(key, "holds a non-finite number")
         layers.append((W, None))
-    options = {"harmonics": h, "phase_columns": tuple(int(c) for c in cols)}
-    return layers, set(_STRUCTURED), options
+    options = {"harmonics": h, "phase_columns": tuple(int(c) for c in cols),
+               "command_columns": tuple(int(c) for c in cmd)}
+    return layers, set(_STRUCTURED) | set(_OPTIONAL), options
 
 
 def _integer(arrays: dict[str, np.ndarray], key: str, bad) -> int:

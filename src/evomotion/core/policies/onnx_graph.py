@@ -12,7 +12,9 @@ A structured policy (:mod:`.structured`) replaces the layers by its tape and gai
 
     Gather(observation, sin/cos column) -> s_1, c_1 [batch, 1]         (raw, not normalised)
     s_{k+1} = Add(Mul(s_k, c_1), Mul(c_k, s_1)), c_{k+1} = Sub(Mul(c_k, c_1), Mul(s_k, s_1))
-    tape = a_0 + Σ_k Add(Mul(s_k, a_k), Mul(c_k, b_k))                  ([batch, act])
+    g = Concat(1, s_1, c_1, ..., s_H, c_H)                             ([batch, 1 + 2H])
+    g = Concat(g, Mul(g, command_1), ..., Mul(g, command_m))           (with command_columns)
+    tape = MatMul(g, Cᵀ)                                                ([batch, act])
     Gather(normalised, other columns) -> MatMul(Kᵀ) -> Add(tape)        (the feedback)
 Built with ``onnx.helper``; needs the ``onnx`` extra (``pip install evomotion[onnx]``).
 """
@@ -88,26 +90,33 @@ def policy_model(spec: PolicySpec, params: np.ndarray, obs_mean: np.ndarray,
 
 
 def _structured(spec: StructuredSpec, layers: list[Layer], normalised: str, const, node) -> str:
-    """The nodes of ``tape(φ) + K x`` (see the module doc); returns the output's name."""
+    """The nodes of ``tape(φ, c) + K x`` (see the module doc); returns the output's name."""
     (C, _), (K, _) = layers
     i, j = spec.phase_columns  # type: ignore[misc]
     s1 = node("Gather", ["observation", const("phase_sin_column", np.array([i], np.int64))],
               "phase_sin_1", axis=1)
     c1 = node("Gather", ["observation", const("phase_cos_column", np.array([j], np.int64))],
               "phase_cos_1", axis=1)
-    y = const("tape_a0", C[:, 0])
+    one = node("Add", [node("Mul", [s1, const("zero", np.zeros(1))], "zero_batch"),
+                       const("one", np.ones(1))], "phase_one")
+    f = [one]
     s, c = s1, c1
     for k in range(1, spec.harmonics + 1):
         if k > 1:
             sc, cs = node("Mul", [s, c1], f"sc_{k}"), node("Mul", [c, s1], f"cs_{k}")
             cc, ss = node("Mul", [c, c1], f"cc_{k}"), node("Mul", [s, s1], f"ss_{k}")
             s, c = node("Add", [sc, cs], f"phase_sin_{k}"), node("Sub", [cc, ss], f"phase_cos_{k}")
-        term_a = node("Mul", [s, const(f"tape_a{k}", C[:, 2 * k - 1])], f"tape_sin_{k}")
-        term_b = node("Mul", [c, const(f"tape_b{k}", C[:, 2 * k])], f"tape_cos_{k}")
-        y = node("Add", [y, node("Add", [term_a, term_b], f"tape_term_{k}")], f"tape_{k}")
-    if spec.harmonics == 0:  # a constant: broadcast it to [batch, act] through the clock
-        y = node("Add", [node("Mul", [s1, const("zero", np.zeros(1))], "zero_batch"), y],
-                 "tape_0")
+        f += [s, c]
+    g = node("Concat", f, "phase_features", axis=1)
+    parts = [g]
+    for m, col in enumerate(spec.command_columns):
+        cm = node("Gather", ["observation", const(f"command_column_{m}",
+                                                  np.array([col], np.int64))],
+                  f"command_{m}", axis=1)
+        parts.append(node("Mul", [g, cm], f"command_features_{m}"))
+    if len(parts) > 1:
+        g = node("Concat", parts, "tape_features", axis=1)
+    y = node("MatMul", [g, const("tape_coef_t", C.T)], "tape")
     if K.shape[1] == 0:
         return y
     x = node("Gather", [normalised, const("feedback_columns",

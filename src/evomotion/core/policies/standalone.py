@@ -12,8 +12,9 @@ passed through the layers (tanh between layers, and after the last one when ``ou
 mapped to ``offset + scale * y`` and clipped to ``[low, high]``. A "structured" policy's ``y``
 is instead ``tape(phi) + K x``: a Fourier series of the phase read from the RAW sin/cos
 columns ``phase_columns`` (``tape_coef[a, 1 + 2H]`` on ``1, sin phi, cos phi, ...,
-sin H phi, cos H phi``, the multiples by angle addition) plus the gains ``feedback_gain`` on the
-normalised observation without those two columns. Only numpy and the standard library are
+sin H phi, cos H phi``, the multiples by angle addition; with ``command_columns`` the
+features are those and each raw command value times them) plus the gains ``feedback_gain`` on
+the normalised observation without the two phase columns. Only numpy and the standard library are
 imported.
 """
 
@@ -40,6 +41,7 @@ class Policy:
         if self.kind == "structured":
             self.harmonics = int(arrays["harmonics"])
             self.phase_columns = [int(c) for c in arrays["phase_columns"]]
+            self.command_columns = [int(c) for c in arrays.get("command_columns", [])]
             self.tape = np.asarray(arrays["tape_coef"], dtype=np.float64)
             self.gain = np.asarray(arrays["feedback_gain"], dtype=np.float64)
         for k in range(0 if self.kind == "structured" else int(arrays["n_layers"])):
@@ -83,7 +85,9 @@ class Policy:
             features += [s, c]
             if k < self.harmonics:
                 s, c = s * c1 + c * s1, c * c1 - s * s1
-        y = _row_dot(self.tape, np.stack(features, axis=-1))
+        f = np.stack(features, axis=-1)
+        f = np.concatenate([f] + [x[:, m, None] * f for m in self.command_columns], axis=-1)
+        y = _row_dot(self.tape, f)
         if self.gain.shape[1]:
             keep = [k for k in range(self.obs_dim) if k not in (i, j)]
             y = y + _row_dot(self.gain, h[:, keep])

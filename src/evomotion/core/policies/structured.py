@@ -20,9 +20,16 @@ and ONNX compute the same thing). ``x`` is the ARS V2 normalised observation (Ma
 2018, Algorithm 2 line 5, clipped to ``±clip_obs``) without the two phase columns; ``K`` the
 ``act_dim x (obs_dim − 2)`` feedback gains.
 
-Parameters (``n_params = a (1 + 2H) + a (o − 2)``): the tape coefficients first, ``C[a, 1 + 2H]``
-row-major with row ``j = (a_j0, a_j1, b_j1, ..., a_jH, b_jH)`` (the weights of the features
-``f(φ) = (1, sin φ, cos φ, ..., sin Hφ, cos Hφ)``), then ``K`` row-major. Zero parameters give
+A command (``command_columns``: the observation's raw command values ``c_1..c_m``, e.g. a walk's
+``vx, vy, ω``) modulates the tape: the features become ``g = (f, c_1 f, ..., c_m f)``, so
+``tape(φ, c) = C_0 f(φ) + Σ_i c_i C_i f(φ)``, a gait whose every harmonic is an affine function
+of the command (the step length, width and turn of a walk engine scale its foot trajectories by
+the command; :func:`fit_tape` fits such a tape to an engine's trajectories at many commands).
+
+Parameters (``n_params = a (1 + 2H)(1 + m) + a (o − 2)``): the tape coefficients first,
+``C[a, (1 + 2H)(1 + m)]`` row-major with row ``j = (a_j0, a_j1, b_j1, ..., a_jH, b_jH)`` (the
+weights of the features ``f(φ) = (1, sin φ, cos φ, ..., sin Hφ, cos Hφ)``; with a command, then
+the same for ``c_1 f``, ..., ``c_m f``), then ``K`` row-major. Zero parameters give
 the nominal pose ``offset``. :func:`fit_tape` fits ``C`` to an open-loop gait's keyframe
 trajectory by least squares, :meth:`StructuredSpec.params_from_tape` makes it a start (K = 0).
 """
@@ -69,6 +76,7 @@ class StructuredSpec(PolicySpec):
 
     phase_columns: tuple[int, int] | None = None  # the (sin, cos) columns of the observation
     harmonics: int = 2  # H: sin/cos pairs of the tape per action
+    command_columns: tuple[int, ...] = ()  # raw observation columns that modulate the tape
 
     kind: ClassVar[str] = "structured"
     squash_output: ClassVar[bool] = False
@@ -96,11 +104,29 @@ class StructuredSpec(PolicySpec):
             raise ValueError(f"phase_columns must be two different columns in 0..{self.obs_dim - 1}"
                              f", got {(i, j)}")
         object.__setattr__(self, "phase_columns", (i, j))
+        raw = self.command_columns
+        cmd: tuple = tuple(raw) if isinstance(raw, tuple | list | np.ndarray) else (raw,)
+        if any(isinstance(c, bool) or not isinstance(c, int | np.integer)
+               or not 0 <= int(c) < self.obs_dim or int(c) in (i, j) for c in cmd) or \
+                len(set(int(c) for c in cmd)) != len(cmd):
+            raise ValueError(f"command_columns must be different column numbers in "
+                             f"0..{self.obs_dim - 1}, not the phase columns, got "
+                             f"{self.command_columns!r}")
+        object.__setattr__(self, "command_columns", tuple(int(c) for c in cmd))
 
     @property
     def n_features(self) -> int:
-        """``1 + 2H``: the tape's features per action."""
-        return 1 + 2 * self.harmonics
+        """``(1 + 2H)(1 + m)``: the tape's features per action."""
+        return (1 + 2 * self.harmonics) * (1 + len(self.command_columns))
+
+    def features(self, obs: np.ndarray) -> np.ndarray:
+        """``g[n, (1 + 2H)(1 + m)] = (f, c_1 f, ..., c_m f)`` of raw observations."""
+        i, j = self.phase_columns  # type: ignore[misc]
+        f = phase_features(obs[:, i], obs[:, j], self.harmonics)
+        if not self.command_columns:
+            return f
+        return np.concatenate([f] + [obs[:, c, None] * f for c in self.command_columns],
+                              axis=-1)
 
     @property
     def feedback_columns(self) -> np.ndarray:
@@ -120,9 +146,7 @@ class StructuredSpec(PolicySpec):
         observation (``mean``/``std``: ``(o,)`` or one per row ``(n, o)``)."""
         obs = self._check_act(params, obs, mean, std)
         (C, _), (K, _) = self.unflatten(params)
-        i, j = self.phase_columns  # type: ignore[misc]
-        f = phase_features(obs[:, i], obs[:, j], self.harmonics)
-        y = _row_dot(C, f)
+        y = _row_dot(C, self.features(obs))
         if K.shape[-1]:
             x = self.normalise(obs, mean, std)[:, self.feedback_columns]
             y = y + _row_dot(K, x)
@@ -138,11 +162,13 @@ class StructuredSpec(PolicySpec):
         return self.flatten(layers)
 
 
-def fit_tape(times_s: np.ndarray, targets: np.ndarray, period_s: float, harmonics: int
-             ) -> np.ndarray:
+def fit_tape(times_s: np.ndarray, targets: np.ndarray, period_s: float, harmonics: int,
+             commands: np.ndarray | None = None) -> np.ndarray:
     """Least-squares tape ``coeffs[a, 1 + 2H]`` (rows as in the module doc) through the samples
     ``targets[T, a]`` at ``times_s[T]``, with ``φ = 2π t / period_s``. Fit the policy's output
-    ``y``: for a pose trajectory ``q`` that is ``(q − offset) / scale``."""
+    ``y``: for a pose trajectory ``q`` that is ``(q − offset) / scale``. With
+    ``commands[T, m]`` (the command at each sample) the tape is command-modulated:
+    ``coeffs[a, (1 + 2H)(1 + m)]``."""
     t = np.asarray(times_s, dtype=np.float64)
     q = np.asarray(targets, dtype=np.float64)
     if isinstance(harmonics, bool) or not isinstance(harmonics, int | np.integer) or \
@@ -158,6 +184,11 @@ def fit_tape(times_s: np.ndarray, targets: np.ndarray, period_s: float, harmonic
         raise ValueError("times_s and targets must be finite")
     phi = 2.0 * np.pi * t / float(period_s)
     F = phase_features(np.sin(phi), np.cos(phi), int(harmonics))
+    if commands is not None:
+        c = np.asarray(commands, dtype=np.float64)
+        if c.ndim != 2 or c.shape[0] != t.size or not np.isfinite(c).all():
+            raise ValueError(f"commands must be finite, of shape ({t.size}, m), got {c.shape}")
+        F = np.concatenate([F] + [c[:, k, None] * F for k in range(c.shape[1])], axis=-1)
     if np.linalg.matrix_rank(F) < F.shape[1]:
         raise ValueError(f"{t.size} samples do not determine {F.shape[1]} tape coefficients "
                          f"(need at least {F.shape[1]} distinct phases)")

@@ -138,18 +138,23 @@ def structured_record(arrays: dict[str, np.ndarray], observation_names: Sequence
     """The ``policy.json`` part of a structured policy (:mod:`evomotion.core.policies.structured`)
     from ``policy.npz``'s arrays: normaliser, action map, ``harmonics`` H, ``phase_columns``
     (which must be the observation's ``phase:sin``, ``phase:cos``: the runner's clock),
-    ``tape_coef[a][1 + 2H]``, ``feedback_gain[a][o - 2]``; a bad shape is one InputError
+    ``command_columns`` (the raw command columns that modulate the tape),
+    ``tape_coef[a][(1 + 2H)(1 + m)]``, ``feedback_gain[a][o - 2]``; a bad shape is one InputError
     line."""
     names = list(observation_names)
     o, act = len(names), int(np.shape(arrays["action_scale"])[0])
     h = int(arrays["harmonics"])
     cols = [int(c) for c in np.ravel(arrays["phase_columns"])]
+    cmd = [int(c) for c in np.ravel(arrays.get("command_columns", np.zeros(0, np.int64)))]
+    if any(not 0 <= c < o or not names[c].startswith("command:") for c in cmd):
+        raise InputError(f"NAOqi export: the structured policy's command columns {cmd} must be "
+                         "the observation's command columns")
     tape, gain = np.asarray(arrays["tape_coef"]), np.asarray(arrays["feedback_gain"])
     if len(cols) != 2 or [names[c] if 0 <= c < o else None for c in cols] != \
             ["phase:sin", "phase:cos"]:
         raise InputError(f"NAOqi export: the structured policy's phase columns {cols} must be "
                          "the observation's phase:sin and phase:cos (the runner's clock)")
-    for key, arr, shape in (("tape_coef", tape, (act, 1 + 2 * h)),
+    for key, arr, shape in (("tape_coef", tape, (act, (1 + 2 * h) * (1 + len(cmd)))),
                             ("feedback_gain", gain, (act, o - 2))):
         if arr.shape != shape or not np.isfinite(arr).all():
             raise InputError(f"NAOqi export: the structured policy's {key} must be finite "
@@ -157,8 +162,8 @@ def structured_record(arrays: dict[str, np.ndarray], observation_names: Sequence
     if int(np.shape(arrays["obs_mean"])[0]) != o:
         raise InputError(f"NAOqi export: {o} observation names for a normaliser of "
                          f"{np.shape(arrays['obs_mean'])[0]} columns")
-    return {**_head(arrays), "harmonics": h, "phase_columns": cols, "tape_coef": tape,
-            "feedback_gain": gain}
+    return {**_head(arrays), "harmonics": h, "phase_columns": cols, "command_columns": cmd,
+            "tape_coef": tape, "feedback_gain": gain}
 
 
 def policy_model(policy: ExportedPolicy, observation_names: Sequence[str]) -> dict[str, Any]:
@@ -176,7 +181,8 @@ def naoqi_policy_record(policy: ExportedPolicy, observation_names: Sequence[str]
                         lower_rad: Sequence[float], upper_rad: Sequence[float],
                         control_period_s: float, phase_period_s: float = 0.0,
                         nominal_pose: dict[str, float] | None = None,
-                        contact_threshold_kg: float = CONTACT_THRESHOLD_KG) -> dict[str, Any]:
+                        contact_threshold_kg: float = CONTACT_THRESHOLD_KG,
+                        command_ramp_s: float = 0.0) -> dict[str, Any]:
     """The runner's ``policy.json`` record (see the module doc); one InputError line for a
     policy the NAO cannot run."""
     names, joints = list(observation_names), list(joints)
@@ -207,6 +213,7 @@ def naoqi_policy_record(policy: ExportedPolicy, observation_names: Sequence[str]
             "roll_key": ROLL_KEY, "pitch_key": PITCH_KEY,
             "contact_threshold_kg": float(contact_threshold_kg),
             "phase_period_s": float(phase_period_s),
+            "command_ramp_s": float(command_ramp_s),
             "control_period_s": float(control_period_s),
             "joints": joints, "nominal_rad": np.asarray(nominal_rad, float),
             "lower_rad": np.asarray(lower_rad, float), "upper_rad": np.asarray(upper_rad, float),
@@ -224,12 +231,14 @@ def write_naoqi_policy(folder: str | Path, policy: ExportedPolicy,
                        nominal_rad: Sequence[float], lower_rad: Sequence[float],
                        upper_rad: Sequence[float], control_period_s: float,
                        phase_period_s: float = 0.0,
-                       nominal_pose: dict[str, float] | None = None) -> dict[str, Path]:
+                       nominal_pose: dict[str, float] | None = None,
+                       command_ramp_s: float = 0.0) -> dict[str, Path]:
     """``folder/policy_runner.py`` and ``folder/policy.json`` (made with its parent's
     permission, i.e. ``folder`` may be new); everything is checked before anything is
     written."""
     record = naoqi_policy_record(policy, observation_names, joints, nominal_rad, lower_rad,
-                                 upper_rad, control_period_s, phase_period_s, nominal_pose)
+                                 upper_rad, control_period_s, phase_period_s, nominal_pose,
+                                 command_ramp_s=command_ramp_s)
     folder = Path(folder)
     return {"json": write_json(folder / POLICY_JSON, record, "NAOqi policy file", mkdir=True,
                                indent=1),

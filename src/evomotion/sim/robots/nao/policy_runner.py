@@ -4,7 +4,8 @@
 """Run an evomotion closed-loop policy on a real NAO through NAOqi (written by evomotion).
 
     python policy_runner.py [policy.json] [--ip 127.0.0.1] [--port 9559] [--seconds 10]
-                            [--period-ms 20] [--command vx,vy,w] [--dry-run]
+                            [--period-ms 20] [--command vx,vy,w] [--command-key KEY]
+                            [--dry-run]
 
 One file, the standard library only (no numpy, no evomotion): it runs under NAOqi 2.8's own
 Python 2.7 on the robot and under Python 3 with the ``naoqi`` SDK module on a PC. Every control
@@ -21,7 +22,11 @@ position over the measured period; 0 on the first step), ``gravity`` (``R^T (0, 
 AngleX = roll, AngleY = pitch, ZYX convention: ``(sin p, -sin r cos p, -cos r cos p)``),
 ``contact`` (1 when a foot's FSR total weight in kg is above ``contact_threshold_kg``, else
 0), ``phase_sin``/``phase_cos`` (the runner's own clock from the loop's start), ``command``
-(``--command``).
+(``--command``, fixed; or ``--command-key KEY``: the list of numbers a behaviour puts at that
+ALMemory key with ``insertData``, read in the same ``getListData`` call every step, the last
+good one kept while the key holds anything else). With ``command_ramp_s`` in ``policy.json``
+(a walk controller's) the command the policy sees moves linearly from its value to each new
+one over that time, from zero at the start, as in training.
 
 Before the loop: the stiffness of the driven joints is set to 1 and the robot goes to the
 nominal pose (ALMotion); ``--dry-run`` sends nothing and prints the targets. Ctrl-C ends the
@@ -107,13 +112,19 @@ class Policy(object):
             raise ValueError("policy.json: harmonics %r, phase_columns %r for %d observations"
                              % (record["harmonics"], record["phase_columns"], o))
         self.phase_columns = cols
+        self.command_columns = [int(c) for c in record.get("command_columns", [])]
+        if not all(0 <= c < o and c not in cols for c in self.command_columns):
+            raise ValueError("policy.json: command_columns %r for %d observations"
+                             % (record["command_columns"], o))
         self.keep = [m for m in range(o) if m not in cols]
-        self.tape = _matrix(record, "tape_coef", a, 1 + 2 * self.harmonics)
+        self.tape = _matrix(record, "tape_coef", a, (1 + 2 * self.harmonics)
+                            * (1 + len(self.command_columns)))
         self.gain = _matrix(record, "feedback_gain", a, o - 2)
 
     def structured(self, obs, h):
         """``tape(phi) + K x`` of the raw ``obs`` and normalised ``h``: ``1, sin phi, cos phi,
-        ..., sin H phi, cos H phi`` from the raw phase columns by angle addition, as
+        ..., sin H phi, cos H phi`` from the raw phase columns by angle addition (then each raw
+        command value times them, with ``command_columns``), as
         evomotion's ``structured.py`` and ``policy.py`` compute them."""
         i, j = self.phase_columns
         s1, c1 = obs[i], obs[j]
@@ -123,6 +134,9 @@ class Policy(object):
             features += [s, c]
             if k < self.harmonics:
                 s, c = s * c1 + c * s1, c * c1 - s * s1
+        base = list(features)
+        for m in self.command_columns:  # a command-modulated tape: (f, c_1 f, ..., c_m f)
+            features += [obs[m] * f for f in base]
         x = [h[m] for m in self.keep]
         y = []
         for tape, gain in zip(self.tape, self.gain):
@@ -153,12 +167,14 @@ class Policy(object):
 class Observer(object):
     """Builds the observation from one ``getListData`` answer (see the module doc)."""
 
-    def __init__(self, record, command=None):
+    def __init__(self, record, command=None, command_key=None):
         self.columns = record["observation"]
         self.roll_key, self.pitch_key = record["roll_key"], record["pitch_key"]
         self.threshold = float(record["contact_threshold_kg"])
         self.phase_period = float(record.get("phase_period_s") or 0.0)
         self.command = list(command or [])
+        self.command_key = command_key
+        self.ramp = CommandRamp(float(record.get("command_ramp_s") or 0.0))
         if self.phase_period <= 0 and any(c["source"] in ("phase_sin", "phase_cos")
                                           for c in self.columns):
             raise ValueError("policy.json: the policy reads phase; phase_period_s must be > 0")
@@ -170,22 +186,30 @@ class Observer(object):
             for k in (str(self.roll_key), str(self.pitch_key)):
                 if k not in keys:
                     keys.append(k)
-        self.keys = keys
-        self.index = dict((k, i) for i, k in enumerate(keys))
         need = 1 + max([int(c["index"]) for c in self.columns if c["source"] == "command"]
                        or [-1])
+        if command_key is not None:
+            keys.append(str(command_key))
+            self.command = [0.0] * need if len(self.command) < need else self.command
+        self.keys = keys
+        self.index = dict((k, i) for i, k in enumerate(keys))
         if len(self.command) < need:
-            raise ValueError("the policy reads %d command values: give --command" % need)
+            raise ValueError("the policy reads %d command values: give --command or "
+                             "--command-key" % need)
         self.last = None  # (time s, positions by key) of the previous step
 
     def __call__(self, values, t):
         """The observation of sensor ``values`` (in :attr:`keys` order) at time ``t`` (s)."""
+        values = list(values)
+        if self.command_key is not None:
+            self.command = _command(values.pop(), self.command)
+            values.append(0.0)
         v = [float(x) for x in values]
         if len(v) != len(self.keys):
             raise ValueError("ALMemory returned %d values for %d keys" % (len(v), len(self.keys)))
         prev = self.last
         dt = None if prev is None else t - prev[0]
-        g = None
+        g = cmd = None
         obs = []
         for col in self.columns:
             src = col["source"]
@@ -204,11 +228,48 @@ class Observer(object):
                 angle = 2.0 * math.pi * t / self.phase_period
                 obs.append(math.sin(angle) if src == "phase_sin" else math.cos(angle))
             elif src == "command":
-                obs.append(float(self.command[int(col["index"])]))
+                if cmd is None:
+                    cmd = self.ramp(self.command, t)
+                obs.append(float(cmd[int(col["index"])]))
             else:
                 raise ValueError("unknown observation source %r" % (src,))
         self.last = (t, v)
         return obs
+
+
+def _command(value, last):
+    """The numbers at the command key, or ``last`` while it holds anything else."""
+    try:
+        new = [float(x) for x in value]
+    except (TypeError, ValueError):
+        return last
+    if len(new) < len(last) or not all(_finite(x) for x in new):
+        return last
+    return new[:len(last)]
+
+
+class CommandRamp(object):
+    """The command moved linearly to each new target over ``ramp_s`` (0: at once), from
+    zero at the first call."""
+
+    def __init__(self, ramp_s):
+        self.ramp_s = float(ramp_s)
+        self.start = self.target = None
+        self.t_start = 0.0
+
+    def __call__(self, target, t):
+        target = [float(x) for x in target]
+        if self.target is None:
+            self.start, self.target, self.t_start = [0.0] * len(target), target, t
+        elif target != self.target:
+            self.start, self.target, self.t_start = self.value(t), target, t
+        return self.value(t)
+
+    def value(self, t):
+        if self.ramp_s <= 0:
+            return list(self.target)
+        f = min(max((t - self.t_start) / self.ramp_s, 0.0), 1.0)
+        return [a + (b - a) * f for a, b in zip(self.start, self.target)]
 
 
 def gravity(roll, pitch):
@@ -222,13 +283,13 @@ class Runner(object):
     ``clock()`` in seconds, ``sleep(s)``; :meth:`step` is one control period."""
 
     def __init__(self, record, memory, dcm, motion, command=None, clock=_now,
-                 sleep=time.sleep, dry_run=False, delay_ms=0):
+                 sleep=time.sleep, dry_run=False, delay_ms=0, command_key=None):
         if record.get("format") != FORMAT:
             raise ValueError("policy.json: format %r, this runner reads %r"
                              % (record.get("format"), FORMAT))
         self.record = record
         self.policy = Policy(record)
-        self.observe = Observer(record, command)
+        self.observe = Observer(record, command, command_key)
         self.joints = [str(j) for j in record["joints"]]
         self.nominal = [float(v) for v in record["nominal_rad"]]
         self.lower = _bound(record["lower_rad"], -float("inf"))
@@ -303,6 +364,8 @@ def main(argv=None):
     p.add_argument("--period-ms", type=float, default=None,
                    help="control period (10-20 ms; default the policy's)")
     p.add_argument("--command", default="", help="vx,vy,w: the command channel's values")
+    p.add_argument("--command-key", default=None,
+                   help="an ALMemory key holding [vx, vy, w], read every step")
     p.add_argument("--dry-run", action="store_true", help="print targets, send nothing")
     args = p.parse_args(argv)
     try:
@@ -316,7 +379,8 @@ def main(argv=None):
         memory = ALProxy("ALMemory", args.ip, args.port)
         dcm = ALProxy("DCM", args.ip, args.port)
         motion = ALProxy("ALMotion", args.ip, args.port)
-        runner = Runner(record, memory, dcm, motion, command, dry_run=args.dry_run)
+        runner = Runner(record, memory, dcm, motion, command, dry_run=args.dry_run,
+                        command_key=args.command_key)
         runner.start()
         show = (lambda t: print(",".join(repr(x) for x in t))) if args.dry_run else None
         steps, late = runner.run(args.seconds, period, show)

@@ -1,0 +1,1 @@
+"""Study ``humanoid-omniwalk``: a closed-loop omnidirectional NAO walk controller."""

@@ -1,0 +1,181 @@
+"""A humanoid-omniwalk run's controller measured beside the walk engine it started from.
+
+``evomotion humanoid-omniwalk compare RUN --worlds 100 --duration 60``:
+
+- **Random commands**: the best centre (``policy.npz``, its frozen normaliser inside) and the
+  engine (the fitted tape without feedback: the open-loop walk the search started from) walk
+  the **same** ``worlds`` unseen perturbed worlds (seeds from :data:`EVAL_SEED_BASE`, which no
+  training episode uses), each ``duration`` seconds of the run's random command schedule with
+  one push of up to the run's ``push_max_ns``. Reported: survival (never fallen), mean time up,
+  the tracking errors (m/s, rad/s) and the relative error ``Σ|v − v_cmd| / Σ|v_cmd|`` over the
+  one-cycle windows while up (velocity and yaw rate apart).
+- **Top speeds**: each direction commanded alone at the run's range limit (forward ``vx_max``,
+  backward ``vx_min``, left/right ``±vy_max``, turning ``±yaw_rate_max``) for
+  :data:`SPEED_TEST_S` in the nominal world without a push; the walked velocity is the mean over
+  the last half (m/s, deg/s).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from evomotion.errors import InputError
+from evomotion.studies.humanoid_omniwalk.commands import tracking
+
+STUDY_NAME = "humanoid-omniwalk"
+EVAL_SEED_BASE = 2**40  # above every training seed (< 2^31)
+MAX_WORLDS = 10_000
+SPEED_TEST_S = 10.0
+BATCH = 20  # worlds per closed-loop call (the recorded states of 60 s are large)
+
+
+def load_run(path: str | Path, duration_s: float | None = None,
+             option: str = "RUN") -> tuple[Any, Any, Path]:
+    """(problem, exported policy, run folder) of a humanoid-omniwalk run folder (or its
+    ``policy.npz``); the problem's episodes last ``duration_s`` when given."""
+    from evomotion.core.policies.export import read_policy_npz
+    from evomotion.run.config import config_from_dict, config_from_run_dir, run_of_study
+    from evomotion.studies import get_study
+    from evomotion.studies.humanoid_omniwalk.problem import OmniWalkProblem
+
+    p = Path(path)
+    folder = run_of_study(p.parent if p.name == "policy.npz" else p, STUDY_NAME, option)
+    npz = folder / "policy.npz"
+    if not npz.is_file():
+        raise InputError(f"{option} {path}: no policy.npz yet (the run has not checkpointed "
+                         "a policy)")
+    _, raw = config_from_run_dir(folder)
+    cfg = config_from_dict(get_study(STUDY_NAME), raw).problem
+    if duration_s is not None:
+        cfg = dataclasses.replace(cfg, duration_s=float(duration_s))
+    problem = OmniWalkProblem(cfg)
+    policy = read_policy_npz(npz)
+    spec = problem.policy
+    if (policy.spec.kind, policy.spec.obs_dim, policy.spec.act_dim,
+            policy.params.size) != (spec.kind, spec.obs_dim, spec.act_dim, spec.n_params):
+        raise InputError(f"{npz}: a {policy.spec.kind} policy of {policy.params.size} "
+                         f"parameters; the run's config needs {spec.kind} of {spec.n_params}")
+    return problem, policy, folder
+
+
+def _play(problem, params: np.ndarray, mean: np.ndarray, std: np.ndarray, seeds: np.ndarray,
+          commands: np.ndarray | None = None, push_ns: float | None = None) -> dict:
+    """Metrics and tracking sums of ``params`` (one controller) in the worlds of ``seeds``."""
+    out: dict[str, list] = {}
+    for a in range(0, len(seeds), BATCH):
+        s = seeds[a:a + BATCH]
+        n = len(s)
+        cmd = None if commands is None else commands[a:a + BATCH]
+        m, res, cmds = problem.play(np.tile(params, (n, 1)), np.tile(mean, (n, 1)),
+                                    np.tile(std, (n, 1)), s, push_ns, cmd)
+        tr = tracking(res.torso, cmds, problem.ctl.window, problem.ctl.control_dt)
+        ev, ew = tr.errors()
+        ends = np.arange(problem.ctl.window, cmds.shape[1] + 1)
+        up = ends[None] * problem.control_steps <= res.fall_step[:, None]
+        m = dict(m, err_v=(ev * up).sum(1), err_w=(ew * up).sum(1),
+                 cmd_v=(np.hypot(tr.cmd[..., 0], tr.cmd[..., 1]) * up).sum(1),
+                 cmd_w=(np.abs(tr.cmd[..., 2]) * up).sum(1),
+                 vx=tr.vx, vy=tr.vy, w=tr.yaw_rate)
+        for k, v in m.items():
+            out.setdefault(k, []).append(v)
+    return {k: np.concatenate(v) for k, v in out.items()}
+
+
+def _summary(m: dict) -> dict[str, float]:
+    return {"survival": float(m["survived"].mean()), "time_up_s": float(m["time_up_s"].mean()),
+            "speed_error_mps": float(m["speed_error_mps"].mean()),
+            "yaw_rate_error_rps": float(m["yaw_rate_error_rps"].mean()),
+            "relative_speed_error": float(m["err_v"].sum() / max(m["cmd_v"].sum(), 1e-12)),
+            "relative_yaw_rate_error": float(m["err_w"].sum() / max(m["cmd_w"].sum(), 1e-12)),
+            "power_w": float(m["power_w"].mean()),
+            "speed_excess": float(m["speed_excess"].mean())}
+
+
+def top_speeds(problem, params, mean, std) -> dict[str, dict[str, float]]:
+    """Each direction alone at its range limit, nominal world, no push (module doc)."""
+    cfg = problem.cfg
+    tests = {"forward": (cfg.vx_max, 0, 0), "backward": (cfg.vx_min, 0, 0),
+             "left": (0, cfg.vy_max, 0), "right": (0, -cfg.vy_max, 0),
+             "turn_left": (0, 0, cfg.yaw_rate_max), "turn_right": (0, 0, -cfg.yaw_rate_max)}
+    quiet = dataclasses.replace(cfg, duration_s=SPEED_TEST_S, perturb=False, push_min_ns=0.0,
+                                push_max_ns=0.0)
+    from evomotion.studies.humanoid_omniwalk.problem import OmniWalkProblem
+
+    p = OmniWalkProblem(quiet)
+    C = math.ceil(p.nstep / p.control_steps)
+    t = np.arange(C) * p.ctl.control_dt
+    ramp = np.clip(t / cfg.ramp_s, 0.0, 1.0)[None, :, None]
+    cmds = np.array(list(tests.values()), float)[:, None, :] * ramp
+    m = _play(p, params, mean, std, np.zeros(len(tests), np.int64), cmds)
+    half = m["vx"].shape[1] // 2
+    out = {}
+    for i, name in enumerate(tests):
+        out[name] = {"command": [float(v) for v in tests[name]],
+                     "vx_mps": float(m["vx"][i, half:].mean()),
+                     "vy_mps": float(m["vy"][i, half:].mean()),
+                     "yaw_rate_dps": float(np.degrees(m["w"][i, half:].mean())),
+                     "fell": bool(m["survived"][i] < 1)}
+    p.sim.close()
+    return out
+
+
+def compare(run: str | Path, worlds: int = 100, duration_s: float = 60.0, seed: int = 0
+            ) -> dict[str, Any]:
+    from evomotion.core.checks import check_number
+
+    check_number("--worlds", worlds, lo=1, hi=MAX_WORLDS, integer=True)
+    check_number("--duration", duration_s, lo=0.5, hi=600.0)
+    check_number("--seed", seed, lo=0, hi=2**20, integer=True)
+    problem, policy, folder = load_run(run, duration_s)
+    seeds = EVAL_SEED_BASE + int(seed) * MAX_WORLDS + np.arange(int(worlds))
+    engine = problem.ctl.initial_params()
+    o = problem.obs_dim
+    rows = {"controller": (policy.params, policy.obs_mean, policy.obs_std),
+            "engine": (engine, np.zeros(o), np.ones(o))}
+    out: dict[str, Any] = {"run": str(folder), "worlds": int(worlds), "seed": int(seed),
+                           "duration_s": float(duration_s),
+                           "push_ns": list(problem.draw.push_ns)}
+    for name, (x, mean, std) in rows.items():
+        out[name] = _summary(_play(problem, x, mean, std, seeds))
+        out[name]["top_speeds"] = top_speeds(problem, x, mean, std)
+    problem.sim.close()
+    return out
+
+
+def table(res: dict[str, Any]) -> str:
+    lo, hi = res["push_ns"]
+    lines = [f"NAO, {res['worlds']} unseen perturbed worlds, {res['duration_s']:g} s of random "
+             f"commands each, one push U({lo:g}, {hi:g}) N s (seed {res['seed']})", "",
+             "| controller | survival | time up (s) | speed error (m/s) | relative | yaw-rate "
+             "error (deg/s) | relative | power (W) |", "|---|---|---|---|---|---|---|---|"]
+    for key, name in (("controller", "evolved controller"), ("engine", "walk engine (open "
+                                                                       "loop, the start)")):
+        r = res[key]
+        lines.append(f"| {name} | {100 * r['survival']:.0f} % | {r['time_up_s']:.1f} | "
+                     f"{r['speed_error_mps']:.3f} | {100 * r['relative_speed_error']:.0f} % | "
+                     f"{np.degrees(r['yaw_rate_error_rps']):.1f} | "
+                     f"{100 * r['relative_yaw_rate_error']:.0f} % | {r['power_w']:.0f} |")
+    lines += ["", f"Top speeds (nominal world, each command alone for {SPEED_TEST_S:g} s, the "
+              "mean over the last half):", "",
+              "| command | controller | engine |", "|---|---|---|"]
+    for name, c in res["controller"]["top_speeds"].items():
+        e = res["engine"]["top_speeds"][name]
+
+        def fmt(r: dict) -> str:
+            s = (f"{r['yaw_rate_dps']:.0f} deg/s" if name.startswith("turn") else
+                 f"vx {r['vx_mps']:.2f}, vy {r['vy_mps']:.2f} m/s")
+            return s + (" (fell)" if r["fell"] else "")
+        lines.append(f"| {name} {c['command']} | {fmt(c)} | {fmt(e)} |")
+    return "\n".join(lines)
+
+
+def compare_command(run: Path, worlds: int = 100, duration_s: float = 60.0, seed: int = 0,
+                    json_out: bool = False) -> str:
+    res = compare(run, worlds, duration_s, seed)
+    return json.dumps(res, indent=1) if json_out else table(res)

@@ -1,0 +1,117 @@
+"""The NAO walk controller: which joints it drives, what it reads, where its search starts.
+
+- Drives 15 joints every control period: both legs (the hip yaw-pitch motor once, as on the
+  real NAO, where ``RHipYawPitch`` follows ``LHipYawPitch``) and both shoulders' pitch and
+  roll; targets are offsets from the engine's mean standing-in-place pose, clipped to the
+  joint ranges (:mod:`evomotion.sim.closed_loop`).
+- Reads the 10 leg servos' angles and velocities, the IMU (gravity direction, gyro), both
+  feet's contacts, the gait clock (``sin``/``cos`` of ``2π t / period_s``) and the command.
+- Is a structured policy (:mod:`evomotion.core.policies.structured`): a tape of ``H``
+  harmonics, each an affine function of the command, plus linear feedback on the normalised
+  observation. :meth:`Controller.initial_params` fits the tape by least squares to the walk
+  engine (:mod:`.omni_gait`) over a grid of commands, one cycle each (feedback 0).
+"""
+
+from __future__ import annotations
+
+from functools import cached_property
+
+import numpy as np
+
+from evomotion.core.policies import StructuredSpec, fit_tape
+from evomotion.sim.closed_loop import ClosedLoopResult, ClosedLoopSimulator
+from evomotion.sim.observations import ObservationSpec
+from evomotion.sim.robots import load_robot, nao
+from evomotion.sim.robots.nao.joint_limits import SPEED_LIMITS
+from evomotion.sim.robots.nao.model import initial_state
+from evomotion.sim.rollout import ServoWork
+from evomotion.studies.humanoid_omniwalk.omni_gait import OmniGait, targets
+
+ARMS = ("LShoulderPitch", "RShoulderPitch", "LShoulderRoll", "RShoulderRoll")
+DRIVEN = (*nao.LEFT_LEG, *nao.RIGHT_LEG[1:], *ARMS)
+CHANNELS = ("joint_pos", "joint_vel", "gravity", "gyro", "foot_contact", "phase", "command")
+#: the commands the tape is fitted over: vx (m/s) x vy (m/s) x ω (rad/s)
+FIT_GRID = (np.linspace(-0.2, 0.45, 6), np.linspace(-0.2, 0.2, 5), np.linspace(-1.2, 1.2, 5))
+FIT_DT_S = 0.01
+
+
+class Controller:
+    """The controller's simulator, policy spec and start (see the module doc)."""
+
+    def __init__(self, gait: OmniGait, control_period_s: float = 0.02, harmonics: int = 3,
+                 clip_obs: float = 5.0, threads: int = 1) -> None:
+        from evomotion.errors import InputError
+
+        self.gait = gait
+        self.robot = r = load_robot("nao")
+        self.dt = float(r.model.opt.timestep)
+        k = control_period_s / self.dt
+        if abs(k - round(k)) > 1e-6 or round(k) < 1:
+            raise InputError(f"problem.control_period_s: {control_period_s} s is not a whole "
+                             f"number of the NAO's {self.dt} s physics steps")
+        self.control_dt = round(k) * self.dt
+        col = {j: i for i, j in enumerate(nao.JOINTS)}
+        self.columns = np.array([col[j] for j in DRIVEN])
+        phases = np.linspace(0.0, 1.0, 48, endpoint=False)
+        self.nominal = targets(gait, phases, np.zeros((48, 3))).mean(axis=0)
+        self.obs_spec = ObservationSpec(CHANNELS, phase_period_s=gait.period_s, command_size=3)
+        self.sim = ClosedLoopSimulator(r, self.obs_spec, int(round(k)), threads,
+                                       columns=self.columns, nominal=self.nominal,
+                                       followers=[(col["RHipYawPitch"], col["LHipYawPitch"])])
+        names = list(self.sim.observe.names)
+        self.policy = StructuredSpec(
+            self.sim.observation_size, self.columns.size,
+            phase_columns=(names.index("phase:sin"), names.index("phase:cos")),
+            harmonics=harmonics, clip_obs=clip_obs,
+            command_columns=tuple(names.index(f"command:{i}") for i in range(3)),
+            low=self.sim.lower - self.nominal[self.columns],
+            high=self.sim.upper - self.nominal[self.columns])
+        self.window = max(1, int(round(gait.period_s / self.control_dt)))  # one gait cycle
+        self.state0 = initial_state(r.model, self.nominal)
+        self.speed_limits = np.array([SPEED_LIMITS[j] for j in DRIVEN])
+        self.work = ServoWork(r.model, self.columns)
+
+    def initial_params(self) -> np.ndarray:
+        return self._fitted.copy()
+
+    @cached_property
+    def _fitted(self) -> np.ndarray:
+        grid = np.stack(np.meshgrid(*FIT_GRID, indexing="ij"), axis=-1).reshape(-1, 3)
+        t = np.arange(0.0, self.gait.period_s, FIT_DT_S)
+        tt, cc = np.tile(t, len(grid)), np.repeat(grid, t.size, axis=0)
+        q = targets(self.gait, tt / self.gait.period_s, cc)[:, self.columns]
+        coeffs = fit_tape(tt, q - self.nominal[self.columns], self.gait.period_s,
+                          self.policy.harmonics, commands=cc)
+        return self.policy.params_from_tape(coeffs)
+
+    def run(self, params: np.ndarray, mean: np.ndarray, std: np.ndarray, worlds: list,
+            nstep: int, commands: np.ndarray) -> ClosedLoopResult:
+        """Episode ``i``: ``params[i]`` with its normaliser in ``worlds[i]`` under
+        ``commands[i]`` (``[n, C, 3]``), from the engine's standing pose."""
+        spec = self.policy
+
+        def policy(rows: np.ndarray, obs: np.ndarray) -> np.ndarray:
+            return spec.act(params[rows], obs, mean[rows], std[rows])
+
+        return self.sim.run(policy, worlds, nstep, commands=commands,
+                            initial_state=self.state0, record_states=True,
+                            record_targets=True)
+
+    def effort(self, res: ClosedLoopResult) -> tuple[np.ndarray, np.ndarray]:
+        """(mean servo power W, mean speed excess) per episode while up (module doc of
+        :mod:`.problem`); the power sampled at the control steps."""
+        assert res.targets is not None
+        done = np.maximum(np.ceil(res.steps / self.sim.k).astype(np.int64), 1)
+        n, C, _ = res.targets.shape
+        if res.states is not None:
+            ctrl = np.broadcast_to(self.nominal, (n, C, self.nominal.size)).copy()
+            ctrl[..., self.columns] = res.targets
+            work = self.work(res.states[:, :C], ctrl, done - 1) * self.sim.k
+            power = work / (done * self.control_dt)
+        else:
+            power = np.zeros(n)
+        rate = np.abs(np.diff(res.targets, axis=1)) / self.control_dt
+        over = np.maximum(rate / self.speed_limits - 1.0, 0.0).sum(axis=2)
+        valid = np.arange(C - 1)[None] < (done[:, None] - 1)
+        excess = (over * valid).sum(axis=1) / np.maximum(done - 1, 1)
+        return power, excess

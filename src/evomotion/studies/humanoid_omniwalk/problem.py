@@ -1,0 +1,217 @@
+"""The omnidirectional walk controller as a policy-search problem
+(``evomotion run humanoid-omniwalk``).
+
+The controller (:mod:`.controller`) is a structured policy: a phase tape modulated by the
+command ``(vx, vy, ω)`` (fitted by least squares to the walk engine of :mod:`.omni_gait`, where
+the search starts) plus linear feedback from the NAO's sensors (joint angles and velocities,
+the IMU's gravity direction and gyro, the feet's contacts, the command); it sets 15 joints
+every ``control_period_s`` (the legs, the hip yaw-pitch motor once, the shoulders).
+
+Every episode (``duration_s``) is one perturbed world (:mod:`evomotion.studies.episode_worlds`:
+friction, masses, CoM, motors, latency, one push up to ``push_max_ns``) and one random command
+schedule (:mod:`.commands`: a new command every 2-4 s). The episode score (maximised):
+
+    score = mean_c [alive_c (r_v + yaw_share r_ω) / (1 + yaw_share)]
+            − energy_weight · power_w − speed_weight · speed_excess
+
+``r_v = exp(−|v − v_cmd|² / σ_v²)``, ``r_ω = exp(−(ω − ω_cmd)² / σ_ω²)`` over sliding one-cycle
+windows (:func:`.commands.tracking`, after the first cycle), ``alive_c`` 0 from the fall on (a
+fall loses the rest of the episode); ``power_w`` the servos' mean mechanical power
+``Σ|τ q̇|`` (W, ``τ = clip(kp (target − q), force range)``, sampled at the control steps);
+``speed_excess`` the mean over control steps of ``Σ_j max(|Δtarget_j| / Δt / v_j − 1, 0)``,
+``v_j`` the NAO motor's no-load speed (:data:`~evomotion.sim.robots.nao.joint_limits.
+SPEED_LIMITS`): targets faster than the real motors cost.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from evomotion.core.checks import check_fields, check_number, inf_ok
+from evomotion.core.problem import Evaluation, GenomeSpec, Sense
+from evomotion.errors import InputError
+from evomotion.studies.episode_worlds import WorldDraw, episode_world, push_range
+from evomotion.studies.humanoid_omniwalk.commands import CommandDraw, schedules, tracking
+from evomotion.studies.humanoid_omniwalk.omni_gait import OmniGait
+from evomotion.studies.policy_search import EpisodeRows, neutral_rows, split_rows
+
+MAX_EPISODES = 1000
+METRICS = ("return", "steps", "survived", "time_up_s", "speed_error_mps",
+           "yaw_rate_error_rps", "power_w", "speed_excess")
+
+
+@dataclass(frozen=True)
+class OmniWalkConfig:
+    """``[problem]`` of humanoid-omniwalk (SI units)."""
+
+    duration_s: float = 8.0  # episode length (s)
+    control_period_s: float = 0.02  # the controller's period (s)
+    harmonics: int = 3  # sin/cos pairs of the phase tape
+    clip_obs: float = inf_ok(5.0, "no clipping")  # bound on every normalised observation
+    normalize: bool = True  # ARS V2 observation normalisation
+    episodes: int = 1  # training episodes per individual and generation
+    eval_episodes: int = 8  # episodes of the centre per generation (the reported return)
+    vx_min: float = -0.2  # command ranges (m/s, rad/s); see commands.py
+    vx_max: float = 0.45
+    vy_max: float = 0.2
+    yaw_rate_max: float = 1.2
+    hold_min_s: float = 2.0  # a new command every U(hold_min_s, hold_max_s) s
+    hold_max_s: float = 4.0
+    ramp_s: float = 0.5  # commands ramp linearly over this (s)
+    push_min_ns: float = 0.0  # push magnitude U(min, max) N s, random direction
+    push_max_ns: float = 5.0
+    perturb: bool = True  # friction, masses, CoM, motors, latency per episode
+    sigma_v_mps: float = 0.1  # tracking kernel widths
+    sigma_yaw_rps: float = 0.3
+    yaw_share: float = 0.5  # weight of yaw tracking beside velocity tracking
+    energy_weight: float = 0.0005  # score lost per W of mean servo power
+    speed_weight: float = 0.5  # score lost per unit of speed excess
+    param_bound: float = 100.0  # the genome box +- this
+    threads: int = 0  # mujoco.rollout threads; 0 = all cores (1 in a worker process)
+    # the walk engine the tape starts from (omni_gait.py)
+    period_s: float = 0.48
+    swing_fraction: float = 0.45
+    step_height_m: float = 0.02
+    leg_height_m: float = 0.155
+    width_m: float = 0.03
+    sway_m: float = 0.025
+    lean_rad: float = 0.05
+
+    def validate(self) -> None:
+        check_fields(self, "problem")
+        check_number("problem.duration_s", self.duration_s, lo=0.0, hi=600.0, lo_open=True)
+        check_number("problem.control_period_s", self.control_period_s, lo=0.0, hi=1.0,
+                     lo_open=True)
+        check_number("problem.harmonics", self.harmonics, lo=1, hi=16, integer=True)
+        check_number("problem.clip_obs", self.clip_obs, lo=0.0, lo_open=True, allow_inf=True)
+        for key in ("episodes", "eval_episodes"):
+            check_number(f"problem.{key}", getattr(self, key), lo=1, hi=MAX_EPISODES,
+                         integer=True)
+        check_number("problem.vx_max", self.vx_max, lo=0.0, hi=2.0)
+        check_number("problem.vx_min", self.vx_min, lo=-2.0, hi=0.0)
+        check_number("problem.vy_max", self.vy_max, lo=0.0, hi=2.0)
+        check_number("problem.yaw_rate_max", self.yaw_rate_max, lo=0.0, hi=10.0)
+        check_number("problem.hold_min_s", self.hold_min_s, lo=0.0, hi=600.0, lo_open=True)
+        check_number("problem.hold_max_s", self.hold_max_s, lo=self.hold_min_s, hi=600.0)
+        check_number("problem.ramp_s", self.ramp_s, lo=0.0, hi=60.0, lo_open=True)
+        check_number("problem.push_min_ns", self.push_min_ns, lo=0.0, hi=1000.0)
+        check_number("problem.push_max_ns", self.push_max_ns, lo=self.push_min_ns, hi=1000.0)
+        for key in ("sigma_v_mps", "sigma_yaw_rps"):
+            check_number(f"problem.{key}", getattr(self, key), lo=0.0, hi=100.0, lo_open=True)
+        for key in ("yaw_share", "energy_weight", "speed_weight"):
+            check_number(f"problem.{key}", getattr(self, key), lo=0.0, hi=1000.0)
+        check_number("problem.param_bound", self.param_bound, lo=1e-6, hi=1e6)
+        check_number("problem.threads", self.threads, lo=0, hi=1024, integer=True)
+        check_number("problem.period_s", self.period_s, lo=0.2, hi=1.5)
+        check_number("problem.swing_fraction", self.swing_fraction, lo=0.2, hi=0.5)
+        check_number("problem.step_height_m", self.step_height_m, lo=0.0, hi=0.06)
+        check_number("problem.leg_height_m", self.leg_height_m, lo=0.12, hi=0.2)
+        check_number("problem.width_m", self.width_m, lo=-0.01, hi=0.06)
+        check_number("problem.sway_m", self.sway_m, lo=0.0, hi=0.06)
+        check_number("problem.lean_rad", self.lean_rad, lo=-0.2, hi=0.4)
+        for key in ("normalize", "perturb"):
+            if not isinstance(getattr(self, key), bool):
+                raise InputError(f"problem.{key}: expected true or false, got "
+                                 f"{getattr(self, key)!r}")
+
+    def gait(self) -> OmniGait:
+        return OmniGait(period_s=self.period_s, swing_fraction=self.swing_fraction,
+                        step_height_m=self.step_height_m, leg_height_m=self.leg_height_m,
+                        width_m=self.width_m, sway_m=self.sway_m, lean_rad=self.lean_rad)
+
+    def commands(self) -> CommandDraw:
+        return CommandDraw(self.vx_min, self.vx_max, self.vy_max, self.yaw_rate_max,
+                           self.hold_min_s, self.hold_max_s, self.ramp_s)
+
+    def for_worker(self) -> OmniWalkConfig:
+        """One rollout thread in a one-core evaluator worker (an explicit count is kept)."""
+        return replace(self, threads=1) if self.threads == 0 else self
+
+
+class OmniWalkProblem:
+    """Rows of controller parameters (+ normaliser and seeds) -> walk scores."""
+
+    sense: Sense = "max"
+    metric_names: tuple[str, ...] = METRICS
+
+    def __init__(self, cfg: OmniWalkConfig | None = None) -> None:
+        from evomotion.studies.humanoid_omniwalk.controller import Controller
+
+        self.cfg = cfg = cfg or OmniWalkConfig()
+        cfg.validate()
+        threads = cfg.threads or max(1, min(os.cpu_count() or 1, 8))
+        self.ctl = ctl = Controller(cfg.gait(), cfg.control_period_s, cfg.harmonics,
+                                    cfg.clip_obs, threads)
+        self.robot, self.sim, self.policy = ctl.robot, ctl.sim, ctl.policy
+        self.obs_spec, self.obs_names = ctl.obs_spec, ctl.sim.observe.names
+        self.obs_dim, self.act_dim = self.sim.observation_size, self.sim.action_size
+        self.control_steps, self.dt = ctl.sim.k, ctl.dt
+        self.nstep = int(math.ceil(cfg.duration_s / self.dt))
+        lo, hi = self.policy.genome_bounds(cfg.param_bound)
+        self.genome = GenomeSpec(lo, hi)
+        self.draw = WorldDraw(push_range(self.robot, cfg.push_min_ns, cfg.push_max_ns),
+                              (0.2, 0.8), cfg.duration_s, cfg.perturb)
+        self.command_draw = cfg.commands()
+        self.episodes, self.eval_episodes = cfg.episodes, cfg.eval_episodes
+        self.normalize = cfg.normalize
+
+    def initial_population(self, n: int | None, rng: np.random.Generator) -> np.ndarray:
+        """The fitted walk engine (feedback gains 0): where the search starts."""
+        return self.ctl.initial_params()[None]
+
+    def worlds(self, seeds: np.ndarray, push_ns: float | None = None) -> list:
+        cache = {int(s): episode_world(self.robot.model, self.draw, int(s), push_ns)
+                 for s in np.unique(seeds)}
+        return [cache[int(s)] for s in seeds]
+
+    def play(self, params, mean, std, seeds, push_ns: float | None = None,
+             commands: np.ndarray | None = None):
+        """Episodes of ``params[n, P]`` in the worlds and command schedules of ``seeds[n]``
+        (or the given ``commands[n, C, 3]``): ``(metrics dict, ClosedLoopResult, commands)``."""
+        seeds = np.asarray(seeds)
+        C = math.ceil(self.nstep / self.control_steps)
+        if commands is None:
+            commands = schedules(self.command_draw, seeds, np.arange(C) * self.ctl.control_dt)
+        res = self.ctl.run(np.asarray(params, float), np.asarray(mean, float),
+                           np.asarray(std, float), self.worlds(seeds, push_ns), self.nstep,
+                           commands)
+        return self.score(res, commands), res, commands
+
+    def score(self, res, commands: np.ndarray) -> dict[str, np.ndarray]:
+        cfg = self.cfg
+        W = self.ctl.window
+        tr = tracking(res.torso, commands, W, self.ctl.control_dt)
+        ev, ew = tr.errors()
+        ends = np.arange(W, commands.shape[1] + 1)  # window ends (control steps)
+        alive = ends[None] * self.control_steps <= res.fall_step[:, None]
+        r = (np.exp(-(ev / cfg.sigma_v_mps) ** 2)
+             + cfg.yaw_share * np.exp(-(ew / cfg.sigma_yaw_rps) ** 2)) / (1 + cfg.yaw_share)
+        track = (r * alive).mean(axis=1)
+        n_alive = np.maximum(alive.sum(axis=1), 1)
+        power, excess = self.ctl.effort(res)
+        score = track - cfg.energy_weight * power - cfg.speed_weight * excess
+        return {"return": score, "survived": (~res.fell).astype(float),
+                "time_up_s": res.fall_time_s, "steps": np.ceil(res.steps / self.control_steps),
+                "speed_error_mps": (ev * alive).sum(axis=1) / n_alive,
+                "yaw_rate_error_rps": (ew * alive).sum(axis=1) / n_alive,
+                "power_w": power, "speed_excess": excess}
+
+    def evaluation_rows(self, genomes: np.ndarray) -> np.ndarray:
+        return neutral_rows(genomes, self.obs_dim, self.episodes)
+
+    def evaluate(self, rows: np.ndarray) -> Evaluation:
+        params, mean, std, seeds, episodes = split_rows(np.asarray(rows, float),
+                                                        self.genome.dim, self.obs_dim)
+        eps = EpisodeRows.of(seeds, episodes, MAX_EPISODES)
+        o = eps.owner
+        m, res, _ = self.play(params[o], mean[o], std[o], eps.seeds)
+        count = res.obs_count.astype(np.int64)
+        safe = np.maximum(count, 1)[:, None]
+        obs_mean = res.obs_sum / safe
+        obs_m2 = np.maximum(res.obs_sumsq - count[:, None] * obs_mean ** 2, 0.0)
+        avg = {k: eps.mean(v) for k, v in m.items()}
+        return Evaluation(avg["return"], {**avg, **eps.moments(count, obs_mean, obs_m2)})

@@ -1,0 +1,65 @@
+"""Command schedules and tracking (studies/humanoid_omniwalk/commands.py)."""
+
+from __future__ import annotations
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from evomotion.studies.humanoid_omniwalk.commands import (
+    CommandDraw,
+    command_schedule,
+    schedules,
+    tracking,
+)
+
+T = np.arange(0, 20, 0.02)
+
+
+@settings(max_examples=30, deadline=None, derandomize=True, database=None)
+@given(seed=st.integers(0, 2**40))
+def test_a_schedule_is_its_seeds_alone_in_range_and_ramped(seed):
+    d = CommandDraw()
+    c = command_schedule(d, seed, T)
+    np.testing.assert_array_equal(c, command_schedule(d, seed, T))
+    np.testing.assert_array_equal(schedules(d, np.array([seed, 7, seed]), T)[2], c)
+    assert np.all(c[:, 0] >= d.vx_min - 1e-12) and np.all(c[:, 0] <= d.vx_max + 1e-12)
+    assert np.all(np.abs(c[:, 1]) <= d.vy_max) and np.all(np.abs(c[:, 2]) <= d.yaw_rate_max)
+    assert np.all(c[0] == 0)  # ramps from standing
+    # a ramp of ramp_s: no step bigger than the full range over ramp_s / dt steps
+    span = np.array([d.vx_max - d.vx_min, 2 * d.vy_max, 2 * d.yaw_rate_max])
+    assert np.all(np.abs(np.diff(c, axis=0)) <= span * 0.02 / d.ramp_s + 1e-12)
+
+
+def test_schedules_hold_commands_for_two_to_four_seconds_and_mix_kinds():
+    d = CommandDraw()
+    kinds = set()
+    for seed in range(40):
+        c = command_schedule(d, seed, T)
+        steady = c[np.arange(len(T)) % 5 == 0]
+        for row in steady:
+            kinds.add(tuple(np.flatnonzero(np.abs(row) > 1e-12)))
+        changes = np.flatnonzero(np.abs(np.diff(c, axis=0)).sum(axis=1) > 0)
+        starts = changes[np.r_[True, np.diff(changes) > 1]] * 0.02
+        assert np.all(np.diff(starts) >= d.hold_min_s - 0.05)
+    assert {(0,), (1,), (2,), (0, 1, 2)} <= kinds
+
+
+def test_tracking_reads_the_velocity_in_the_heading_frame():
+    """A torso walking at 0.2 m/s forward and 0.1 m/s to its left while turning at 0.5 rad/s."""
+    dt, C, W = 0.02, 200, 24
+    t = np.arange(C + 1) * dt
+    yaw = 0.5 * t
+    v_world = np.stack([0.2 * np.cos(yaw) - 0.1 * np.sin(yaw),
+                        0.2 * np.sin(yaw) + 0.1 * np.cos(yaw)], -1)
+    pos = np.concatenate([[[0, 0]], np.cumsum(v_world[:-1] * dt, axis=0)])
+    torso = np.zeros((1, C + 1, 13))
+    torso[0, :, :2] = pos
+    torso[0, :, 3], torso[0, :, 6] = np.cos(yaw / 2), np.sin(yaw / 2)
+    cmd = np.tile([0.2, 0.1, 0.5], (1, C, 1))
+    tr = tracking(torso, cmd, W, dt)
+    np.testing.assert_allclose(tr.yaw_rate, 0.5, atol=1e-9)
+    np.testing.assert_allclose(tr.vx, 0.2, atol=3e-3)
+    np.testing.assert_allclose(tr.vy, 0.1, atol=3e-3)
+    ev, ew = tr.errors()
+    assert ev.max() < 5e-3 and ew.max() < 1e-9

@@ -1,0 +1,181 @@
+"""humanoid-omniwalk: the controller starts as the walk engine, evaluations are independent of
+their neighbours, the run's files, compare, one-line errors."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from evomotion.errors import InputError
+from evomotion.run.config import resolve_config
+from evomotion.run.runner import run_study
+from evomotion.studies import get_study
+from evomotion.studies.humanoid_omniwalk.compare import compare, compare_command
+from evomotion.studies.humanoid_omniwalk.omni_gait import targets
+from evomotion.studies.humanoid_omniwalk.problem import OmniWalkConfig, OmniWalkProblem
+from evomotion.studies.policy_search import policy_rows
+
+TINY = ("problem.duration_s=1.0", "problem.eval_episodes=1", "problem.episodes=1",
+        "problem.threads=1", "algorithm.pop_size=4", "algorithm.top_directions=0",
+        "run.generations=1", "run.videos=false", "run.seed=3")
+
+
+@pytest.fixture(scope="module")
+def problem():
+    return OmniWalkProblem(OmniWalkConfig(duration_s=1.5, threads=1))
+
+
+@pytest.fixture(scope="module")
+def run_dir(tmp_path_factory):
+    out = tmp_path_factory.mktemp("omniwalk") / "run"
+    s = get_study("humanoid-omniwalk")
+    run_study(s, resolve_config(s, None, list(TINY)), out, quiet=True)
+    return out
+
+
+def test_the_search_starts_at_the_walk_engine(problem):
+    """The fitted tape (feedback 0) reproduces the engine's targets for commands off the fit
+    grid within 0.03 rad (rms per joint), whatever the normaliser."""
+    ctl = problem.ctl
+    x0 = problem.initial_population(None, np.random.default_rng(0))[0]
+    rng = np.random.default_rng(1)
+    n = 300
+    cmd = rng.uniform([-0.2, -0.2, -1.2], [0.45, 0.2, 1.2], (n, 3))
+    t = rng.uniform(0, 5, n)
+    phi = 2 * np.pi * t / ctl.gait.period_s
+    obs = rng.normal(size=(n, problem.obs_dim))
+    names = list(problem.obs_names)
+    obs[:, names.index("phase:sin")], obs[:, names.index("phase:cos")] = np.sin(phi), np.cos(phi)
+    for i in range(3):
+        obs[:, names.index(f"command:{i}")] = cmd[:, i]
+    got = problem.policy.act(np.tile(x0, (n, 1)), obs, rng.normal(size=problem.obs_dim),
+                             np.ones(problem.obs_dim))
+    want = targets(ctl.gait, t / ctl.gait.period_s, cmd)[:, ctl.columns] - \
+        ctl.nominal[ctl.columns]
+    assert np.sqrt(np.mean((got - want) ** 2, axis=0)).max() < 0.03
+
+
+def test_evaluation_rows_are_independent_of_their_neighbours(problem):
+    x0 = problem.initial_population(None, np.random.default_rng(0))
+    g = x0 + 0.002 * np.random.default_rng(2).standard_normal((3, problem.genome.dim))
+    rows = policy_rows(g, np.zeros(problem.obs_dim), np.ones(problem.obs_dim), 11, 2)
+    ev = problem.evaluate(rows)
+    np.testing.assert_array_equal(problem.evaluate(rows[1:2]).fitness, ev.fitness[1:2])
+    assert set(ev.metrics) >= set(problem.metric_names)
+    assert np.all(ev.metrics["power_w"] > 0) and np.all(ev.metrics["speed_excess"] >= 0)
+
+
+def test_a_fall_scores_below_walking_on(problem):
+    """The engine's walk beside a controller that folds the knees: it falls and scores less."""
+    x0 = problem.initial_population(None, np.random.default_rng(0))[0]
+    bad = x0.copy()
+    (C, _), (K, _) = problem.policy.unflatten(bad)
+    names = [problem.robot.model.actuator(int(c)).name for c in problem.sim.columns]
+    C = C.copy()
+    C[[names.index("LKneePitch"), names.index("RKneePitch")], 0] += 1.5
+    bad = problem.policy.flatten([(C, None), (K, None)])
+    m, res, _ = problem.play(np.stack([x0, bad]), np.zeros((2, problem.obs_dim)),
+                             np.ones((2, problem.obs_dim)), np.array([5, 5]))
+    assert res.fell[1] and m["return"][1] < m["return"][0]
+
+
+def test_run_writes_the_controller_and_its_description(run_dir, problem):
+    for name in ("policy.npz", "policy.py", "policy.json", "best.json", "stats.csv"):
+        assert (run_dir / name).is_file(), name
+    info = json.loads((run_dir / "policy.json").read_text())
+    assert info["observations"] == list(problem.obs_names)
+    assert len(info["joints"]) == problem.act_dim == 15
+    assert info["followers"] == {"RHipYawPitch": "LHipYawPitch"}
+    assert info["phase_period_s"] == problem.ctl.gait.period_s
+
+
+def test_compare_prints_both_controllers_and_the_top_speeds(run_dir):
+    text = compare_command(run_dir, worlds=2, duration_s=1.0)
+    assert "| evolved controller |" in text and "| walk engine (open loop" in text
+    assert "| forward [0.45, 0.0, 0.0] |" in text
+    res = json.loads(compare_command(run_dir, worlds=2, duration_s=1.0, json_out=True))
+    assert 0 <= res["controller"]["survival"] <= 1
+    assert set(res["engine"]["top_speeds"]) == {"forward", "backward", "left", "right",
+                                                "turn_left", "turn_right"}
+
+
+def test_bad_input_is_one_line(run_dir, tmp_path):
+    with pytest.raises(InputError, match="--worlds"):
+        compare(run_dir, worlds=0)
+    with pytest.raises(InputError, match="--duration"):
+        compare(run_dir, worlds=1, duration_s=float("nan"))
+    with pytest.raises(InputError, match="expected a humanoid-omniwalk run folder"):
+        compare(tmp_path / "nothing")
+    with pytest.raises(InputError, match="control_period_s"):
+        OmniWalkProblem(OmniWalkConfig(control_period_s=0.01, threads=1))
+    with pytest.raises(InputError, match="hold_max_s"):
+        OmniWalkConfig(hold_min_s=3.0, hold_max_s=2.0).validate()
+
+
+def test_the_engine_walks_and_turns_the_commanded_way():
+    """The fitted engine (the search's start) in the nominal world: each command alone moves
+    the torso its way (the yaw measured unwrapped: a turn past 180 degrees once read as the
+    opposite turn)."""
+    import math
+
+    from evomotion.studies.humanoid_omniwalk.commands import tracking
+
+    p = OmniWalkProblem(OmniWalkConfig(duration_s=4.0, threads=1, perturb=False,
+                                       push_max_ns=0.0))
+    x0 = p.ctl.initial_params()
+    C = math.ceil(p.nstep / p.control_steps)
+    ramp = np.clip(np.arange(C) * 0.02 / 0.5, 0, 1)[None, :, None]
+    cmds = np.array([[0.25, 0, 0], [-0.15, 0, 0], [0, 0.1, 0], [0, -0.1, 0], [0, 0, 1.0],
+                     [0, 0, -1.0]])
+    P = np.repeat(x0[None], len(cmds), axis=0)
+    res = p.sim.run(lambda r, o: p.policy.act(P[r], o, np.zeros(p.obs_dim),
+                                              np.ones(p.obs_dim)),
+                    len(cmds), p.nstep, commands=cmds[:, None] * ramp,
+                    initial_state=p.ctl.state0)
+    tr = tracking(res.torso, cmds[:, None] * ramp, p.ctl.window, 0.02)
+    walked = np.stack([tr.vx, tr.vy, tr.yaw_rate], -1)[:, -75:].mean(axis=1)
+    assert not res.fell.any()
+    for i, c in enumerate(cmds):
+        axis = int(np.flatnonzero(c)[0])
+        assert np.sign(walked[i, axis]) == np.sign(c[axis]) and \
+            abs(walked[i, axis]) > 0.4 * abs(c[axis]), (c, walked[i])
+
+
+def _cli(*args: str):
+    import subprocess
+    import sys
+
+    return subprocess.run([sys.executable, "-m", "evomotion.cli", *args], capture_output=True,
+                          text=True, timeout=180)
+
+
+def test_replay_with_a_command_a_command_file_and_bad_ones(run_dir, tmp_path):
+    r = _cli("replay", str(run_dir), "--command", "0.2,0,0", "--duration", "1.5", "--json")
+    assert r.returncode == 0, r.stderr
+    out = json.loads(r.stdout)
+    assert out["command"] == "0.2,0,0" and out["duration_s"] == 1.5
+    f = tmp_path / "cmds.txt"
+    f.write_text("# t vx vy w\n0, 0.1, 0, 0\n0.8 0 0 0.5\n")
+    r = _cli("replay", str(run_dir), "--command", str(f), "--duration", "1.5", "--stress", "2")
+    assert r.returncode == 0, r.stderr
+    assert "walk controller of run" in r.stdout and "2 perturbed worlds" in r.stdout
+    bad = tmp_path / "bad.txt"
+    for text, message in (("0 1 2\n", "bad.txt:1: expected"), ("1 0 0 0\n0.5 0 0 0\n",
+                                                                "bad.txt:2: times")):
+        bad.write_text(text)
+        r = _cli("replay", str(run_dir), "--command", str(bad))
+        assert r.returncode != 0 and "Traceback" not in r.stderr and message in r.stderr
+    r = _cli("replay", str(run_dir), "--command", "0.1,nan,0")
+    assert r.returncode != 0 and len(r.stderr.strip().splitlines()) == 1
+
+
+def test_ramped_commands_match_training_schedules():
+    from evomotion.studies.humanoid_omniwalk.replay import ramped
+
+    t = np.arange(0, 4, 0.02)
+    c = ramped(np.array([0.0, 2.0]), np.array([[0.3, 0, 0], [0, 0, 1.0]]), t, 0.5)
+    assert np.allclose(c[0], 0) and np.allclose(c[25:100], [0.3, 0, 0])
+    assert np.allclose(c[100], [0.3, 0, 0]) and np.allclose(c[-1], [0, 0, 1.0])
+    assert np.abs(np.diff(c, axis=0)).max() <= 1.0 * 0.02 / 0.5 + 1e-12
