@@ -23,7 +23,8 @@ VIEW = {"arm-ik": ".view-image", "grid-path": ".view-image", "quadruped-plan": "
         "humanoid-step": ".nao-scene", "humanoid-walk": ".nao-scene",
         "biped-kick": ".kick-table", "humanoid-repertoire": ".repertoire-map",
         "functions": "text=no view of its own", "gym": "text=no view of its own",
-        "humanoid-balance": "text=no view of its own"}
+        "humanoid-balance": "text=no view of its own",
+        "humanoid-omniwalk": "text=no view of its own"}
 
 
 def _rows(page) -> int:

@@ -191,6 +191,35 @@ def make_policy_driver(problem: PolicyProblem, config: Any) -> PolicySearchDrive
     return PolicySearchDriver(problem, make_optimizer(problem, config.algorithm))
 
 
+def observation_moments(count: np.ndarray, sums: np.ndarray, sumsqs: np.ndarray
+                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per episode ``(count, mean[o], m2[o])`` (Welford's moments, for :class:`EpisodeRows`)
+    from a closed-loop run's observation count, sums and sums of squares."""
+    n = np.asarray(count).astype(np.int64)
+    mean = sums / np.maximum(n, 1)[:, None]
+    return n, mean, np.maximum(sumsqs - n[:, None] * mean ** 2, 0.0)
+
+
+#: the optimizers a policy search runs (core/es and CMA-ES), each through the policy driver
+POLICY_OPTIMIZERS = ("ars", "openai_es", "pgpe", "snes", "cmaes")
+
+
+def policy_algorithms() -> dict:
+    """A policy study's ``algorithms``: ``{name: (config class, make_policy_driver)}``."""
+    from evomotion.core.algorithms import ALGORITHMS
+
+    return {name: (ALGORITHMS[name][0], make_policy_driver) for name in POLICY_OPTIMIZERS}
+
+
+def best_record(ctx: Any) -> dict[str, Any]:
+    """A policy study's ``best.json`` extras: the best centre's return, episodes, steps."""
+    s = ctx.state
+    if s is None:
+        return {}
+    return {"centre_return": -float(s.best_cost) if s.best_cost < float("inf") else None,
+            "train_episodes": int(s.train_episodes), "env_steps": int(s.env_steps)}
+
+
 @dataclass(frozen=True)
 class EpisodeRows:
     """The episodes of evaluation rows: ``owner[e]`` (the row of episode ``e``) and its seed

@@ -30,9 +30,9 @@ def finalize(ctx: Any) -> int | None:
 
 
 def best_record(ctx: Any) -> dict[str, Any]:
-    s = ctx.state
-    if s is None:
-        return {}
-    return {"centre_return": -float(s.best_cost) if s.best_cost < float("inf") else None,
-            "train_episodes": int(s.train_episodes), "env_steps": int(s.env_steps),
-            "backend": ctx.problem.backend if ctx.problem is not None else None}
+    from evomotion.studies.policy_search import best_record as policy_best
+
+    out = policy_best(ctx)
+    if out:
+        out["backend"] = ctx.problem.backend if ctx.problem is not None else None
+    return out

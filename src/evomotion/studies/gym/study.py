@@ -12,18 +12,8 @@ from __future__ import annotations
 
 from evomotion.studies.base import Study, lazy_hook
 from evomotion.studies.gym.problem import GymConfig, GymProblem
+from evomotion.studies.policy_search import POLICY_OPTIMIZERS, policy_algorithms  # noqa: F401 (tests read it here)
 from evomotion.studies.view import lazy
-
-#: the optimizers a policy search runs (core/es and CMA-ES), each through the policy driver
-POLICY_OPTIMIZERS = ("ars", "openai_es", "pgpe", "snes", "cmaes")
-
-
-def _algorithms() -> dict:
-    from evomotion.core.algorithms import ALGORITHMS
-    from evomotion.studies.policy_search import make_policy_driver
-
-    return {name: (ALGORITHMS[name][0], make_policy_driver) for name in POLICY_OPTIMIZERS}
-
 
 STUDY = Study(
     name="gym",
@@ -41,7 +31,7 @@ STUDY = Study(
     preset_notes={"paper": "ARS V2-t with the paper's Hopper hyperparameters (alpha 0.01, "
                            "N 8, b 4, nu 0.025)"},
     core_algorithms=(),
-    algorithms=_algorithms(),
+    algorithms=policy_algorithms(),
     on_checkpoint=lazy_hook("evomotion.studies.gym.artifacts", "write_policy"),
     finalize=lazy_hook("evomotion.studies.gym.artifacts", "finalize"),
     best_record=lazy_hook("evomotion.studies.gym.artifacts", "best_record"),

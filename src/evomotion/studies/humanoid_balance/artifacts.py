@@ -82,10 +82,3 @@ def finalize(ctx: Any) -> int | None:
                 + "; evomotion humanoid-balance compare RUN measures it")
     return None
 
-
-def best_record(ctx: Any) -> dict[str, Any]:
-    s = ctx.state
-    if s is None:
-        return {}
-    return {"centre_return": -float(s.best_cost) if s.best_cost < float("inf") else None,
-            "train_episodes": int(s.train_episodes), "env_steps": int(s.env_steps)}

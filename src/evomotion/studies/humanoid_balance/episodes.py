@@ -28,6 +28,7 @@ from evomotion.core.policies.spec import PolicySpec
 from evomotion.sim.closed_loop import ClosedLoopResult, ClosedLoopSimulator
 from evomotion.sim.worlds import World
 from evomotion.studies.episode_worlds import WorldDraw, episode_world, push_range
+from evomotion.studies.policy_search import observation_moments
 
 __all__ = ["Episodes", "WorldDraw", "episode_world", "push_range", "run_episodes"]
 
@@ -78,9 +79,6 @@ def run_episodes(sim: ClosedLoopSimulator, spec: PolicySpec, params: np.ndarray,
     tilt_mean = (tilt * valid).sum(axis=1) / done
     action_sq = sq / np.maximum(acts, 1)
     score = up - tilt_weight * tilt_mean - action_weight * action_sq
-    count = res.obs_count.astype(np.int64)
-    safe = np.maximum(count, 1)[:, None]
-    obs_mean = res.obs_sum / safe
-    obs_m2 = np.maximum(res.obs_sumsq - count[:, None] * obs_mean ** 2, 0.0)
+    count, obs_mean, obs_m2 = observation_moments(res.obs_count, res.obs_sum, res.obs_sumsq)
     return Episodes(score, up, tilt_mean, action_sq, (~res.fell).astype(float),
                     res.fall_time_s, count, obs_mean, obs_m2, res)

@@ -20,10 +20,9 @@ from evomotion.studies.humanoid_balance.problem import (
     HumanoidBalanceConfig,
     HumanoidBalanceProblem,
 )
+from evomotion.studies.policy_search import policy_algorithms
 from evomotion.studies.view import lazy
 
-#: the optimizers a policy search runs (core/es and CMA-ES), each through the policy driver
-POLICY_OPTIMIZERS = ("ars", "openai_es", "pgpe", "snes", "cmaes")
 ARTIFACTS = "evomotion.studies.humanoid_balance.artifacts"
 
 cli = typer.Typer(help="A balance policy for a pushed biped.", no_args_is_help=True)
@@ -44,11 +43,6 @@ def compare_cmd(run: Path = typer.Argument(..., help="a humanoid-balance run fol
     typer.echo(compare_command(run, worlds=worlds, push_ns=push, seed=seed, json_out=json_out))
 
 
-def _algorithms() -> dict:
-    from evomotion.core.algorithms import ALGORITHMS
-    from evomotion.studies.policy_search import make_policy_driver
-
-    return {name: (ALGORITHMS[name][0], make_policy_driver) for name in POLICY_OPTIMIZERS}
 
 
 STUDY = Study(
@@ -63,10 +57,10 @@ STUDY = Study(
                             "noise_std": 0.01, "top_directions": 8},
               "run": {"generations": 120, "checkpoint_every": 5}},
     core_algorithms=(),
-    algorithms=_algorithms(),
+    algorithms=policy_algorithms(),
     on_checkpoint=lazy_hook(ARTIFACTS, "write_policy"),
     finalize=lazy_hook(ARTIFACTS, "finalize"),
-    best_record=lazy_hook(ARTIFACTS, "best_record"),
+    best_record=lazy_hook("evomotion.studies.policy_search", "best_record"),
     replay=None,
     replay_run=lazy("evomotion.studies.humanoid_balance.replay", "replay_policy_command"),
     run_record=None,

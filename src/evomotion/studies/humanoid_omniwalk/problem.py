@@ -37,7 +37,12 @@ from evomotion.errors import InputError
 from evomotion.studies.episode_worlds import WorldDraw, episode_world, push_range
 from evomotion.studies.humanoid_omniwalk.commands import CommandDraw, schedules, tracking
 from evomotion.studies.humanoid_omniwalk.omni_gait import OmniGait
-from evomotion.studies.policy_search import EpisodeRows, neutral_rows, split_rows
+from evomotion.studies.policy_search import (
+    EpisodeRows,
+    neutral_rows,
+    observation_moments,
+    split_rows,
+)
 
 MAX_EPISODES = 1000
 METRICS = ("return", "steps", "survived", "time_up_s", "speed_error_mps",
@@ -209,9 +214,7 @@ class OmniWalkProblem:
         eps = EpisodeRows.of(seeds, episodes, MAX_EPISODES)
         o = eps.owner
         m, res, _ = self.play(params[o], mean[o], std[o], eps.seeds)
-        count = res.obs_count.astype(np.int64)
-        safe = np.maximum(count, 1)[:, None]
-        obs_mean = res.obs_sum / safe
-        obs_m2 = np.maximum(res.obs_sumsq - count[:, None] * obs_mean ** 2, 0.0)
+        count, obs_mean, obs_m2 = observation_moments(res.obs_count, res.obs_sum,
+                                                      res.obs_sumsq)
         avg = {k: eps.mean(v) for k, v in m.items()}
         return Evaluation(avg["return"], {**avg, **eps.moments(count, obs_mean, obs_m2)})

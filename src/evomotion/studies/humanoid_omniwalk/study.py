@@ -17,9 +17,9 @@ import typer
 
 from evomotion.studies.base import Study, lazy_hook
 from evomotion.studies.humanoid_omniwalk.problem import OmniWalkConfig, OmniWalkProblem
+from evomotion.studies.policy_search import policy_algorithms
 from evomotion.studies.view import lazy
 
-POLICY_OPTIMIZERS = ("ars", "openai_es", "pgpe", "snes", "cmaes")
 ARTIFACTS = "evomotion.studies.humanoid_omniwalk.artifacts"
 
 cli = typer.Typer(help="A closed-loop omnidirectional NAO walk.", no_args_is_help=True)
@@ -40,11 +40,6 @@ def compare_cmd(run: Path = typer.Argument(..., help="a humanoid-omniwalk run fo
                                json_out=json_out))
 
 
-def _algorithms() -> dict:
-    from evomotion.core.algorithms import ALGORITHMS
-    from evomotion.studies.policy_search import make_policy_driver
-
-    return {name: (ALGORITHMS[name][0], make_policy_driver) for name in POLICY_OPTIMIZERS}
 
 
 STUDY = Study(
@@ -60,10 +55,10 @@ STUDY = Study(
                             "noise_std": 0.005, "top_directions": 8},
               "run": {"generations": 800, "checkpoint_every": 20}},
     core_algorithms=(),
-    algorithms=_algorithms(),
+    algorithms=policy_algorithms(),
     on_checkpoint=lazy_hook(ARTIFACTS, "write_policy"),
     finalize=lazy_hook(ARTIFACTS, "finalize"),
-    best_record=lazy_hook(ARTIFACTS, "best_record"),
+    best_record=lazy_hook("evomotion.studies.policy_search", "best_record"),
     replay=None,
     replay_run=lazy("evomotion.studies.humanoid_omniwalk.replay", "replay_walk_command"),
     run_record=None,
