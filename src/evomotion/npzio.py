@@ -74,7 +74,9 @@ def loads_npz(data: bytes, path: str | Path, what: str = "npz file",
 
 
 def _check_header(fh, size: int, name: str) -> None:
-    """The ``.npy`` header of member ``name`` declares an array of at most its ``size``."""
+    """The ``.npy`` header of member ``name`` declares an array that fits in the bytes after
+    it (``size``: the whole member; a header's own bytes once counted as data, so a member
+    2 elements short failed later, as an EOF, not here)."""
     version = np.lib.format.read_magic(fh)
     if version == (1, 0):
         shape, _, dtype = np.lib.format.read_array_header_1_0(fh)
@@ -88,6 +90,7 @@ def _check_header(fh, size: int, name: str) -> None:
     need = n * dtype.itemsize
     if n > 0 and dtype.itemsize == 0 or n > MAX_ELEMENTS:
         raise ValueError(f"declares shape {tuple(shape)[:8]} of {dtype} (too many elements)")
-    if need > size:
+    data = size - fh.tell()  # the member's bytes after its header
+    if need > data:
         raise ValueError(f"declares shape {tuple(shape)[:8]} ({need} bytes) but holds "
-                         f"{size} bytes")
+                         f"{data} bytes")

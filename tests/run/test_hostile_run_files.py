@@ -211,3 +211,16 @@ def test_a_stagnated_run_killed_while_finishing_only_finishes(tmp_path):
     assert _cli("resume", str(d), "-q").returncode == 0
     assert (d / "stats.csv").read_text() == rows and (d / "best.json").is_file()
     assert "to write the final artifacts" in (d / "log.txt").read_text()
+
+
+@pytest.mark.parametrize("shape", [(2,), (1, 2), (3,)])
+def test_a_member_a_few_elements_short_is_refused_by_its_header(shape):
+    """The header's own bytes once counted as array data: (2,) of float64 (16 bytes) in a
+    member holding 8 passed the header check and failed later as an EOF."""
+    import zipfile
+
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w") as z:
+        z.writestr("a.npy", _npy_header_claiming(shape))
+    with pytest.raises(InputError, match="declares shape .* but holds 8 bytes"):
+        loads_npz(buf.getvalue(), "x.npz")
