@@ -89,6 +89,9 @@ def test_run_writes_the_controller_and_its_description(run_dir, problem):
     assert len(info["joints"]) == problem.act_dim == 15
     assert info["followers"] == {"RHipYawPitch": "LHipYawPitch"}
     assert info["phase_period_s"] == problem.ctl.gait.period_s
+    record = json.loads((run_dir / "naoqi" / "policy.json").read_text())
+    assert (run_dir / "naoqi" / "policy_runner.py").is_file()
+    assert record["command_ramp_s"] == 0.5 and record["joints"] == info["joints"]
 
 
 def test_compare_prints_both_controllers_and_the_top_speeds(run_dir):
