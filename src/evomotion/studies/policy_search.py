@@ -31,6 +31,7 @@ from evomotion.core.policies.normalizer import Moments, RunningStats, combine, m
 from evomotion.core.problem import GenomeSpec
 from evomotion.core.state import state_from_arrays, state_to_arrays
 from evomotion.run.ask_tell import make_optimizer
+from evomotion.run.contracts import OwnInitialPopulation
 from evomotion.run.driver import Driver, Evaluate, StepReport
 
 #: episode seeds are drawn below this (exact in a float64 row)
@@ -117,8 +118,9 @@ class PolicySearchDriver(Driver):
 
     def init(self, rng: np.random.Generator) -> PolicySearchState:
         o = self.problem.obs_dim
-        start = getattr(self.problem, "initial_population", None)  # e.g. a fitted gait tape
-        opt_state = self.opt.init(rng) if start is None else self.opt.init(rng, start(1, rng))
+        p = self.problem  # a problem with its own start (a fitted gait tape): as AskTellDriver
+        opt_state = (self.opt.init(rng, p.initial_population(1, rng))
+                     if isinstance(p, OwnInitialPopulation) else self.opt.init(rng))
         return PolicySearchState(opt_state, normalizer.init(o),
                                  np.asarray(self.opt.center(opt_state), float).copy(),
                                  float("inf"), np.zeros(o), np.ones(o))

@@ -97,17 +97,22 @@ def _summary(m: dict) -> dict[str, float]:
             "speed_excess": float(m["speed_excess"].mean())}
 
 
-def top_speeds(problem, params, mean, std) -> dict[str, dict[str, float]]:
-    """Each direction alone at its range limit, nominal world, no push (module doc)."""
-    cfg = problem.cfg
+def quiet_problem(problem):
+    """The top-speed tests' problem: ``problem``'s, nominal world, no push, SPEED_TEST_S."""
+    from evomotion.studies.humanoid_omniwalk.problem import OmniWalkProblem
+
+    return OmniWalkProblem(dataclasses.replace(problem.cfg, duration_s=SPEED_TEST_S,
+                                               perturb=False, push_min_ns=0.0,
+                                               push_max_ns=0.0))
+
+
+def top_speeds(p, params, mean, std) -> dict[str, dict[str, float]]:
+    """Each direction alone at its range limit in ``p`` (a :func:`quiet_problem`; module
+    doc)."""
+    cfg = p.cfg
     tests = {"forward": (cfg.vx_max, 0, 0), "backward": (cfg.vx_min, 0, 0),
              "left": (0, cfg.vy_max, 0), "right": (0, -cfg.vy_max, 0),
              "turn_left": (0, 0, cfg.yaw_rate_max), "turn_right": (0, 0, -cfg.yaw_rate_max)}
-    quiet = dataclasses.replace(cfg, duration_s=SPEED_TEST_S, perturb=False, push_min_ns=0.0,
-                                push_max_ns=0.0)
-    from evomotion.studies.humanoid_omniwalk.problem import OmniWalkProblem
-
-    p = OmniWalkProblem(quiet)
     C = math.ceil(p.nstep / p.control_steps)
     t = np.arange(C) * p.ctl.control_dt
     ramp = np.clip(t / cfg.ramp_s, 0.0, 1.0)[None, :, None]
@@ -121,7 +126,6 @@ def top_speeds(problem, params, mean, std) -> dict[str, dict[str, float]]:
                      "vy_mps": float(m["vy"][i, half:].mean()),
                      "yaw_rate_dps": float(np.degrees(m["w"][i, half:].mean())),
                      "fell": bool(m["survived"][i] < 1)}
-    p.sim.close()
     return out
 
 
@@ -141,9 +145,11 @@ def compare(run: str | Path, worlds: int = 100, duration_s: float = 60.0, seed: 
     out: dict[str, Any] = {"run": str(folder), "worlds": int(worlds), "seed": int(seed),
                            "duration_s": float(duration_s),
                            "push_ns": list(problem.draw.push_ns)}
+    quiet = quiet_problem(problem)
     for name, (x, mean, std) in rows.items():
         out[name] = _summary(_play(problem, x, mean, std, seeds))
-        out[name]["top_speeds"] = top_speeds(problem, x, mean, std)
+        out[name]["top_speeds"] = top_speeds(quiet, x, mean, std)
+    quiet.sim.close()
     problem.sim.close()
     return out
 
