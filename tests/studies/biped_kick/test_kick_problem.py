@@ -6,6 +6,7 @@ import mujoco
 import numpy as np
 
 from evomotion.core.constraints import feasibility_first
+from evomotion.errors import InputError
 from evomotion.sim.motion import format_motion, parse_motion
 from evomotion.sim.robots import nao
 from evomotion.sim.robots.nao.joint_limits import check_speeds
@@ -90,8 +91,17 @@ def test_scene_ball_and_rolling():
     m = scene.load_scene()
     assert np.isclose(m.body("ball").mass[0], scene.BALL_MASS_KG)
     assert np.isclose(m.geom("ball").size[0], 0.05) and m.geom("ball").condim[0] == 6
-    a = scene.measured_deceleration()
+    a = scene.measured_deceleration(0.005)
     assert 0.8 * scene.rolling_deceleration(0.005) < a < 1.1 * scene.rolling_deceleration(0.005)
+
+
+def test_carpet_is_calibrated_to_the_cited_deceleration():
+    """The default carpet decelerates the ball by B-Human's 0.35 m/s^2 (within 1 %), and the
+    calibration finds that friction again; a kick's default config uses it."""
+    assert abs(scene.measured_deceleration() / scene.CARPET_DECELERATION_M_S2 - 1) < 0.01
+    assert abs(scene.calibrated_rolling_m() / scene.CARPET_ROLLING_M - 1) < 0.01
+    assert abs(scene.calibrated_rolling_m(0.7) / 0.005 - 1) < 0.02  # the old assumption
+    assert KickConfig().rolling_m == scene.CARPET_ROLLING_M
 
 
 def test_sensor_cop_matches_contact_cop_when_standing():
@@ -163,3 +173,44 @@ def test_tiny_experiment(tmp_path, monkeypatch):
     assert "keyframe" in (tmp_path / "table.md").read_text()
     assert np.array_equal(on_grid(np.array([12, 24]), np.array([1.0, 2.0]),
                                   np.array([5, 12, 30])), [np.nan, 1.0, 2.0], equal_nan=True)
+
+
+def test_kicks_in_perturbed_worlds_keep_the_carpet():
+    """Kick worlds perturb the robot (friction, masses, motors, latency) but not the ball's
+    calibrated roll; the nominal world reproduces the nominal kick exactly, and a world's kick
+    does not depend on the other kicks of its batch."""
+    from evomotion.sim.worlds import World
+    from evomotion.studies.biped_kick.experiment import kick_worlds, perturbed_kicks
+
+    p = KickProblem(KickConfig(nthread=1, aims_deg=(0.0,)))
+    worlds = kick_worlds(p, 3, np.random.default_rng(4))
+    ball, floor = p.model.geom("ball").id, p.model.geom("floor").id
+    for w in worlds:
+        assert np.array_equal(w.model.geom_friction[ball], p.model.geom_friction[ball])
+        assert w.push_ns == (0.0, 0.0, 0.0)
+    assert len({float(w.model.geom_friction[floor, 0]) for w in worlds}) == 3
+    offsets = np.zeros((2, 2))
+    nominal = perturbed_kicks(p, X0, offsets)
+    same = perturbed_kicks(p, X0, offsets, worlds=[World(p.model), worlds[0]])
+    assert same["distance_m"][0] == nominal["distance_m"][0]
+    alone = perturbed_kicks(p, X0, offsets[:1], worlds=worlds[:1])
+    assert alone["distance_m"][0] == same["distance_m"][1] != nominal["distance_m"][0]
+    try:
+        perturbed_kicks(p, X0, offsets, worlds=worlds[:1])
+        raise AssertionError("one world for two kicks was accepted")
+    except InputError as exc:
+        assert "one world per kick" in str(exc)
+
+
+def test_tolerant_offset_is_the_centre_of_the_band_the_kick_tolerates():
+    from evomotion.studies.biped_kick.experiment import perturbed_kicks, tolerant_offset
+
+    p = KickProblem(KickConfig(nthread=1, aims_deg=(0.0,)))
+    step = 0.0025
+    c = tolerant_offset(p, X0, step_m=step)
+    assert -0.03 <= c <= 0.03
+    dy = np.arange(-0.03, 0.03 + step / 2, step)
+    err = np.abs(perturbed_kicks(p, X0, np.stack([np.zeros_like(dy), dy], 1))["angle_error_deg"])
+    ok = err <= 3.0
+    assert ok.any() and ok[np.argmin(np.abs(dy - c))]  # inside the band it names
+    assert tolerant_offset(p, X0, max_error_deg=-1.0) == 0.0  # no band: no offset

@@ -98,10 +98,18 @@ def test_play_bad_input_is_one_line(tmp_path, args, msg):
 
 
 def test_play_json(tmp_path):
+    """By default the shipped walk controller walks the approach (simulated); ``--walk model``
+    places the robot with the walking model."""
     r = _cli("--ball", "1.2", "0.4", "--target", "3", "0", "--json", cwd=tmp_path)
     assert r.returncode == 0, r.stderr
     res = json.loads(r.stdout)
-    assert {"ball_rest_m", "target_error_m", "time_s", "fell"} <= set(res)
+    assert {"ball_rest_m", "target_error_m", "time_s", "fell", "time_to_kick_s"} <= set(res)
+    assert res["walk"].startswith("controller") and "default_walk" in res["walk"]
+    assert not res["fell"] and res["walk_reached"] and res["walk_position_error_m"] < 0.04
+    r = _cli("--ball", "1.2", "0.4", "--target", "3", "0", "--json", "--walk", "model",
+             cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert "walking model" in json.loads(r.stdout)["walk"]
 
 
 def test_the_shipped_kick_alone_stays_up():
@@ -214,3 +222,61 @@ def test_the_kick_does_not_depend_on_the_robots_heading_in_the_world():
         assert np.linalg.norm(d) > 0.1
         dirs.append(np.degrees(np.arctan2(d[1], d[0]) - psi))
     assert abs(dirs[0] - dirs[1]) < 1.0
+
+
+def test_go_to_pose_command_faces_the_goal_far_and_corrects_near():
+    from evomotion.sim.walk_to_pose import FAR_M, command_to
+
+    vmax = np.array([0.36, 0.16, 0.96, 0.16])
+    far = command_to(np.zeros(3), np.array([2.0, 2.0, 0.0]), vmax)
+    assert far[1] == 0.0 and far[2] > 0 and 0 <= far[0] <= vmax[0]  # turns left, walks on
+    ahead = command_to(np.zeros(3), np.array([2.0, 0.0, 1.0]), vmax)
+    assert np.allclose(ahead, [vmax[0], 0.0, 0.0])  # far: the goal heading waits
+    near = command_to(np.array([1.0, 1.0, np.pi / 2]),
+                      np.array([1.0 + 0.5 * FAR_M, 1.0, np.pi / 2 - 0.1]), vmax)
+    assert near[0] == 0.0 or abs(near[0]) < 1e-12
+    assert near[1] < 0 and near[2] < 0  # the goal lies to its right; turn clockwise
+    assert np.all(np.abs(command_to(np.zeros(3), np.array([0.2, -0.3, 3.0]), vmax)[1:])
+                  <= vmax[1:3])
+
+
+def test_play_walks_with_a_walk_controller_in_the_same_simulation(omniwalk_run):
+    """``play --walk`` with a humanoid-omniwalk run: its exported controller walks the robot
+    in the kick scene (stance, closed-loop walk, crouch), then the kick is played from where
+    it stands; the video's frames cover the whole simulation."""
+    from evomotion.studies.biped_kick.controller_walk import CROUCH_S, SETTLE_S, STANCE_S
+    from evomotion.studies.biped_kick.play import walk_kind
+
+    assert walk_kind(omniwalk_run) == "controller"
+    p = KickProblem(KickConfig(nthread=1))
+    g, _ = read_kick(None)
+    res = play(p, g, np.zeros(3), np.array([0.9, 0.1]), np.array([3.5, 0.0]),
+               repertoire=omniwalk_run)
+    assert res["walk"].startswith("controller") and "simulated" in res["walk"]
+    assert res["walk_time_s"] >= STANCE_S + CROUCH_S + SETTLE_S - 1e-9 or res["fell"]
+    assert isinstance(res["fell"], bool) and (res["kicked"] or res["fell"])
+    if res["kicked"]:
+        assert res["time_to_kick_s"] > res["walk_time_s"]
+        assert np.isfinite(res["walk_position_error_m"])
+
+
+def test_a_walk_folder_of_another_study_or_a_broken_controller_is_one_line(omniwalk_run,
+                                                                          tmp_path):
+    import shutil
+
+    bad = tmp_path / "walk"
+    shutil.copytree(omniwalk_run, bad, ignore=shutil.ignore_patterns("checkpoints"))
+    info = json.loads((bad / "policy.json").read_text())
+    info["joints"][0] = "NoSuchJoint"
+    (bad / "policy.json").write_text(json.dumps(info))
+    r = _cli("--walk", str(bad), cwd=tmp_path)
+    lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
+    assert r.returncode == 2 and len(lines) == 1 and "NoSuchJoint" in lines[0], r.stderr
+    (bad / "policy.json").write_text("[1, 2]")
+    r = _cli("--walk", str(bad), cwd=tmp_path)
+    assert r.returncode == 2 and "policy.json" in r.stderr and "Traceback" not in r.stderr
+    (bad / "config.toml").write_text('study = "arm-ik"\n')
+    r = _cli("--walk", str(bad), cwd=tmp_path)
+    lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
+    assert r.returncode == 2 and len(lines) == 1 and "a arm-ik run, expected a " \
+        "humanoid-omniwalk run" in lines[0], r.stderr

@@ -182,3 +182,48 @@ def test_ramped_commands_match_training_schedules():
     assert np.allclose(c[0], 0) and np.allclose(c[25:100], [0.3, 0, 0])
     assert np.allclose(c[100], [0.3, 0, 0]) and np.allclose(c[-1], [0, 0, 1.0])
     assert np.abs(np.diff(c, axis=0)).max() <= 1.0 * 0.02 / 0.5 + 1e-12
+
+
+def test_the_policy_player_sends_the_training_loops_targets(run_dir, problem, tmp_path):
+    """sim.policy_player (the exported files played in any model, as biped-kick play does)
+    sends the targets the training's closed loop sends, stepping its own MjData: the same
+    observations from the same state and command, within 1e-6 rad over 1 s of walking. The
+    run's policy with every parameter jittered, so that every observation column matters."""
+    import shutil
+
+    import mujoco
+
+    from evomotion.core.policies.export import read_policy_npz, write_policy_npz
+    from evomotion.sim.policy_player import PolicyPlayer
+    from evomotion.sim.state import STATE_SPEC
+
+    run = read_policy_npz(run_dir / "policy.npz")
+    jitter = 0.01 * np.random.default_rng(5).standard_normal(run.params.shape)
+    write_policy_npz(tmp_path / "policy.npz", run.spec, run.params + jitter, run.obs_mean,
+                     run.obs_std)
+    shutil.copy(run_dir / "policy.json", tmp_path / "policy.json")
+    run_dir = tmp_path
+    pol = read_policy_npz(run_dir / "policy.npz")
+    model = problem.robot.model
+    sim = problem.sim
+    C = 50  # 1 s of 20 ms control steps
+    cmd = np.linspace(0, 1, C)[:, None] * np.array([0.2, 0.05, 0.3])  # slower than the ramp
+    res = sim.run(lambda rows, obs: pol.spec.act(np.tile(pol.params, (len(rows), 1)), obs,
+                                                 pol.obs_mean, pol.obs_std),
+                  1, C * sim.k, commands=cmd[None], initial_state=problem.ctl.state0,
+                  record_targets=True)
+    assert not res.fell[0]
+    player = PolicyPlayer(run_dir, model, {"left": "left_floor", "right": "right_floor"})
+    d = mujoco.MjData(model)
+    mujoco.mj_setState(model, d, problem.ctl.state0, STATE_SPEC)
+    mujoco.mj_forward(model, d)
+    player.start(d)
+    sent = []
+    for c in range(C):
+        ctrl = player.targets(d, cmd[c])
+        sent.append(ctrl[player.columns])
+        d.ctrl[:] = ctrl
+        for _ in range(player.control_steps):
+            mujoco.mj_step(model, d)
+    assert np.abs(np.array(sent) - res.targets[0]).max() < 1e-6
+    assert np.array_equal(player.columns, sim.columns)

@@ -2,17 +2,23 @@
 it rests (paper 002's whole chain for one ball and target, field frame, metres, radians).
 
 1. **Plan** (:func:`planning.plan_aimed_kick`): the aim ``a`` in [-30, +30] deg and the stand
-   pose that puts the ball where the evolved kick wants it for that aim; the cubic Bézier
+   pose that puts the ball where the evolved kick wants it for that aim, moved sideways to the
+   centre of the kick's tolerance to placement errors (:func:`.experiment.tolerant_offset`,
+   measured on the straight kick: ``ball_tolerant_offset_m`` in the report); the cubic Bézier
    approach from the robot's pose to it.
 2. **Walk**, in one MuJoCo simulation (NAO + ball, field frame) with the kick: given a
-   ``humanoid-repertoire`` run (``--walk RUN``), the robot walks there with its steps, closed
-   loop (:mod:`.walk_play`); otherwise with the walking model of :mod:`planning` (0.20 m/s,
-   0.6 rad/s on curves), which gives the approach time while the robot is placed at the stand
-   pose (the approach is not simulated). The output's ``walk`` key says which.
+   ``humanoid-omniwalk`` run (``--walk RUN``; the command's default is the shipped controller
+   :data:`DEFAULT_WALK`), its closed-loop walk controller takes the robot there along the
+   approach (:mod:`.controller_walk`); given a ``humanoid-repertoire`` run, the
+   robot walks there with its steps, closed loop (:mod:`.walk_play`); otherwise with the
+   walking model of :mod:`planning` (0.20 m/s, 0.6 rad/s on curves), which gives the approach
+   time while the robot is placed at the stand pose (the approach is not simulated). The
+   output's ``walk`` key says which.
 3. **Kick** from where the robot really stands: the aim is recomputed from its heading (within
-   +-30 deg), the kick's motion for that aim is played (:func:`motion.joint_targets`), then the
-   ball rolls on; the roll left after the rollout is ``v |v| / (2 a_roll)`` and lasts
-   ``|v| / a_roll``.
+   +-30 deg; +-10 deg after a controller's walk, whose plan turns the robot to face the target
+   within that: :data:`CONTROLLER_MAX_AIM_DEG`), the kick's motion for that aim is played
+   (:func:`motion.joint_targets`), then the ball rolls on; the roll left after the rollout is
+   ``v |v| / (2 a_roll)`` and lasts ``|v| / a_roll``.
 
 Reported: where the ball rests, its distance to the target and to the ball->target line
 (``target_error_m``), the times, and whether the robot fell.
@@ -32,8 +38,15 @@ from evomotion.textio import decode_utf8, loads_json, read_file_bytes
 
 #: the kick shipped with evomotion (evolved by ``evomotion run biped-kick``, see its docs)
 DEFAULT_KICK = Path(__file__).with_name("default_kick.json")
+#: the walk controller ``play`` walks with by default: a humanoid-omniwalk run's exported
+#: ``policy.npz`` and ``policy.json`` (where from: its ``source.json``)
+DEFAULT_WALK = Path(__file__).with_name("default_walk")
 WALK_MODEL = WalkModel()
 MAX_KICK_BYTES = 1 << 20
+#: with a walk controller (it turns on the spot cheaply) the plan aims at most this far from the
+#: robot's heading (deg): a kick aimed further sits the ball beside the toe, where a 2 cm
+#: placement error turns it by many degrees
+CONTROLLER_MAX_AIM_DEG = 5.0
 
 
 def read_kick(path: Path | None) -> tuple[np.ndarray, str]:
@@ -74,6 +87,25 @@ def check_kick_run(run: Path, option: str = "--kick") -> None:
                          "(or its best.json)")
 
 
+def walk_kind(path: Path, option: str = "--walk") -> str:
+    """``"controller"`` for a humanoid-omniwalk run folder, else ``"repertoire"`` (a
+    humanoid-repertoire run or its ``repertoire/``, checked when it is read); a run of any
+    other study is one :class:`InputError` line."""
+    from evomotion.run.config import config_from_run_dir
+
+    p = Path(path)
+    if p.is_dir() and (p / "config.toml").is_file():
+        name, _ = config_from_run_dir(p)
+        if name == "humanoid-omniwalk":
+            return "controller"
+        if name != "humanoid-repertoire":
+            raise InputError(f"{option} {path}: a {name} run, expected a humanoid-omniwalk "
+                             "run (its walk controller) or a humanoid-repertoire run")
+    elif p.is_dir() and (p / "policy.json").is_file() and (p / "policy.npz").is_file():
+        return "controller"  # exported controller files alone (the shipped default_walk/)
+    return "repertoire"
+
+
 def field_state(problem: Any, pose: np.ndarray, ball: np.ndarray) -> np.ndarray:
     """Kick-scene state with the robot's torso at the field pose (x, y, heading) in its crouch
     and the ball resting at ``ball``."""
@@ -109,19 +141,33 @@ def play(problem: Any, genome: np.ndarray, robot: np.ndarray, ball: np.ndarray,
     robot, ball, target = (np.asarray(v, dtype=float) for v in (robot, ball, target))
     root0 = nao.state_qpos(problem.model, nao.initial_state(problem.model), nao.ROOT_JOINT, 2)
 
+    from evomotion.studies.biped_kick.experiment import tolerant_offset
+
+    tolerant = tolerant_offset(problem, g)  # the ball where a placement error costs least
+
     def ball_local(aims: np.ndarray) -> np.ndarray:
         rows = np.repeat(g[None], len(np.atleast_1d(aims)), axis=0)
-        return problem.ball_xy(rows, np.atleast_1d(aims)) - root0
+        return problem.ball_xy(rows, np.atleast_1d(aims)) - root0 + np.array([0.0, tolerant])
 
-    max_aim = np.radians(MAX_AIM_DEG)
+    controller = repertoire is not None and walk_kind(repertoire) == "controller"
+    max_aim = np.radians(CONTROLLER_MAX_AIM_DEG if controller else MAX_AIM_DEG)
     plan = plan_aimed_kick(robot, ball, target, ball_local, max_aim)
     path_m, model_s = bezier_time(plan.control_points, WALK_MODEL)
-    report: dict[str, Any] = {"walk_path_m": path_m}
+    report: dict[str, Any] = {"walk_path_m": path_m, "ball_tolerant_offset_m": tolerant}
     if repertoire is None:
         run = SceneRun(problem, field_state(problem, plan.pose, ball))
         report.update(walk=f"walking model ({WALK_MODEL.speed_m_s} m/s, "
                            f"{WALK_MODEL.turn_rad_s} rad/s); the approach is not simulated",
                       walk_time_s=model_s)
+    elif controller:
+        from evomotion.studies.biped_kick.controller_walk import walk_controller
+
+        run = SceneRun(problem, field_state(problem, robot, ball))
+        w = walk_controller(run, Path(repertoire), plan.pose, plan.control_points)
+        report.update(walk=f"controller {repertoire} (closed loop, simulated)",
+                      walk_time_s=run.time_s, walk_reached=w["reached"],
+                      walk_position_error_m=w["position_error_m"],
+                      walk_heading_error_deg=w["heading_error_deg"])
     else:
         run = SceneRun(problem, field_state(problem, robot, ball))
         w = walk(run, repertoire, plan.control_points, plan.pose)
@@ -130,6 +176,7 @@ def play(problem: Any, genome: np.ndarray, robot: np.ndarray, ball: np.ndarray,
                       walk_position_error_m=w["position_error_m"],
                       walk_heading_error_deg=w["heading_error_deg"])
     walk_s = run.time_s if repertoire is not None else model_s
+    report["time_to_kick_s"] = None
     if run.fell:  # fell while walking: there is nothing to kick with
         rest = nao.state_qpos(problem.model, run.state, scene.BALL_JOINT, 2)
         report.update(ball_rest_m=[float(rest[0]), float(rest[1])],
@@ -163,6 +210,7 @@ def play(problem: Any, genome: np.ndarray, robot: np.ndarray, ball: np.ndarray,
         "stand_pose": [float(x) for x in pose],
         "ball_placement_error_m": placement,
         "kick_time_s": float(nstep * problem.dt), "roll_time_s": roll_s,
+        "time_to_kick_s": float(walk_s + contact_s(states, problem)),
         "kick_distance_m": float(np.linalg.norm(r)),
     })
     report["kicked"] = True
@@ -184,3 +232,14 @@ def _with_video(report: dict[str, Any], run: Any, problem: Any, video: Path | No
             report["video"] = None
             report["video_skipped"] = str(exc)
     return report
+
+
+def contact_s(states: np.ndarray, problem: Any) -> float:
+    """Time (s) from the start of ``states`` (the kick's rollout) until the ball first moves
+    faster than 5 cm/s (the foot meets it); the whole rollout if it never does."""
+    from evomotion.sim.robots import nao
+    from evomotion.studies.biped_kick import scene
+
+    v = nao.state_qvel(problem.model, states, scene.BALL_JOINT, 2)
+    moving = np.linalg.norm(v, axis=-1) > 0.05
+    return float((int(np.argmax(moving)) + 1 if moving.any() else len(states)) * problem.dt)

@@ -42,6 +42,7 @@ from evomotion.core.problem import Evaluation, GenomeSpec
 from evomotion.errors import InputError
 from evomotion.sim.robots import nao
 from evomotion.sim.rollout import BatchSimulator, fall_step, interpolate_controls, torso_track
+from evomotion.sim.worlds import simulate_worlds
 from evomotion.studies.biped_kick import scene
 from evomotion.studies.biped_kick.kickers import kicker_for
 from evomotion.studies.biped_kick.motion import (
@@ -87,7 +88,7 @@ ROLLOUT_DOUBLES_PER_STEP = 220
 class KickConfig:
     """The ``[problem]`` section of the biped-kick study."""
 
-    rolling_m: float = 0.005
+    rolling_m: float = scene.CARPET_ROLLING_M  # m; calibrated to 0.35 m/s^2 (scene.py)
     ball_dx_m: float = 0.0  # ball offset from where the kick wants it (m)
     ball_dy_m: float = 0.0
     aims_deg: tuple[float, ...] = (-30.0, -15.0, 0.0, 15.0, 30.0)
@@ -126,6 +127,7 @@ class KickConfig:
                         ("roll_after_s", MAX_ROLL_AFTER_S), ("zmp_margin_m", MAX_ZMP_MARGIN_M)):
             check_number(f"problem.{key}", getattr(self, key), lo=0.0, hi=hi)
         check_number("problem.speed_margin", self.speed_margin, lo=0.0, hi=1.0, lo_open=True)
+
         check_number("problem.fall_height_m", self.fall_height_m, lo=0.0,
                      hi=MAX_FALL_HEIGHT_M, lo_open=True)
         check_number("problem.fall_tilt_rad", self.fall_tilt_rad, lo=0.0, hi=math.pi,
@@ -250,9 +252,11 @@ class KickProblem:
         return q + v * speed[..., None] / (2 * self.decel), speed / self.decel
 
     def kicks(self, genomes: np.ndarray, aims_rad: np.ndarray, ball_xy: np.ndarray,
-              keep: bool = False) -> dict[str, np.ndarray]:
+              keep: bool = False, worlds: list | None = None) -> dict[str, np.ndarray]:
         """One rollout per row: genome ``[n, d]``, aim ``[n]`` (rad), ball ``[n, 2]`` (world).
-        Per-kick results; with ``keep`` also ``states``, ``sensors``, ``margin``, ``end``."""
+        Per-kick results; with ``keep`` also ``states``, ``sensors``, ``margin``, ``end``.
+        ``worlds``: one perturbed :class:`~evomotion.sim.worlds.World` of this problem's
+        model per row (:func:`.experiment.kick_worlds`), else the nominal model."""
         g = np.atleast_2d(np.asarray(genomes, dtype=float))
         aims = np.broadcast_to(np.asarray(aims_rad, dtype=float), (len(g),))
         ball0 = np.asarray(ball_xy, dtype=float).reshape(len(g), 2)
@@ -260,7 +264,14 @@ class KickProblem:
         keys, ctrl, end, ik_error = self.controls(g, aims)
         nstep = ctrl.shape[1]
         state0 = np.stack([self.kicker.initial_state(b) for b in ball0])
-        states, sensors = self.sim.run_with_sensors(state0, ctrl)
+        if worlds is None:
+            states, sensors = self.sim.run_with_sensors(state0, ctrl)
+        else:
+            if len(worlds) != len(g):
+                raise InputError(f"kicks: expected one world per kick ({len(g)}), got "
+                                 f"{len(worlds)}")
+            states, sensors = simulate_worlds(worlds, state0, ctrl, self.cfg.nthread,
+                                              sensors=True)
         rest, roll_s = self.ball_rest(states[np.arange(len(g)), end - 1])
         travel = rest - ball0
         u = np.stack([np.cos(aims), np.sin(aims)], axis=1)

@@ -82,9 +82,11 @@ def play_cmd(
         help="robot x y theta (m, m, rad; within +-100 m, +-2 pi rad)")] = (0.0, 0.0, 0.0),
     kick: Annotated[Path | None, typer.Option(
         help="a biped-kick run folder (or its best.json); default: the shipped kick")] = None,
-    walk: Annotated[Path | None, typer.Option(
-        help="a humanoid-repertoire run folder: walk there with its steps (simulated); "
-             "default: the walking model")] = None,
+    walk: Annotated[str | None, typer.Option(
+        help="a humanoid-omniwalk run folder (walk there with its closed-loop controller) or "
+             "a humanoid-repertoire run folder (with its steps), simulated; 'model': the "
+             "walking model (places the robot, not simulated); default: the shipped walk "
+             "controller")] = None,
     video: Annotated[Path | None, typer.Option(help="MP4 of the simulation")] = None,
     json_out: Annotated[bool, typer.Option("--json", help="JSON on stdout")] = False,
 ) -> None:
@@ -92,7 +94,7 @@ def play_cmd(
     import json
 
     from evomotion.outfile import check_target
-    from evomotion.studies.biped_kick.play import play, read_kick
+    from evomotion.studies.biped_kick.play import DEFAULT_WALK, play, read_kick, walk_kind
 
     for name, vals in (("--ball", ball), ("--target", target), ("--robot", robot)):
         check_pose(name, vals)
@@ -104,20 +106,29 @@ def play_cmd(
         if video.suffix.lower() != ".mp4":
             raise InputError(f"--video {video}: expected a .mp4 path")
         check_target(video, "video (--video)")
-    if walk is not None:
-        from evomotion.studies.biped_kick.walk_play import load_index
+    walk_dir = None if walk == "model" else Path(walk) if walk is not None else DEFAULT_WALK
+    if walk_dir is not None:  # refused before any simulation
+        if walk_kind(walk_dir) == "controller":
+            from evomotion.sim.policy_player import PolicyPlayer
+            from evomotion.studies.biped_kick.controller_walk import CONTACTS
+            from evomotion.studies.biped_kick.scene import load_scene
 
-        load_index(walk, "--walk")  # refused before any simulation
+            PolicyPlayer(walk_dir, load_scene(), CONTACTS)
+        else:
+            from evomotion.studies.biped_kick.walk_play import load_index
+
+            load_index(walk_dir, "--walk")
     genome, source = read_kick(kick)
     res = play(make_problem(KickConfig()), genome, np.array(robot), np.array(ball),
-               np.array(target), video, repertoire=walk)
+               np.array(target), video, repertoire=walk_dir)
     res["kick"] = source
     if json_out:
         typer.echo(json.dumps(res, indent=2))
         return
     if not res["kicked"]:
-        typer.echo(f"kick: {source}\nwalk: {res['walk']}: FELL after {res.get('walk_steps', 0)} "
-                   f"steps ({res['time_s']:.1f} s); no kick")
+        steps = f"{res['walk_steps']} steps, " if "walk_steps" in res else ""
+        typer.echo(f"kick: {source}\nwalk: {res['walk']}: FELL after {steps}"
+                   f"{res['time_s']:.1f} s; no kick")
         raise typer.Exit(1)
     typer.echo(f"kick: {source}\nwalk: {res['walk']}, {res['walk_path_m']:.2f} m path, "
                f"{res['walk_time_s']:.1f} s, to ({res['stand_pose'][0]:.2f}, "
@@ -125,7 +136,8 @@ def play_cmd(
                f"\nkick: aim {res['aim_deg']:+.1f} deg, {'FELL' if res['fell'] else 'stayed up'}"
                f"\nball rests at ({res['ball_rest_m'][0]:.2f}, {res['ball_rest_m'][1]:.2f}) "
                f"after {res['kick_distance_m']:.2f} m; {res['target_error_m']:.2f} m off the "
-               f"target line, {res['target_distance_m']:.2f} m from the target; total "
+               f"target line, {res['target_distance_m']:.2f} m from the target; foot on the "
+               f"ball after {res['time_to_kick_s']:.1f} s, ball at rest after "
                f"{res['time_s']:.1f} s"
                + (f"\nvideo: {video}" if res.get("video") else "")
                + (f"\nvideo skipped: {res['video_skipped']}" if res.get("video_skipped")
@@ -183,7 +195,7 @@ STUDY = Study(
     # plain CMA-ES: the paper's Tent-map and Levy additions did not beat it on the kick
     # (docs/biped-kick.md, 10 seeds x 360 evaluations); they are the paper preset
     defaults={"algorithm": {"name": "cmaes", "sigma0": 0.15},
-              "run": {"max_evaluations": 2000, "generations": 1000}},
+              "run": {"max_evaluations": 4000, "generations": 1000}},
     presets={"paper": {"algorithm": {"name": "cmaes", "chaos": True, "levy": True},
                        "problem": {"aims_deg": [0.0]}}},
     preset_notes={"paper": "the paper's improved CMA-ES (Tent-map jumps and Levy flights) on "

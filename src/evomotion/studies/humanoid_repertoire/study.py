@@ -7,6 +7,7 @@ from pathlib import Path
 
 import typer
 
+from evomotion.errors import InputError
 from evomotion.studies.base import Study, lazy_hook
 from evomotion.studies.humanoid_repertoire.problem import (
     FALLEN_OBJECTIVE,
@@ -56,7 +57,10 @@ def export_cmd(run: Path = typer.Argument(..., help="a humanoid-repertoire run f
 
 
 @cli.command("walk-to")
-def walk_to_cmd(run: Path = typer.Argument(..., help="a humanoid-repertoire run folder"),
+def walk_to_cmd(run: Path = typer.Argument(..., help="a humanoid-repertoire run folder (a "
+                                                     "chain of its steps), or a "
+                                                     "humanoid-omniwalk run (its closed-loop "
+                                                     "walk controller)"),
                 x: float = typer.Option(..., "--x", help="target forward (m), within +-10"),
                 y: float = typer.Option(0.0, "--y", help="target left (m), within +-10"),
                 theta: float = typer.Option(0.0, "--theta", help="target heading (deg), "
@@ -65,9 +69,23 @@ def walk_to_cmd(run: Path = typer.Argument(..., help="a humanoid-repertoire run 
                 out: Path = typer.Option(None, "--out", help="the chained .motion (default: "
                                                              "in the run folder)"),
                 json_out: bool = typer.Option(False, "--json", help="JSON on stdout")) -> None:
-    """Plan a sequence of repertoire steps to a pose (A*), chain and play it."""
+    """Walk to a pose: a sequence of repertoire steps (A*), chained and played, or a walk
+    controller's closed-loop walk."""
     from evomotion.studies.humanoid_repertoire.step_planning import walk_to
 
+    if _is_controller_run(run):
+        r = _controller_walk_to(run, x, y, theta, video, out)
+        if json_out:
+            typer.echo(json.dumps(r, indent=2))
+            return
+        typer.echo(f"walk controller, {r['walk_s']:.1f} s walking -> ({r['reached']['x_m']:+.3f}"
+                   f", {r['reached']['y_m']:+.3f}) m, {r['reached']['theta_deg']:+.1f} deg: "
+                   f"error {r['position_error_m']:.3f} m, {r['heading_error_deg']:.1f} deg, "
+                   f"{'FELL' if r['fell'] else 'stayed up'}"
+                   + (f"; video {r['video']}" if r["video"] else ""))
+        if r.get("video_skipped"):
+            typer.echo(f"video skipped: {r['video_skipped']}", err=True)
+        return
     r = walk_to(run, x, y, theta, video=video, out=out)
     if json_out:
         typer.echo(json.dumps(r, indent=2))
@@ -76,6 +94,31 @@ def walk_to_cmd(run: Path = typer.Argument(..., help="a humanoid-repertoire run 
                f") m, {r['reached']['theta_deg']:+.1f} deg: error {r['position_error_m']:.3f}"
                f" m, {r['heading_error_deg']:.1f} deg, {'FELL' if r['fell'] else 'stayed up'}"
                f"; {r['motion']}")
+
+
+def _is_controller_run(run: Path) -> bool:
+    from evomotion.run.config import config_from_run_dir
+
+    return (run.is_dir() and (run / "config.toml").is_file()
+            and config_from_run_dir(run)[0] == "humanoid-omniwalk")
+
+
+def _controller_walk_to(run: Path, x: float, y: float, theta: float, video: Path | None,
+                        out: Path | None) -> dict:
+    """``walk-to`` with a humanoid-omniwalk run: checks, then the closed-loop walk."""
+    from evomotion.outfile import check_target
+    from evomotion.studies.humanoid_repertoire.controller_walk_to import controller_walk_to
+    from evomotion.studies.humanoid_repertoire.step_planning import check_request
+
+    check_request(("--x", "--y", "--theta"), x, y, theta)
+    if out is not None:
+        raise InputError("--out: a walk controller's walk is closed loop, not a chain of "
+                         "motions; there is no .motion to write")
+    if video is not None:
+        if video.suffix.lower() != ".mp4":
+            raise InputError(f"--video {video}: expected a .mp4 path")
+        video = check_target(video, "video (--video)")
+    return controller_walk_to(run, x, y, theta, video)
 
 
 ARTIFACTS = "evomotion.studies.humanoid_repertoire.artifacts"
