@@ -245,3 +245,22 @@ def test_checkpoint_json_is_not_a_zip_bomb_target(interrupted, tmp_path):
         z.writestr("state.pop.npy", b"\x93NUMPY garbage")
     log = _resume(d)
     assert NEWEST + ".json" in log and "skipped" in log
+
+
+def test_a_resume_keeps_the_stopped_sessions_log_lines(tmp_path):
+    """The log is the run's history (issue 35): after a Ctrl-C and a resume it still holds the
+    ``stopped: interrupted`` line, and the resume says which lines the stopped session wrote
+    after the checkpoint it continues from; a last line a kill cut short is ended first."""
+    out = tmp_path / "run"
+    _interrupted(out)
+    before = (out / "log.txt").read_text()
+    assert "stopped: interrupted at generation 9" in before
+    with open(out / "log.txt", "a") as f:
+        f.write("half a li")  # as a kill -9 in the middle of a write leaves it
+    text = _resume(out)
+    assert text.startswith(before + "half a li\n")
+    lines = text.splitlines()
+    resumed = [ln for ln in lines if ln.startswith("resumed at generation 9")]
+    assert len(resumed) == 1 and "lines above since that checkpoint are the stopped " \
+        "session's" in resumed[0]
+    assert lines[-1].startswith("stopped: generations at generation 12")

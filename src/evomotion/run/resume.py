@@ -187,11 +187,15 @@ def resume_run(study: LoopStudy, config: Config, problem: Any, driver: Driver, o
     files.stats.truncate(c.stats_offset)
     if files.history is not None:
         files.history.truncate(c.history_offset)
-    log.truncate(c.log_offset)
+    kept = log.lines_after(c.log_offset)  # the log keeps the stopped session's lines
     for line in notes:
         log(line)
+    since = (f"; the {kept} line{'s' if kept != 1 else ''} above since that checkpoint are the "
+             "stopped session's" + ("" if finish_only else
+                                    f" (its generations after {c.generation} run again)")
+             ) if kept else ""
     log(f"resumed at generation {c.generation} to write the final artifacts (the run was "
-        "stopped while writing them)" if finish_only else
-        f"resumed at generation {c.generation} with evaluator {config.run.evaluator}")
+        "stopped while writing them)" + since if finish_only else
+        f"resumed at generation {c.generation} with evaluator {config.run.evaluator}" + since)
     run = RunState(study, config, problem, driver, state, rng, c, log, out_dir)
     return run, finish_only, cleaned

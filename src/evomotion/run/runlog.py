@@ -9,7 +9,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
-from evomotion.outfile import append_text, open_append, truncate_file
+from evomotion.outfile import append_text, open_append
 from evomotion.run.console import Reporter
 
 
@@ -28,11 +28,19 @@ class RunLog:
     def offset(self) -> int:
         return self.path.stat().st_size if self.path is not None else len(self.lines)
 
-    def truncate(self, offset: int) -> None:
+    def lines_after(self, offset: int) -> int:
+        """How many lines the log holds after ``offset`` (a checkpoint's): a resume keeps them
+        (the log is the run's history: the stopped session's last generations and its
+        ``stopped:`` line), ending a line a kill cut short so the next starts on its own."""
         if self.path is None:
-            del self.lines[offset:]
-            return
-        truncate_file(self.path, offset, "run log")
+            return max(len(self.lines) - offset, 0)
+        with open(self.path, "rb") as f:
+            f.seek(offset)
+            tail = f.read()
+        if tail and not tail.endswith(b"\n"):
+            append_text(self.path, "\n", "run log")
+            return tail.count(b"\n") + 1
+        return tail.count(b"\n")
 
     def __call__(self, msg: str) -> None:
         msg = one_line(msg)
