@@ -113,3 +113,12 @@ def test_old_preset_name_runs_the_paper_preset_and_old_folders_resume(tmp_path):
     r = cli("resume", str(out), "--set", "run.generations=3", "--quiet")
     assert r.returncode == 0, r.stderr
     assert json.loads((out / "best.json").read_text())["generation"] == 3
+
+
+def test_help_texts_keep_square_brackets():
+    """Typer's rich help once ate ``[studio]`` as markup ("needs the  extra", issue 35): every
+    command's help that names an extra shows it."""
+    r = subprocess.run([sys.executable, "-m", "evomotion.cli", "studio", "--help"],
+                       capture_output=True, text=True, timeout=60,
+                       env={**__import__("os").environ, "COLUMNS": "200"})
+    assert r.returncode == 0 and "needs the [studio] extra" in r.stdout, r.stdout

@@ -259,7 +259,7 @@ def studio_cmd(
     host: Annotated[str, typer.Option(help="Address to listen on (others: warned)")]
     = "127.0.0.1",
 ) -> None:
-    """Watch, compare, start and stop runs in the browser (needs the [studio] extra).
+    """Watch, compare, start and stop runs in the browser (needs the \\[studio] extra).
 
     The URL printed at start carries the access token (or set EVOMOTION_STUDIO_TOKEN)."""
     import os

@@ -130,3 +130,36 @@ def test_a_dev_zero_robot_page_answers_without_bloating(hostile_studio):
     assert (_rss_kb(proc.pid) - before) / 1024 < 200
     assert _rss_kb(proc.pid, "VmHWM") / 1024 < 1024
     assert proc.poll() is None
+
+
+def _post_json(url: str, body) -> tuple[int, dict]:
+    import urllib.error
+    import urllib.request
+
+    req = urllib.request.Request(url, data=json.dumps(body).encode(), method="POST",
+                                 headers={**API, "Content-Type": "application/json"})
+    try:
+        with urllib.request.urlopen(req, timeout=60) as r:
+            return r.status, json.loads(r.read())
+    except urllib.error.HTTPError as e:
+        return e.code, json.loads(e.read())
+
+
+def test_api_start_starts_a_run_and_refuses_bad_bodies(hostile_studio):
+    """``POST /api/start`` (docs/studio.md) starts a run (it answered 422 to everything before
+    issue 35: FastAPI took the request for a query parameter); a bad body is one line, 400."""
+    base, root, *_ = hostile_studio
+    for body, msg in (([1, 2], "expected a JSON object"), ({"study": 3}, "study:"),
+                      ({"study": "no-such-study"}, "no-such-study"),
+                      ({"study": "functions", "sets": "run.generations=1"}, "sets:")):
+        code, res = _post_json(f"{base}/api/start", body)
+        assert code == 400 and msg in res["error"] and "\n" not in res["error"], (body, res)
+    code, res = _post_json(f"{base}/api/start", {"study": "functions",
+                                                 "sets": ["run.generations=2"]})
+    assert code == 200, res
+    run = root / res["name"]
+    assert (run / "config.toml").is_file() and res["pid"] > 0
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and not (run / "best.json").exists():
+        time.sleep(0.2)
+    assert (run / "best.json").exists()

@@ -60,3 +60,18 @@ def test_frames_of_a_study_step_through_figures(tmp_path):
     assert isinstance(frames, Frames) and frames.count >= 3
     fig, caption = frames.draw(frames.count - 1)
     assert fig.axes and caption.startswith("generation ")
+
+
+def test_motions_sort_by_their_numbers_and_durations_read_for_people(tmp_path):
+    """Issue 35: the kick's motions sorted as text (+0, +10, ..., -10), a 0.039 s run read
+    "0.0 s"."""
+    from evomotion.studio.pages import duration_text
+
+    (tmp_path / "kicks").mkdir()
+    for a in ("-30", "-20", "-10", "+0", "+10", "+20", "+30"):
+        (tmp_path / "kicks" / f"aim_{a}.motion").write_text("#WEBOTS_MOTION,V1.0\n")
+    (tmp_path / "best.motion").write_text("#WEBOTS_MOTION,V1.0\n")
+    assert views.motions_of(tmp_path) == ["best.motion"] + [
+        f"kicks/aim_{a}.motion" for a in ("-30", "-20", "-10", "+0", "+10", "+20", "+30")]
+    assert [duration_text(s) for s in (0.039, 12.34, 59.9, 75, 7322, float("nan"))] == \
+        ["0.039 s", "12.3 s", "59.9 s", "1 min 15 s", "2 h 02 min", ""]

@@ -57,7 +57,7 @@ def install_security(app: Any, token: str) -> None:
 
 def add_api(app: Any, root: Path) -> None:
     """JSON routes for scripts and for the page's own buttons' fallback; token-checked."""
-    from fastapi import Request
+    from fastapi import Body
     from fastapi.responses import FileResponse, JSONResponse, PlainTextResponse
 
     from evomotion.studio import actions, data
@@ -91,14 +91,32 @@ def add_api(app: Any, root: Path) -> None:
             return fail(e)
 
     @app.post("/api/start")
-    async def start(request: Request):
-        body = await request.json()
+    def start(body: Any = Body(None)):  # noqa: B008 - FastAPI's way to take a JSON body
+        # ``Any`` (a name in this module's globals) rather than ``Request`` imported here:
+        # under ``from __future__ import annotations`` FastAPI resolves the annotation from
+        # the globals, and a local ``Request`` made ``request`` a query parameter (every POST
+        # answered 422; issue 35)
         try:
-            out, proc = actions.start_run(root, str(body.get("study", "")), body.get("preset"),
-                                          [str(s) for s in body.get("sets", [])])
+            study, preset, sets = _start_body(body)
+            out, proc = actions.start_run(root, study, preset, sets)
         except InputError as e:
             return fail(e)
         return {"name": out.relative_to(root).as_posix(), "pid": proc.pid}
+
+
+def _start_body(body: Any) -> tuple[str, str | None, list[str]]:
+    """(study, preset, sets) of a ``/api/start`` JSON body, or one-line :class:`InputError`."""
+    if not isinstance(body, dict):
+        raise InputError("expected a JSON object {\"study\": ..., \"preset\": ..., "
+                         "\"sets\": [...]}")
+    study, preset, sets = body.get("study"), body.get("preset"), body.get("sets", [])
+    if not isinstance(study, str):
+        raise InputError("study: expected a study name (a string)")
+    if preset is not None and not isinstance(preset, str):
+        raise InputError("preset: expected a name or null")
+    if not isinstance(sets, list) or not all(isinstance(x, str) for x in sets):
+        raise InputError("sets: expected a list of 'key=value' strings")
+    return study, preset, sets
 
 
 def serve(root: Path, host: str = "127.0.0.1", port: int = 8765,

@@ -32,8 +32,32 @@ def _fmt_row(r: data.RunSummary) -> dict:
             if r.started > 0 else ""
     except (OverflowError, OSError, ValueError):  # a date no calendar holds
         d["started_text"] = ""
-    d["duration_text"] = f"{r.duration_s:.1f} s"
+    d["duration_text"] = duration_text(r.duration_s)
     return d
+
+
+#: the curves' tooltip: values to 6 significant digits (they printed 16), no trailing zeros;
+#: the axis value (generation, evaluations) as a whole number (it read "84.00"); NiceGUI
+#: evaluates keys starting with ':' as JavaScript
+TOOLTIP = {"trigger": "axis",
+           ":valueFormatter": "v => (v == null || !isFinite(v)) ? '-' : "
+                              "String(Number(Number(v).toPrecision(6)))",
+           "axisPointer": {"label": {":formatter": "p => String(Math.round(p.value))"}}}
+#: a series with at most this many finite points shows its points as symbols
+FEW_POINTS = 30
+
+
+def duration_text(seconds: float) -> str:
+    """A run's duration for people: 3 significant digits under a minute (0.039 s, 12.3 s;
+    it read "0.0 s" for a 0.039 s run), then minutes and seconds, then hours and minutes."""
+    s = float(seconds)
+    if not s >= 0 or s == float("inf"):
+        return ""
+    if s < 60:
+        return f"{s:.3g} s"
+    if s < 3600:
+        return f"{int(s // 60)} min {int(s % 60):02d} s"
+    return f"{int(s // 3600)} h {int(s % 3600 // 60):02d} min"
 
 
 def header(ui, title: str) -> None:
@@ -112,10 +136,10 @@ def build(root: Path) -> None:
                               value="generation").classes("x-axis")
             summary = ui.label().classes("text-slate-600 run-summary")
         chart = ui.echart({
-            "animation": False, "tooltip": {"trigger": "axis"}, "legend": {"top": 0},
+            "animation": False, "tooltip": TOOLTIP, "legend": {"top": 0},
             "grid": {"left": 70, "right": 20, "top": 40, "bottom": 40},
             "xAxis": {"type": "value", "name": "generation", "nameLocation": "middle",
-                      "nameGap": 25},
+                      "nameGap": 25, "minInterval": 1},
             "yAxis": {"type": "value", "scale": True, "name": "fitness"},
             "series": [{"name": lab, "type": "line", "showSymbol": False, "data": []}
                        for _k, lab in CURVES]}).classes("w-full h-80 fitness-chart")
@@ -124,9 +148,12 @@ def build(root: Path) -> None:
         def redraw() -> None:
             x = st.column(xaxis.value)
             for i, (k, _lab) in enumerate(CURVES):
-                chart.options["series"][i]["data"] = [list(p) for p in zip(x, st.column(k),
-                                                                       strict=False)]
-            chart.options["xAxis"]["name"] = xaxis.value
+                pts = [list(p) for p in zip(x, st.column(k), strict=False)]
+                chart.options["series"][i]["data"] = pts
+                # a curve of few finite points (best_so_far inf, then one value) drew nothing
+                chart.options["series"][i]["showSymbol"] = \
+                    sum(p[1] is not None for p in pts) <= FEW_POINTS
+            chart.options["xAxis"]["name"] = xaxis.value  # both axes count: whole ticks
             chart.update()
 
         def status() -> None:
@@ -181,9 +208,9 @@ def build(root: Path) -> None:
                          with_input=True).classes("w-full compare-pick")
         note = ui.label().classes("text-slate-600 compare-note")
         chart = ui.echart({
-            "animation": False, "tooltip": {"trigger": "axis"}, "legend": {"top": 0},
+            "animation": False, "tooltip": TOOLTIP, "legend": {"top": 0},
             "xAxis": {"type": "value", "name": "evaluations", "nameLocation": "middle",
-                      "nameGap": 25},
+                      "nameGap": 25, "minInterval": 1},
             "yAxis": {"type": "value", "scale": True, "name": "best so far"},
             "series": [
                 {"name": "q25", "type": "line", "stack": "iqr", "showSymbol": False,

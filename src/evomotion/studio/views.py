@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import base64
 import io
+import re
 from pathlib import Path
 from typing import Any
 
@@ -73,9 +74,19 @@ def scene_of(run_dir: Path, default: str = "nao") -> str:
 
 
 def motions_of(run_dir: Path) -> list[str]:
-    """The run's ``.motion`` files, relative to the run folder (best first)."""
-    found = sorted(p.relative_to(run_dir).as_posix() for p in bounded_files(run_dir, ".motion"))
-    return sorted(found, key=lambda n: (n != "best.motion", n))
+    """The run's ``.motion`` files, relative to the run folder (best first, then in natural
+    order: signed numbers by value, so the kick's ``aim_-30`` ... ``aim_+30``)."""
+    found = [p.relative_to(run_dir).as_posix() for p in bounded_files(run_dir, ".motion")]
+    return sorted(found, key=lambda n: (n != "best.motion", natural_key(n)))
+
+
+_NUMBER = re.compile(r"([+-]?\d+(?:\.\d+)?)")
+
+
+def natural_key(name: str) -> tuple:
+    """Sort key reading signed numbers in ``name`` by value (text parts as text)."""
+    parts = _NUMBER.split(name)
+    return tuple((0, float(p), "") if i % 2 else (1, 0.0, p) for i, p in enumerate(parts))
 
 
 def render(study: str, root: Path, run_dir: Path) -> None:
