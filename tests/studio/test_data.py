@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import socket
 import subprocess
 import sys
@@ -208,3 +209,31 @@ def test_population_bin_reader_never_crashes(tmp_path_factory, raw):
         return
     for g, pop, fit in hist:
         assert pop.ndim == 2 and fit.shape == (pop.shape[0],) and isinstance(g, int)
+
+
+def test_compare_groups_runs_by_study_and_never_pools_them(tmp_path):
+    """Issue 35: runs of different studies were pooled into one band; now one group per study
+    (in the order first selected), each with its runs' own curves."""
+    a = [_run(tmp_path, f"f{i}", f"run.seed={i}") for i in range(2)]
+    (tmp_path / "other").mkdir()
+    other = tmp_path / "other" / "g0"
+    shutil.copytree(a[0], other)
+    cfg = other / "config.toml"
+    cfg.write_text(cfg.read_text().replace('study = "functions"', 'study = "grid-path"', 1))
+    groups = data.compare_groups([a[0], other, a[1]], points=20, labels=["f0", "other/g0", "f1"])
+    assert [g["study"] for g in groups] == ["functions", "grid-path"]
+    assert groups[0]["names"] == ["f0", "f1"] and groups[1]["names"] == ["other/g0"]
+    assert max(groups[0]["runs"]) == 2 and max(groups[1]["runs"]) == 1  # runs counted per x
+    assert [c["run"] for c in groups[0]["curves"]] == ["f0", "f1"]
+    c0 = groups[0]["curves"][0]
+    assert len(c0["evaluations"]) == len(c0["best"]) > 0
+
+
+def test_compare_series_keep_internal_series_out_of_the_legend(tmp_path):
+    from evomotion.studio.pages import compare_series
+
+    runs = [_run(tmp_path, f"r{i}", f"run.seed={i}") for i in range(2)]
+    series, legend = compare_series(data.compare_groups(runs, points=20))
+    assert "functions lower" in [s["name"] for s in series]
+    assert legend == ["functions: interquartile band", "functions: median of 2", "r0", "r1"]
+    assert len({s["color"] for s in series if "color" in s}) == 1  # one study, one colour

@@ -146,7 +146,9 @@ def test_compare_page_draws_median_and_band(page, studio):
     base, root = studio
     page.goto(f"{base}/compare?runs=functions,grid-path")
     page.wait_for_selector(".compare-chart canvas")
-    _wait(lambda: "2 runs" in page.locator(".compare-note").inner_text(), what="the note")
+    _wait(lambda: "2 runs of 2 studies" in page.locator(".compare-note").inner_text(),
+          what="the note")
+    assert "never pooled" in page.locator(".compare-note").inner_text()
 
 
 def test_token_guards_pages_files_and_actions(studio):

@@ -344,6 +344,32 @@ class StatsTail:
         return np.array([v if v is not None else np.nan for v in self.column(name)], float)
 
 
+def compare_groups(run_dirs: list[Path], points: int = 200,
+                   labels: list[str] | None = None) -> list[dict]:
+    """The runs grouped by study (their fitnesses are on different scales, so runs of
+    different studies are never pooled; issue 35): per study, in the order first selected,
+    ``{"study", "names": [run names], **compare_runs(its runs), "curves": [{"run", "evaluations",
+    "best"}]}`` with each run's own best-so-far curve (finite rows only); ``labels``: the
+    runs' names (default their folder names)."""
+    names = dict(zip(run_dirs, labels or [d.name for d in run_dirs], strict=True))
+    groups: dict[str, list[Path]] = {}
+    for d in run_dirs:
+        groups.setdefault(study_name(d), []).append(d)
+    out = []
+    for study, dirs in groups.items():
+        curves = []
+        for d in dirs:
+            st = StatsTail(d / "stats.csv")
+            st.update()
+            e, b = st.array("evaluations"), st.array("best_so_far")
+            ok = np.isfinite(e) & np.isfinite(b)
+            curves.append({"run": names[d], "evaluations": e[ok].tolist(),
+                           "best": b[ok].tolist()})
+        out.append({"study": study, "names": [names[d] for d in dirs],
+                    **compare_runs(dirs, points), "curves": curves})
+    return out
+
+
 def compare_runs(run_dirs: list[Path], points: int = 200) -> dict[str, list[float]]:
     """Median and interquartile band of the best-so-far fitness of ``run_dirs`` against
     evaluations, on a common grid (a run counts at x once it has made x evaluations and until

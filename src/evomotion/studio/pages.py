@@ -47,6 +47,44 @@ TOOLTIP = {"trigger": "axis",
 FEW_POINTS = 30
 
 
+#: colours of the compared studies (ECharts' default palette)
+PALETTE = ("#5470c6", "#91cc75", "#fac858", "#ee6666", "#73c0de", "#3ba272", "#fc8452",
+           "#9a60b4")
+
+
+def compare_series(groups: list[dict]) -> tuple[list[dict], list[str]]:
+    """ECharts series and legend names of :func:`data.compare_groups`: per study a band (an
+    invisible lower edge, left out of the legend, and the band stacked on it), its median and a
+    thin line per run, all in the study's colour."""
+    series: list[dict] = []
+    legend: list[str] = []
+    for k, g in enumerate(groups):
+        colour = PALETTE[k % len(PALETTE)]
+        x = g["evaluations"]
+        band = [u - lo for u, lo in zip(g["q75"], g["q25"], strict=True)]
+        stack = f"iqr-{k}"
+        median = f"{g['study']}: median of {len(g['names'])}"
+        series += [
+            {"name": f"{g['study']} lower", "type": "line", "stack": stack, "showSymbol": False,
+             "lineStyle": {"opacity": 0}, "data": [list(p) for p in zip(x, g["q25"])],
+             "tooltip": {"show": False}},
+            {"name": f"{g['study']}: interquartile band", "type": "line", "stack": stack,
+             "showSymbol": False, "lineStyle": {"opacity": 0}, "color": colour,
+             "areaStyle": {"color": colour, "opacity": 0.25},
+             "data": [list(p) for p in zip(x, band)], "tooltip": {"show": False}},
+            {"name": median, "type": "line", "showSymbol": len(x) <= FEW_POINTS,
+             "color": colour, "lineStyle": {"width": 2.5},
+             "data": [list(p) for p in zip(x, g["median"])]}]
+        legend += [f"{g['study']}: interquartile band", median]
+        for c in g["curves"]:
+            series.append({"name": c["run"], "type": "line", "color": colour,
+                           "showSymbol": len(c["evaluations"]) <= FEW_POINTS,
+                           "lineStyle": {"width": 1, "opacity": 0.5},
+                           "data": [list(p) for p in zip(c["evaluations"], c["best"])]})
+            legend.append(c["run"])
+    return series, legend
+
+
 def duration_text(seconds: float) -> str:
     """A run's duration for people: 3 significant digits under a minute (0.039 s, 12.3 s;
     it read "0.0 s" for a 0.039 s run), then minutes and seconds, then hours and minutes."""
@@ -208,30 +246,26 @@ def build(root: Path) -> None:
                          with_input=True).classes("w-full compare-pick")
         note = ui.label().classes("text-slate-600 compare-note")
         chart = ui.echart({
-            "animation": False, "tooltip": TOOLTIP, "legend": {"top": 0},
+            "animation": False, "tooltip": TOOLTIP, "legend": {"top": 0, "data": []},
             "xAxis": {"type": "value", "name": "evaluations", "nameLocation": "middle",
                       "nameGap": 25, "minInterval": 1},
             "yAxis": {"type": "value", "scale": True, "name": "best so far"},
-            "series": [
-                {"name": "q25", "type": "line", "stack": "iqr", "showSymbol": False,
-                 "lineStyle": {"opacity": 0}, "data": []},
-                {"name": "interquartile band", "type": "line", "stack": "iqr",
-                 "showSymbol": False, "lineStyle": {"opacity": 0},
-                 "areaStyle": {"color": "rgba(70,130,180,0.3)"}, "data": []},
-                {"name": "median", "type": "line", "showSymbol": False, "data": [],
-                 "lineStyle": {"width": 2.5}}]}).classes("w-full h-96 compare-chart")
+            "series": []}).classes("w-full h-96 compare-chart")
 
         def redraw() -> None:
-            dirs = [root / n for n in pick.value or []]
-            c = data.compare_runs(dirs)
-            x = c["evaluations"]
-            band = [u - lo for u, lo in zip(c["q75"], c["q25"], strict=True)]
-            for i, ys in enumerate((c["q25"], band, c["median"])):
-                chart.options["series"][i]["data"] = [list(p) for p in zip(x, ys,
-                                                                       strict=True)]
+            names = list(pick.value or [])
+            groups = data.compare_groups([root / n for n in names], labels=names)
+            series, legend = compare_series(groups)
+            chart.options["series"], chart.options["legend"]["data"] = series, legend
             chart.update()
-            note.set_text(f"{len(dirs)} runs: median and interquartile band of the best "
-                          "fitness so far")
+            studies = len(groups)
+            note.set_text(
+                f"{len(names)} runs" + (f" of {studies} studies: one median and "
+                                        "interquartile band per study (their fitnesses are "
+                                        "not comparable, so they are never pooled)"
+                                        if studies > 1 else
+                                        ": median and interquartile band") +
+                " of the best fitness so far; a thin line per run")
 
         pick.on_value_change(lambda _: redraw())
         redraw()
