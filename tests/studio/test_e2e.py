@@ -199,3 +199,23 @@ def test_a_click_on_the_repertoire_map_plays_that_cell(page, studio):
                      box["y"] + 20 + (ny - 1 - iy + 0.5) * h / ny)
     _wait(lambda: f"cell-{cell:04d}.motion" in page.locator(".motion-pick").inner_text(), 20,
           "the clicked cell's motion")
+
+
+def test_the_study_view_updates_when_a_motion_appears(page, studio):
+    """Issue 35: after a run wrote best.motion the open page still said "no .motion in this run
+    yet" until a reload; the view now redraws when the run's artifacts change."""
+    import shutil
+
+    base, root = studio
+    late = root / "late-motion"
+    shutil.copytree(root / "humanoid-step", late, ignore=shutil.ignore_patterns("*.motion"))
+    try:
+        page.goto(f"{base}/run?name=late-motion")
+        page.wait_for_selector(".fitness-chart canvas")
+        _wait(lambda: "no .motion in this run yet" in page.locator(".study-view").inner_text(),
+              what="the empty view")
+        shutil.copy(root / "humanoid-step" / "best.motion", late / "best.motion")
+        page.wait_for_selector(VIEW["humanoid-step"], timeout=30000)
+        assert "no .motion in this run yet" not in page.locator(".study-view").inner_text()
+    finally:  # the other tests count the session's runs
+        shutil.rmtree(late)

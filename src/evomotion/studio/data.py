@@ -393,3 +393,37 @@ def compare_runs(run_dirs: list[Path], points: int = 200) -> dict[str, list[floa
     q25, med, q75 = np.nanpercentile(Y, [25, 50, 75], axis=0)
     return {"evaluations": x.tolist(), "median": med.tolist(), "q25": q25.tolist(),
             "q75": q75.tolist(), "runs": np.isfinite(Y).sum(0).tolist()}
+
+
+#: what a run writes all the time and no study view shows (their changes do not redraw it)
+NOT_VIEWED = frozenset({"stats.csv", "log.txt", "run.lock", "checkpoints", "population.bin",
+                        "studio-stderr.txt"})
+
+
+def artifact_signature(run_dir: Path, limit: int = 2000) -> tuple:
+    """The names, sizes and modification times of the run's artifacts (its folder and one level
+    of subfolders, at most ``limit`` entries, without :data:`NOT_VIEWED`): the run page redraws
+    its study view when this changes (a ``best.motion`` written at the end of a run showed only
+    after a reload; issue 35). Unreadable entries are left out."""
+    out: list[tuple] = []
+
+    def scan(folder: Path, prefix: str, deeper: bool) -> None:
+        try:
+            with os.scandir(folder) as it:
+                for e in it:
+                    if len(out) >= limit:
+                        return
+                    if e.name in NOT_VIEWED or e.name.startswith("."):
+                        continue
+                    try:
+                        st = e.stat(follow_symlinks=False)
+                    except OSError:
+                        continue
+                    out.append((prefix + e.name, st.st_size, st.st_mtime_ns))
+                    if deeper and e.is_dir(follow_symlinks=False):
+                        scan(Path(e.path), prefix + e.name + "/", False)
+        except OSError:
+            return
+
+    scan(Path(run_dir), "", True)
+    return tuple(sorted(out))

@@ -201,7 +201,22 @@ def build(root: Path) -> None:
             stop_b.set_enabled(s == "running")
             resume_b.set_enabled(data.is_resumable(run_dir, s))
 
+        seen = {"signature": data.artifact_signature(run_dir), "ticks": 0}
+
+        def refresh_view() -> None:
+            """Redraw the study view when the run's artifacts changed (every 2 s)."""
+            seen["ticks"] += 1
+            if seen["ticks"] % 2:
+                return
+            now = data.artifact_signature(run_dir)
+            if now != seen["signature"]:
+                seen["signature"] = now
+                view_box.clear()
+                with view_box:
+                    views.render(study, root, run_dir)
+
         def tick() -> None:
+            refresh_view()
             if st.update():
                 redraw()
                 g, e = st.column("generation")[-1:], st.column("evaluations")[-1:]
@@ -228,7 +243,9 @@ def build(root: Path) -> None:
             t_log = ui.tab("log")
         with ui.tab_panels(tabs, value=t_view).classes("w-full"):
             with ui.tab_panel(t_view).classes("study-view"):
-                views.render(study, root, run_dir)
+                view_box = ui.column().classes("w-full")
+                with view_box:
+                    views.render(study, root, run_dir)
             with ui.tab_panel(t_cfg):
                 ui.code(data.read_config(run_dir)[0], language="toml").classes("w-full run-config")
             with ui.tab_panel(t_log):
