@@ -344,6 +344,15 @@ class StatsTail:
         return np.array([v if v is not None else np.nan for v in self.column(name)], float)
 
 
+def best_curve(run_dir: Path) -> tuple[np.ndarray, np.ndarray]:
+    """(evaluations, best so far) of the run's ``stats.csv`` rows where both are finite."""
+    st = StatsTail(run_dir / "stats.csv")
+    st.update()
+    e, b = st.array("evaluations"), st.array("best_so_far")
+    ok = np.isfinite(e) & np.isfinite(b)
+    return e[ok], b[ok]
+
+
 def compare_groups(run_dirs: list[Path], points: int = 200,
                    labels: list[str] | None = None) -> list[dict]:
     """The runs grouped by study (their fitnesses are on different scales, so runs of
@@ -359,12 +368,8 @@ def compare_groups(run_dirs: list[Path], points: int = 200,
     for study, dirs in groups.items():
         curves = []
         for d in dirs:
-            st = StatsTail(d / "stats.csv")
-            st.update()
-            e, b = st.array("evaluations"), st.array("best_so_far")
-            ok = np.isfinite(e) & np.isfinite(b)
-            curves.append({"run": names[d], "evaluations": e[ok].tolist(),
-                           "best": b[ok].tolist()})
+            e, b = best_curve(d)
+            curves.append({"run": names[d], "evaluations": e.tolist(), "best": b.tolist()})
         out.append({"study": study, "names": [names[d] for d in dirs],
                     **compare_runs(dirs, points), "curves": curves})
     return out
@@ -374,14 +379,7 @@ def compare_runs(run_dirs: list[Path], points: int = 200) -> dict[str, list[floa
     """Median and interquartile band of the best-so-far fitness of ``run_dirs`` against
     evaluations, on a common grid (a run counts at x once it has made x evaluations and until
     its last row)."""
-    curves = []
-    for d in run_dirs:
-        st = StatsTail(d / "stats.csv")
-        st.update()
-        e, b = st.array("evaluations"), st.array("best_so_far")
-        ok = np.isfinite(e) & np.isfinite(b)
-        if ok.any():
-            curves.append((e[ok], b[ok]))
+    curves = [c for c in map(best_curve, run_dirs) if c[0].size]
     if not curves:
         return {"evaluations": [], "median": [], "q25": [], "q75": [], "runs": []}
     hi = max(c[0][-1] for c in curves)
