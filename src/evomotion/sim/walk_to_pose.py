@@ -33,6 +33,8 @@ import numpy as np
 
 from evomotion.errors import InputError
 from evomotion.sim.policy_player import PolicyPlayer
+from evomotion.sim.rollout import fall_step, torso_track
+from evomotion.sim.state import QPOS_OFFSET
 
 FAR_M = 0.35
 PASS_M = 0.15
@@ -141,19 +143,24 @@ class Walker:
         return walked, False
 
 
+def _track(data: mujoco.MjData):
+    """The torso track of :mod:`evomotion.sim.rollout` for ``data``'s state now (one row)."""
+    state = np.zeros(QPOS_OFFSET + 7)
+    state[QPOS_OFFSET:] = data.qpos[:7]
+    return torso_track(state[None, None])
+
+
 def torso_pose(data: mujoco.MjData) -> np.ndarray:
     """(x, y, heading) of the free joint (the model's first joint: the robot's torso)."""
-    w, x, y, z = data.qpos[3:7]
-    return np.array([data.qpos[0], data.qpos[1],
-                     math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))])
+    t = _track(data)
+    return np.array([t.xyz[0, 0, 0], t.xyz[0, 0, 1], t.yaw_rad[0, 0]])
 
 
 def fallen_test(height_m: float, tilt_rad: float) -> Callable[[mujoco.MjData], bool]:
     """``fallen(data)``: the torso (free joint) below ``height_m`` or tilted beyond
-    ``tilt_rad`` (the test of :func:`evomotion.sim.rollout.fall_step`)."""
+    ``tilt_rad``, by :func:`evomotion.sim.rollout.fall_step` itself."""
     def fallen(data: mujoco.MjData) -> bool:
-        x, y = data.qpos[4], data.qpos[5]
-        return bool(data.qpos[2] < height_m or 1.0 - 2.0 * (x * x + y * y) < math.cos(tilt_rad))
+        return bool(fall_step(_track(data), height_m, tilt_rad)[0] < 1)
     return fallen
 
 
