@@ -83,27 +83,36 @@ def timed(fn) -> tuple[float, object]:
 
 
 def physics(args, model, device: str) -> list[dict]:
+    """Steps/s per batch in the run's mode (``--deterministic`` or not), the other mode at the
+    largest batch; for each mode measured, whether replays, a fresh simulator and other
+    neighbours give bit-identical states. Keys: ``warp`` = the mode asked for,
+    ``warp_other`` = the other one (``mode`` / ``other_mode`` name them)."""
     rows = []
     cpu = BatchSimulator(model, args.threads or os.cpu_count())
+    mode = lambda det: "deterministic" if det else "nondeterministic"  # noqa: E731
     for batch in args.batches:
         init, ctrl = controls(model, batch, args.nstep)
-        row = {"batch": batch, "nstep": args.nstep}
-        for det in (True, False) if batch == max(args.batches) else (True,):
+        row = {"batch": batch, "nstep": args.nstep, "mode": mode(args.deterministic)}
+        dets = (args.deterministic,)
+        if batch == max(args.batches) and not args.one_mode:
+            dets = (args.deterministic, not args.deterministic)
+            row["other_mode"] = mode(not args.deterministic)
+        for det in dets:
+            key = "warp" if det == args.deterministic else "warp_other"
             sim = WarpSimulator(model, device, deterministic=det)
             compile_s, first = timed(lambda s=sim: s.segment(init, ctrl))  # compile + capture
             wall, again = timed(lambda s=sim: s.segment(init, ctrl))
-            key = "warp" if det else "warp_nondeterministic"
             row[f"{key}_steps_per_s"] = batch * args.nstep / wall
             row[f"{key}_first_call_s"] = compile_s
-            if det:  # what reproducibility holds on this device (see docs/gpu.md)
-                row["warp_replay_identical"] = bool(np.array_equal(first[0], again[0]))
-                fresh = WarpSimulator(model, device, deterministic=det)
-                other = fresh.segment(init, ctrl)[0]
-                row["warp_fresh_simulator_identical"] = bool(np.array_equal(other, again[0]))
-                perm = np.roll(np.arange(batch), 1)  # row 0 moves to row 1, new neighbours
-                moved = fresh.segment(init[perm], ctrl[perm])[0]
-                row["warp_batch_independent"] = bool(np.array_equal(moved[1], again[0][0]))
-                fresh.close()
+            row[f"{key}_replay_identical"] = bool(np.array_equal(first[0], again[0]))
+            fresh = WarpSimulator(model, device, deterministic=det)
+            other = fresh.segment(init, ctrl)[0]
+            row[f"{key}_fresh_simulator_identical"] = bool(np.array_equal(other, again[0]))
+            perm = np.roll(np.arange(batch), 1)  # row 0 moves to row 1, new neighbours
+            moved = fresh.segment(init[perm], ctrl[perm])[0]
+            row[f"{key}_batch_independent"] = bool(np.array_equal(moved[1], again[0][0]))
+            fresh.close()
+            if key == "warp":
                 warp_states = again[0]
             sim.close()
         if batch in args.cpu_batches:
@@ -111,8 +120,10 @@ def physics(args, model, device: str) -> list[dict]:
             wall, (states, _) = timed(lambda: cpu.run_with_sensors(init[0], ctrl))
             row["cpu_steps_per_s"] = batch * args.nstep / wall
             early = min(125, args.nstep)
-            row["max_state_diff_first_0.5s"] = float(
-                np.abs(states[:, :early, 1:] - warp_states[:, :early, 1:]).max())
+            diff = np.abs(states[:, :early, 1:] - warp_states[:, :early, 1:])
+            nq = model.nq
+            row["max_qpos_diff_first_0.5s"] = float(diff[..., :nq].max())
+            row["max_qvel_diff_first_0.5s"] = float(diff[..., nq:nq + model.nv].max())
             row["speedup"] = row["warp_steps_per_s"] / row["cpu_steps_per_s"]
         rows.append(row)
         print(_fmt(row), flush=True)
@@ -164,7 +175,8 @@ def step_runs(args, device: str) -> list[dict]:
                 continue
             over = [f"algorithm.pop_size={pop}", f"run.generations={args.generations - 1}",
                     "run.wall_seconds=0", f"problem.backend={backend}",
-                    f"problem.warp_device={device}", "problem.batch_rollouts=8192"]
+                    f"problem.warp_device={device}", "problem.batch_rollouts=8192",
+                    f"problem.warp_deterministic={str(args.deterministic).lower()}"]
             with tempfile.TemporaryDirectory() as tmp:
                 cfg = resolve_config(study, None, over)
                 t0 = time.perf_counter()
@@ -194,7 +206,7 @@ def closed_loop(args, device: str) -> list[dict]:
     robot = load_robot("nao")
     spec = ObservationSpec(("joint_pos", "joint_vel", "gravity", "gyro", "foot_contact"))
     k, nstep = 5, args.cl_nstep
-    warp = WarpClosedLoopSimulator(robot, spec, k, device=device)
+    warp = WarpClosedLoopSimulator(robot, spec, k, device=device, deterministic=args.deterministic)
     nominal = np.asarray(robot.pose)[warp.columns]
     policy_spec = make_policy("linear", warp.observation_size, warp.action_size, scale=0.3,
                               low=warp.lower - nominal, high=warp.upper - nominal, clip_obs=5.0)
@@ -248,13 +260,20 @@ def main() -> None:
     p.add_argument("--cl-nstep", type=int, default=500, help="closed loop: physics steps")
     p.add_argument("--cl-cpu-pop", type=int, default=64, help="closed loop: CPU population")
     p.add_argument("--closed-loop-only", action="store_true")
+    p.add_argument("--deterministic", action="store_true",
+                   help="MuJoCo Warp opt.deterministic for every part (off: the default)")
+    p.add_argument("--one-mode", action="store_true",
+                   help="physics: do not also measure the other mode at the largest batch")
+    p.add_argument("--parts", default="memory,physics,closed_loop,runs",
+                   help="comma-separated parts to run (memory, physics, closed_loop, runs)")
     p.add_argument("--out", default="")
     args = p.parse_args()
     wp, mjw = import_warp()
     from evomotion.sim.warp_rollout import resolve_device
 
     device = resolve_device(args.device)
-    info = {"device": device, "device_name": str(wp.get_device(device).name),
+    info = {"device": device, "deterministic": args.deterministic,
+            "device_name": str(wp.get_device(device).name),
             "cpu": platform.processor() or platform.machine(), "cores": os.cpu_count(),
             "warp": wp.__version__, "mujoco_warp": getattr(mjw, "__version__", "?"),
             "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())}
@@ -266,23 +285,26 @@ def main() -> None:
         if args.out:
             Path(args.out).write_text(json.dumps(result, indent=1) + "\n", encoding="utf-8")
 
-    if not args.closed_loop_only:
+    parts = {"closed_loop"} if args.closed_loop_only else set(args.parts.split(","))
+    if args.only_memory:
+        parts = {"memory"}
+    if "memory" in parts:
         result["memory"] = memory(args, device)
         save()
-        if args.only_memory:
-            print(json.dumps(result, indent=1)) if not args.out else None
-            return
+        if args.only_memory and not args.out:
+            print(json.dumps(result, indent=1))
+    if "physics" in parts:
         result["physics"] = physics(args, model, device)
         save()
         best = max(r["warp_steps_per_s"] for r in result["physics"])
-        print(f"peak warp NAO steps/s: {best:,.0f} (target >= 1,000,000 on one H200-class GPU)",
-              flush=True)
-    result["closed_loop"] = closed_loop(args, device)
-    save()
-    if not (args.closed_loop_only or args.skip_runs):
+        print(f"peak warp NAO steps/s ({result['physics'][0]['mode']}): {best:,.0f} "
+              "(target >= 1,000,000 on one H200-class GPU)", flush=True)
+    if "closed_loop" in parts:
+        result["closed_loop"] = closed_loop(args, device)
+        save()
+    if "runs" in parts and not args.skip_runs:
         result["humanoid_step_runs"] = step_runs(args, device)
         save()
-
 
 if __name__ == "__main__":
     main()

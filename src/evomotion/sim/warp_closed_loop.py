@@ -86,7 +86,7 @@ class WarpClosedLoopSimulator:
                  nthread: int = 1, columns: Sequence[int] | None = None,
                  nominal: np.ndarray | None = None, push_steps: int = 1,
                  fall_height_m: float | None = None, fall_tilt_rad: float | None = None, *,
-                 device: str = "", deterministic: bool = True, nconmax: int = 16,
+                 device: str = "", deterministic: bool = False, nconmax: int = 16,
                  njmax: int = 0) -> None:
         configure(self, robot, observations, control_steps, nthread, columns, nominal,
                   push_steps, fall_height_m, fall_tilt_rad)

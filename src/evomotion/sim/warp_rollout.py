@@ -90,7 +90,7 @@ class WarpSimulator(SegmentedSimulator):
 
     backend = "warp"
 
-    def __init__(self, model: mujoco.MjModel, device: str = "", deterministic: bool = True,
+    def __init__(self, model: mujoco.MjModel, device: str = "", deterministic: bool = False,
                  nconmax: int = 16, njmax: int = 0) -> None:
         self.wp, self.mjw = import_warp()
         if model.na:

@@ -73,6 +73,7 @@ class HumanoidBalanceConfig:
     threads: int = 0  # mujoco.rollout threads; 0 = all cores (1 in a worker process)
     backend: str = "cpu"  # physics: cpu (mujoco.rollout, float64) | warp (MuJoCo Warp, float32)
     warp_device: str = ""  # backend warp: "cuda:0", "cpu", ...; "" = the first GPU, else the CPU
+    warp_deterministic: bool = False  # backend warp: opt.deterministic (docs/gpu.md)
 
     def validate(self) -> None:
         check_fields(self, "problem")
@@ -107,6 +108,9 @@ class HumanoidBalanceConfig:
         check_number("problem.threads", self.threads, lo=0, hi=1024, integer=True)
         check_choice("problem.backend", self.backend, ("cpu", "warp"))
         check_text("problem.warp_device", self.warp_device)
+        if not isinstance(self.warp_deterministic, bool):
+            raise InputError("problem.warp_deterministic: expected true or false, got "
+                             f"{self.warp_deterministic!r}")
         for key in ("normalize", "perturb"):
             if not isinstance(getattr(self, key), bool):
                 raise InputError(f"problem.{key}: expected true or false, got "
@@ -151,7 +155,8 @@ class HumanoidBalanceProblem:
             from evomotion.sim.warp_closed_loop import WarpClosedLoopSimulator
 
             self.sim = WarpClosedLoopSimulator(r, self.obs_spec, self.control_steps,
-                                               device=cfg.warp_device)
+                                               device=cfg.warp_device,
+                                               deterministic=cfg.warp_deterministic)
         else:
             self.sim = ClosedLoopSimulator(r, self.obs_spec, self.control_steps, threads)
         self.obs_names = self.sim.observe.names
