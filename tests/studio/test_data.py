@@ -183,16 +183,21 @@ def test_history_records_every_generation_and_survives_resume(tmp_path):
 def test_heat_map_cells_take_the_best_over_the_hidden_measure():
     from types import SimpleNamespace
 
-    from evomotion.studio.views import heat_cells
+    from evomotion.studio.archive_map import map_cells
 
     # a 2 x 2 x 2 grid on [0, 1]^3: two elites share the (x, y) bin (0, 1)
     centre = np.array([[0.25, 0.75, 0.25], [0.25, 0.75, 0.75], [0.75, 0.25, 0.25]])
     a = SimpleNamespace(lower=np.zeros(3), upper=np.ones(3), bins=np.array([2, 2, 2]),
                         centre=centre, objective=np.array([-3.0, -1.0, -2.0]),
-                        cell=np.array([2, 6, 1]))
-    assert heat_cells(a) == [[0, 1, -1.0, 6], [1, 0, -2.0, 1]]
-    assert heat_cells(a, 0) == [[0, 1, -3.0, 2], [1, 0, -2.0, 1]]
-    assert heat_cells(a, 1) == [[0, 1, -1.0, 6]]
+                        cell=np.array([2, 6, 1]), measures=centre,
+                        measure_names=("a", "b", "c"))
+
+    def cells(k=None):
+        return [[m.ix, m.iy, m.objective, m.cell] for m in map_cells(a, set(), None, k)]
+
+    assert cells() == [[0, 1, -1.0, 6], [1, 0, -2.0, 1]]
+    assert cells(0) == [[0, 1, -3.0, 2], [1, 0, -2.0, 1]]
+    assert cells(1) == [[0, 1, -1.0, 6]]
 
 
 @settings(max_examples=200, deadline=None)

@@ -176,29 +176,54 @@ def test_studio_refuses_bad_arguments_in_one_line(tmp_path):
         assert len(r.stderr.strip().splitlines()) == 1
 
 
+def _cell_xy(page, ix: int, iy: int, nx: int, ny: int) -> tuple[float, float]:
+    page.locator(".repertoire-map").scroll_into_view_if_needed()  # the mouse needs it shown
+    box = page.locator(".repertoire-map").bounding_box()  # grid margins of views._repertoire
+    w, h = box["width"] - 180, box["height"] - 80
+    return box["x"] + 90 + (ix + 0.5) * w / nx, box["y"] + 20 + (ny - 1 - iy + 0.5) * h / ny
+
+
 def test_a_click_on_the_repertoire_map_plays_that_cell(page, studio):
+    """Issue 35: the map counts what the CLI counts (it said "256 of 720 cells filled" where
+    the CLI said "125 standing steps"), its tooltip names measures with units and the cell's
+    state, a click plays a standing cell and says why a fallen one plays nothing."""
+    import json
+
     from evomotion.run.archive_file import read_archive
-    from evomotion.studio.views import heat_cells
+    from evomotion.studio.archive_map import FELL, PLAYABLE, map_cells
 
     base, root = studio
-    a = read_archive(root / "humanoid-repertoire" / "archive.npz")
+    run = root / "humanoid-repertoire"
+    a = read_archive(run / "archive.npz")
+    index = json.loads((run / "repertoire" / "index.json").read_text())
+    playable = {e["cell"] for e in index["entries"]}
     nx, ny = int(a.bins[0]), int(a.bins[1])
     page.goto(f"{base}/run?name=humanoid-repertoire")
     page.wait_for_selector(".repertoire-map canvas")
     page.wait_for_selector(".nao-scene")
+    counts = page.locator(".repertoire-counts").inner_text()
+    assert f"{len(index['entries'])} standing steps with a motion" in counts, counts
+    assert f"{index['fallen']} fell" in counts and f"{index['outside_box']} standing outside" \
+        in counts, counts
     shown = page.locator(".motion-pick").inner_text()
-    cells = [c for c in heat_cells(a) if f"cell-{c[3]:04d}" not in shown
-             and (root / "humanoid-repertoire" / "repertoire" / f"cell-{c[3]:04d}.motion")
-             .exists()]
-    if not cells:
-        pytest.skip("the smoke run filled a single cell")
-    ix, iy, _, cell = cells[0]
-    box = page.locator(".repertoire-map").bounding_box()  # grid margins of views._repertoire
-    w, h = box["width"] - 180, box["height"] - 80
-    page.mouse.click(box["x"] + 90 + (ix + 0.5) * w / nx,
-                     box["y"] + 20 + (ny - 1 - iy + 0.5) * h / ny)
-    _wait(lambda: f"cell-{cell:04d}.motion" in page.locator(".motion-pick").inner_text(), 20,
-          "the clicked cell's motion")
+    cells = map_cells(a, playable, -9.0)
+    fallen = [c for c in cells if c.state == FELL]
+    if fallen:
+        page.mouse.click(*_cell_xy(page, fallen[0].ix, fallen[0].iy, nx, ny))
+        _wait(lambda: "fell" in page.locator(".repertoire-message").inner_text(), 10,
+              "the message of a click on a fallen cell")
+    others = [c for c in cells if c.state == PLAYABLE and f"cell-{c.cell:04d}" not in shown]
+    if not others:
+        pytest.skip("the smoke run has no second standing cell to click")
+    target = others[0]
+    page.mouse.move(*_cell_xy(page, target.ix, target.iy, nx, ny))
+    _wait(lambda: f"cell {target.cell:04d}: dx" in page.inner_text("body"), 10, "the tooltip")
+    assert target.tip in page.inner_text("body")
+    page.screenshot(path=str(root / "repertoire-tooltip.png"))
+    page.mouse.click(*_cell_xy(page, target.ix, target.iy, nx, ny))
+    _wait(lambda: f"cell-{target.cell:04d}.motion" in page.locator(".motion-pick").inner_text(),
+          20, "the clicked cell's motion")
+    assert page.locator(".repertoire-message").inner_text() == ""
 
 
 def test_the_study_view_updates_when_a_motion_appears(page, studio):

@@ -84,6 +84,8 @@ class StudyView:
     table: str | None = None  # a run file holding a JSON list of rows, shown as a table
     table_title: str = ""
     archive_map: bool = False  # the archive's heat map; a click plays that cell's motion
+    #: an elite whose objective is at or below this fell (grey on the map, never played)
+    archive_fallen_at: float | None = None
     frames: Callable[[RunFiles], Frames] | None = None
 
 

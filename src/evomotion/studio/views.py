@@ -102,7 +102,7 @@ def render(study: str, root: Path, run_dir: Path) -> None:
         if view.table:
             _table(ui, run_dir / view.table, view.table_title)
         if view.archive_map:
-            _repertoire(ui, run_dir, view.scene)
+            _repertoire(ui, run_dir, view.scene, view.archive_fallen_at)
         elif view.motions:
             _nao(ui, run_dir, motions_of(run_dir), scene=view.scene)
         if view.frames is not None:
@@ -208,26 +208,10 @@ def _table(ui, path: Path, title: str) -> None:
     ui.table(columns=cols, rows=rows).classes("w-full kick-table")
 
 
-def heat_cells(a: Any, slice_k: int | None = None) -> list[list[float]]:
-    """``[ix, iy, objective, cell]`` per (x, y) bin of a grid archive: the best elite over the
-    other measures, or only those in bin ``slice_k`` of the third measure."""
-    lo, hi = a.lower, a.upper
-    bins = [int(b) for b in a.bins]
-    idx = np.stack([np.clip(((a.centre[:, d] - lo[d]) / (hi[d] - lo[d]) * bins[d]).astype(int),
-                            0, bins[d] - 1) for d in range(len(bins))], 1)
-    best: dict[tuple[int, int], list[float]] = {}
-    for k in range(len(a.cell)):
-        if slice_k is not None and len(bins) > 2 and idx[k, 2] != slice_k:
-            continue
-        key = (int(idx[k, 0]), int(idx[k, 1]))
-        o = float(a.objective[k])
-        if key not in best or o > best[key][2]:
-            best[key] = [key[0], key[1], round(o, 4), int(a.cell[k])]
-    return [best[k] for k in sorted(best)]
-
-
-def _repertoire(ui, run_dir: Path, scene: str | None = None) -> None:
+def _repertoire(ui, run_dir: Path, scene: str | None = None,
+                fallen_at: float | None = None) -> None:
     from evomotion.run.archive_file import read_archive
+    from evomotion.studio import archive_map as amap
 
     motions = motions_of(run_dir)
     path = run_dir / "archive.npz"
@@ -241,49 +225,63 @@ def _repertoire(ui, run_dir: Path, scene: str | None = None) -> None:
         ui.label(f"{a.kind} archive: no heat map; its elites' motions:")
         _nao(ui, run_dir, motions, scene=scene)
         return
+    playable = {int(m[len("repertoire/cell-"):-len(".motion")]) for m in motions
+                if re.fullmatch(r"repertoire/cell-\d+\.motion", m)}
     nx, ny = int(a.bins[0]), int(a.bins[1])
     xs = np.linspace(a.lower[0], a.upper[0], nx + 1)
     ys = np.linspace(a.lower[1], a.upper[1], ny + 1)
-    lo, hi = (float(np.percentile(a.objective, 5)), float(a.objective.max())) \
-        if a.objective.size else (0.0, 1.0)
-    ui.label(f"repertoire: {len(a.cell)} of {a.cells} cells filled; click a cell to play its "
-             "motion").classes("font-bold")
-    slices = {-1: f"best over {a.measure_names[2]}" if len(a.bins) > 2 else "all"}
+    ui.label(amap.counts_text(a, playable, fallen_at)).classes("font-bold repertoire-counts")
+    slices = {-1: f"best over {amap.axis_name(a.measure_names[2])}" if len(a.bins) > 2
+              else "all"}
     if len(a.bins) > 2:
         zs = np.linspace(a.lower[2], a.upper[2], int(a.bins[2]) + 1)
-        slices.update({k: f"{a.measure_names[2]} {zs[k]:.3g}..{zs[k + 1]:.3g}"
+        slices.update({k: f"{amap.axis_name(a.measure_names[2])} {zs[k]:.3g}..{zs[k + 1]:.3g}"
                        for k in range(int(a.bins[2]))})
-    shown: dict = {"cells": heat_cells(a)}
+    shown: dict = {"cells": amap.map_cells(a, playable, fallen_at)}
+
+    def by_series() -> list[list]:
+        cells = shown["cells"]
+        return [[m for m in cells if m.state != amap.FELL], [m for m in cells
+                                                             if m.state == amap.FELL]]
 
     def clicked(e) -> None:
-        i = getattr(e, "data_index", None)
-        if i is None or not 0 <= i < len(shown["cells"]) or shown.get("pick") is None:
+        groups = by_series()
+        s, i = getattr(e, "series_index", 0) or 0, getattr(e, "data_index", None)
+        if i is None or not 0 <= s < len(groups) or not 0 <= i < len(groups[s]):
             return
-        name = f"repertoire/cell-{int(shown['cells'][i][3]):04d}.motion"
-        if name in motions:
+        cell = groups[s][i]
+        message.set_text(amap.click_message(cell))
+        name = f"repertoire/cell-{cell.cell:04d}.motion"
+        if cell.state == amap.PLAYABLE and shown.get("pick") is not None and name in motions:
             shown["pick"].set_value(name)
 
     def reslice(k: int) -> None:
-        shown["cells"] = heat_cells(a, None if k < 0 else k)
-        chart.options["series"][0]["data"] = shown["cells"]
+        shown["cells"] = amap.map_cells(a, playable, fallen_at, None if k < 0 else k)
+        chart.options["series"] = amap.series(shown["cells"])
         chart.update()
 
     if len(slices) > 1:
         ui.select(slices, value=-1, label="slice", on_change=lambda e: reslice(e.value)) \
             .classes("w-72 repertoire-slice")
+    lo, hi = amap.colour_range(amap.map_cells(a, playable, fallen_at))
     chart = ui.echart({
-        "animation": False, "tooltip": {"position": "top"},
+        "animation": False,
+        "tooltip": {"position": "top", "confine": True, ":formatter": "p => p.data.tip"},
         "grid": {"left": 90, "right": 90, "bottom": 60, "top": 20},
-        "xAxis": {"type": "category", "name": a.measure_names[0], "nameLocation": "middle",
+        "xAxis": {"type": "category", "name": amap.axis_name(a.measure_names[0]),
+                  "nameLocation": "middle",
                   "nameGap": 35, "data": [f"{(xs[i] + xs[i + 1]) / 2:.3g}" for i in range(nx)]},
-        "yAxis": {"type": "category", "name": a.measure_names[1], "nameLocation": "middle",
+        "yAxis": {"type": "category", "name": amap.axis_name(a.measure_names[1]),
+                  "nameLocation": "middle",
                   "nameGap": 60, "data": [f"{(ys[i] + ys[i + 1]) / 2:.3g}" for i in range(ny)]},
-        "visualMap": {"min": lo, "max": hi if hi > lo else lo + 1, "calculable": True,
+        "visualMap": {"min": lo, "max": hi, "calculable": True, "seriesIndex": 0,
                       "dimension": 2, "orient": "vertical", "right": 0, "top": "center",
+                      "precision": 3, "text": ["objective", ""],
                       "inRange": {"color": ["#440154", "#3b528b", "#21918c", "#5ec962",
                                             "#fde725"]}},
-        "series": [{"type": "heatmap", "data": shown["cells"]}]},
+        "series": amap.series(shown["cells"])},
         on_point_click=clicked).classes("w-full h-96 repertoire-map")
+    message = ui.label("").classes("text-slate-700 repertoire-message")
     shown["pick"] = _nao(ui, run_dir, motions, scene=scene)
 
 

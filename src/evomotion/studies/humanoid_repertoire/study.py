@@ -143,7 +143,8 @@ STUDY = Study(
     finalize=lazy_hook(ARTIFACTS, "finalize"),
     best_record=lazy_hook(ARTIFACTS, "best_record"),
     cli=cli,
-    view=StudyView(motions=True, archive_map=True),
+    # the rule write_repertoire exports by: a fallen elite scores below FALLEN_OBJECTIVE + 1
+    view=StudyView(motions=True, archive_map=True, archive_fallen_at=FALLEN_OBJECTIVE + 1.0),
     smoke=("algorithm.emitters=2", "algorithm.pop_size=4", "problem.hold_s=0.2",
            ),
 )
