@@ -45,18 +45,18 @@ MAX_CHUNKS_PER_WORKER = 1 << 16
 class RunSection:
     """Run control. ``0`` disables a numeric limit; ``target`` is in the problem's sense."""
 
-    seed: int = 0
-    generations: int = 100
-    max_evaluations: int = 0
-    target: float | None = None
-    stagnation_generations: int = 0
-    stagnation_eps: float = 1e-12
-    wall_seconds: float = 0.0
-    checkpoint_every: int = 10
-    evaluator: str = "serial"
-    workers: int = 0
-    chunks_per_worker: int = 4
-    address: str = ""
+    seed: int = 0  # the run's one seed, >= 0: the same seed gives the same run bit for bit
+    generations: int = 100  # generations to run (0: no limit)
+    max_evaluations: int = 0  # stop after this many evaluations (0: no limit)
+    target: float | None = None  # stop once the best reaches it (fitness, the problem's sense)
+    stagnation_generations: int = 0  # stop after N generations without improvement (0: never)
+    stagnation_eps: float = 1e-12  # the least improvement of best or mean that counts, >= 0
+    wall_seconds: float = 0.0  # stop after this much wall time (s; 0: no limit)
+    checkpoint_every: int = 10  # a checkpoint every N generations (and at every stop)
+    evaluator: str = "serial"  # serial | process | ray | dask: same results for one seed
+    workers: int = 0  # evaluator workers, [0, 4096] (0: one per core)
+    chunks_per_worker: int = 4  # work split in workers x this chunks per generation, >= 1
+    address: str = ""  # ray / dask: the cluster's address (HOST:PORT; "": a new local one)
     history_every: int = 0  # population.bin every N generations (0: none; run/history.py)
     loggers: tuple[str, ...] = ()  # extra loggers beside stats.csv (run/loggers/)
     videos: bool = True  # the studies' MP4s at the end (false: skipped, logged; sim/render.py)

@@ -161,19 +161,11 @@ class FormField:
     key: str  # section.name
     kind: str  # bool | int | float | str | text
     value: str  # the resolved value as the CLI would write it after --set
-    doc: str = ""
-
-
-def _text(v: Any) -> str:
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, str):
-        return v
-    if v is None:
-        return "none"
-    if isinstance(v, tuple | list):
-        return "[" + ", ".join(_text(x) if not isinstance(x, str) else repr(x) for x in v) + "]"
-    return repr(v)
+    doc: str = ""  # the field's comment in its dataclass (units, ranges)
+    shown: str = ""  # what the field shows (floats shortened; studio/form_schema.py)
+    choices: tuple[str, ...] = ()  # a registry's names, when the key is checked against one
+    free: bool = False  # other values than ``choices`` allowed (a robot spec file)
+    common: bool = True  # in the form's first group (else "advanced")
 
 
 def _kind(tp: Any) -> str:
@@ -188,30 +180,47 @@ def form_fields(study: str, preset: str | None = None,
                 algorithm: str | None = None) -> list[FormField]:
     """One field per key of ``[run]``, ``[algorithm]`` and ``[problem]`` with the value the
     study resolves to under ``preset`` (and ``algorithm.name``)."""
+    from evomotion.studies import get_study
+    from evomotion.studio import form_schema as fs
+
     sets = [f"algorithm.name={algorithm!r}"] if algorithm else []
     cfg = check_new_run(study, preset, sets)
+    common = fs.common_keys(get_study(study))
     out = []
     for sec in ("run", "algorithm", "problem"):
         obj = getattr(cfg, sec)
         hints = typing.get_type_hints(type(obj))
+        docs = fs.field_docs(type(obj))
         for f in dataclasses.fields(obj):
             if sec == "algorithm" and f.name == "name":
                 continue
-            out.append(FormField(f"{sec}.{f.name}", _kind(hints[f.name]),
-                                 _text(getattr(obj, f.name))))
+            key, kind, v = f"{sec}.{f.name}", _kind(hints[f.name]), getattr(obj, f.name)
+            opts = fs.choices(key)
+            out.append(FormField(key, kind, v if kind == "str" and isinstance(v, str)
+                                 else fs.toml_text(v), docs.get(f.name, ""),
+                                 fs.shown_text(kind, v), tuple(opts[0]) if opts else (),
+                                 bool(opts and opts[1]), key in common))
     return out
 
 
 def changed_sets(fields: list[FormField], values: dict[str, str],
                  algorithm: str | None = None) -> list[str]:
-    """``--set`` items for the values that differ from the form's defaults."""
+    """``--set`` items for the fields whose text differs from what the form showed."""
     sets = [f"algorithm.name={algorithm!r}"] if algorithm else []
     for f in fields:
-        v = values.get(f.key, f.value)
-        v = str(v).strip()
-        if v != f.value:
+        shown = f.shown or f.value
+        v = str(values.get(f.key, shown)).strip()
+        if v != shown:
             sets.append(f"{f.key}={json.dumps(v) if f.kind == 'str' else v}")
     return sets
+
+
+def form_errors(study: str, preset: str | None, sets: list[str],
+                keys: list[str]) -> dict[str | None, str]:
+    """Every error of the filled form at once, by the key it belongs to (None: the form's)."""
+    from evomotion.studio.form_schema import all_errors
+
+    return all_errors(lambda s: check_new_run(study, preset, s), sets, keys)
 
 
 def field_of_error(message: str, keys: list[str]) -> str | None:

@@ -57,15 +57,14 @@ def build(root: Path) -> None:
             p = preset.value or None
             command.set_content("evomotion " + " ".join(
                 _quote(a) for a in actions.run_command(study, p, sets, Path("RUN_DIR"))))
-            try:
-                actions.check_new_run(study, p, sets)
-            except InputError as e:
-                key = actions.field_of_error(str(e), list(state["errors"]))
-                (state["errors"][key] if key else error_top).set_text(f"error: {e}")
-                start.disable()
-                return False
-            start.enable()
-            return True
+            errors = actions.form_errors(study, p, sets, list(state["errors"]))
+            for key, text in errors.items():  # every error at once, each under its field
+                (state["errors"].get(key) or error_top).set_text(f"error: {text}")
+            if len(errors) > 1:
+                error_top.set_text(f"{len(errors)} errors: see the fields marked below" +
+                                   (f"; error: {errors[None]}" if None in errors else ""))
+            start.set_enabled(not errors)
+            return not errors
 
         def rebuild() -> None:
             fields_box.clear()
@@ -80,20 +79,11 @@ def build(root: Path) -> None:
                 return
             state["inputs"], state["errors"] = {}, {}
             with fields_box:
-                for sec in ("run", "algorithm", "problem"):
-                    ui.label(f"[{sec}]").classes("font-mono font-bold mt-2")
-                    with ui.grid(columns=3).classes("w-full gap-x-6"):
-                        for f in (f for f in state["fields"] if f.key.startswith(sec + ".")):
-                            with ui.column().classes("gap-0"):
-                                if f.kind == "bool":
-                                    w = ui.checkbox(f.key, value=f.value == "true")
-                                else:
-                                    w = ui.input(f.key, value=f.value)
-                                w.classes("w-full").props(f"data-key={f.key}")
-                                w.on_value_change(lambda _: check())
-                                state["inputs"][f.key] = w
-                                state["errors"][f.key] = ui.label().classes(
-                                    "text-red-700 text-xs field-error")
+                common = [f for f in state["fields"] if f.common]
+                _fields(ui, common, state, check)
+                with ui.expansion(f"advanced ({len(state['fields']) - len(common)} keys)",
+                                  icon="tune").classes("w-full advanced-keys"):
+                    _fields(ui, [f for f in state["fields"] if not f.common], state, check)
             check()
 
         async def go() -> None:
@@ -123,6 +113,40 @@ def build(root: Path) -> None:
         alg.on_value_change(lambda _: rebuild())
         start.on_click(go)
         rebuild()
+
+
+def _fields(ui, fields: list, state: dict, check) -> None:
+    """The inputs of ``fields`` by section: a checkbox, a select (a registry's names; free
+    text where other values are allowed) or a text input, each with its documentation as a
+    hint and its own error line."""
+    for sec in ("run", "algorithm", "problem"):
+        group = [f for f in fields if f.key.startswith(sec + ".")]
+        if not group:
+            continue
+        ui.label(f"[{sec}]").classes("font-mono font-bold mt-2")
+        with ui.grid(columns=3).classes("w-full gap-x-6"):
+            for f in group:
+                with ui.column().classes("gap-0"):
+                    hint = f.doc + (f" (exactly {f.value})" if f.shown != f.value
+                                    and f.kind == "float" else "")
+                    if f.kind == "bool":
+                        w = ui.checkbox(f.key, value=f.shown == "true")
+                        if hint:
+                            w.tooltip(hint)
+                    elif f.choices:
+                        opts = list(dict.fromkeys([*f.choices, f.shown]))
+                        w = ui.select(opts, value=f.shown, label=f.key,
+                                      with_input=f.free,
+                                      new_value_mode="add-unique" if f.free else None)
+                    else:
+                        w = ui.input(f.key, value=f.shown)
+                    if hint and f.kind != "bool":
+                        w.props["hint"] = hint  # a dict item: no quoting of the text
+                    w.classes("w-full").props(f"data-key={f.key}")
+                    w.on_value_change(lambda _: check())
+                    state["inputs"][f.key] = w
+                    state["errors"][f.key] = ui.label().classes(
+                        "text-red-700 text-xs field-error")
 
 
 def _quote(a: str) -> str:
