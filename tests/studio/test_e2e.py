@@ -9,6 +9,7 @@ import os
 import subprocess
 import sys
 import time
+from pathlib import Path
 from urllib.parse import quote
 
 import pytest
@@ -249,3 +250,52 @@ def test_the_study_view_updates_when_a_motion_appears(page, studio):
         assert "no .motion in this run yet" not in page.locator(".study-view").inner_text()
     finally:  # the other tests count the session's runs
         shutil.rmtree(late)
+
+
+def test_files_tab_plays_videos_shows_plots_and_downloads_everything(page, studio):
+    """Issue 35: a run's video plays in the page (Debian's Chromium decodes the H.264 the
+    studies write), its plots show, and every file downloads under its own name."""
+    import shutil
+
+    import imageio.v2 as iio
+    import numpy as np
+
+    base, root = studio
+    run = root / "with-video"
+    shutil.copytree(root / "functions", run)
+    writer = iio.get_writer(run / "best.mp4", fps=25, codec="libx264", pixelformat="yuv420p")
+    for i in range(25):
+        writer.append_data(np.full((64, 96, 3), i * 10, np.uint8))
+    writer.close()
+    try:
+        page.goto(f"{base}/run?name=with-video")
+        page.get_by_role("tab", name="files").click()
+        page.wait_for_selector("video.run-video")
+        _wait(lambda: page.evaluate("() => document.querySelector('video.run-video')"
+                                    ".readyState") >= 1, 20, "the video's metadata")
+        assert page.evaluate("() => document.querySelector('video.run-video').duration") \
+            == pytest.approx(1.0, abs=0.1)
+        page.wait_for_selector(".run-image img")
+        links = page.locator(".run-files .file-link")
+        names = [links.nth(i).inner_text() for i in range(links.count())]
+        assert {"best.mp4", "config.toml", "best.json", "stats.csv"} <= set(names)
+        with page.expect_download() as dl:
+            links.nth(names.index("config.toml")).click()
+        assert dl.value.suggested_filename == "config.toml"
+        assert Path(dl.value.path()).read_bytes() == (run / "config.toml").read_bytes()
+    finally:
+        shutil.rmtree(run, ignore_errors=True)
+
+
+def test_metrics_tab_plots_any_column_with_log_scale(page, studio):
+    base, root = studio
+    page.goto(f"{base}/run?name=functions")
+    page.get_by_role("tab", name="metrics").click()
+    page.wait_for_selector(".metrics-chart canvas")
+    page.locator(".metric-pick").click()
+    page.get_by_role("option", name="evals_per_s").click()
+    page.keyboard.press("Escape")
+    _wait(lambda: "evals_per_s" in page.locator(".metric-pick").inner_text(), 10, "the pick")
+    page.locator(".metric-log").click()
+    page.wait_for_timeout(500)
+    page.screenshot(path=str(root / "metrics.png"))

@@ -66,9 +66,11 @@ def add_api(app: Any, root: Path) -> None:
         return JSONResponse({"error": str(e)}, 400)
 
     @app.get("/files")
-    def files(path: str):
+    def files(path: str, download: int = 0):
         try:
-            return FileResponse(data.safe_file(root, path))
+            found = data.safe_file(root, path)
+            # download=1: saved under its own name (Content-Disposition: attachment)
+            return FileResponse(found, filename=found.name if download else None)
         except InputError as e:
             return PlainTextResponse(str(e), 404)
 

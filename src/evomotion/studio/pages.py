@@ -9,7 +9,7 @@ from pathlib import Path
 from urllib.parse import quote
 
 from evomotion.errors import InputError
-from evomotion.studio import actions, data
+from evomotion.studio import actions, data, run_files, run_tabs
 
 STATUS_COLOURS = {"running": "blue", "finished": "green", "interrupted": "orange",
                   "failed": "red", "stale": "deep-orange", "remote": "purple",
@@ -196,6 +196,7 @@ def build(root: Path) -> None:
 
         def status() -> None:
             s, reason, pid = data.run_status(run_dir)
+            seen["status"] = s
             badge.set_text(s + (f": {reason}" if reason else ""))
             badge.props(f"color={STATUS_COLOURS.get(s, 'grey')}")
             stop_b.set_enabled(s == "running")
@@ -214,16 +215,22 @@ def build(root: Path) -> None:
                 view_box.clear()
                 with view_box:
                     views.render(study, root, run_dir)
+                files_box.clear()
+                with files_box:
+                    run_tabs.files_panel(ui, root, run_dir)
 
         def tick() -> None:
             refresh_view()
-            if st.update():
+            if st.update() or seen.get("status") == "running":
                 redraw()
-                g, e = st.column("generation")[-1:], st.column("evaluations")[-1:]
-                summary.set_text(f"generation {int(g[0]) if g and g[0] is not None else '-'}"
-                                 f", {int(e[0]) if e and e[0] is not None else 0} evaluations"
-                                 f", {len(st.rows)} rows")
-                log.set_content("\n".join(data.log_tail(run_dir, 60)))
+                metrics_redraw()
+                last = {k: (st.column(k)[-1:] or [None])[0]
+                        for k in ("generation", "evaluations", "wall_s", "evals_per_s")}
+                summary.set_text(run_files.progress(
+                    cfg, last["generation"], last["evaluations"], last["wall_s"],
+                    last["evals_per_s"], seen.get("status") == "running") +
+                    f", {len(st.rows)} rows")
+                show_log()
             status()
 
         def act(fn) -> None:
@@ -239,6 +246,8 @@ def build(root: Path) -> None:
         xaxis.on_value_change(lambda _: redraw())
         with ui.tabs().classes("w-full") as tabs:
             t_view = ui.tab("study view")
+            t_metrics = ui.tab("metrics")
+            t_files = ui.tab("files")
             t_cfg = ui.tab("config")
             t_log = ui.tab("log")
         with ui.tab_panels(tabs, value=t_view).classes("w-full"):
@@ -246,11 +255,32 @@ def build(root: Path) -> None:
                 view_box = ui.column().classes("w-full")
                 with view_box:
                     views.render(study, root, run_dir)
+            with ui.tab_panel(t_metrics):
+                metrics_redraw = run_tabs.metrics_panel(
+                    ui, st, run_tabs.file_url(root, run_dir, "stats.csv", download=True))
+            with ui.tab_panel(t_files):
+                files_box = ui.column().classes("w-full")
+                with files_box:
+                    run_tabs.files_panel(ui, root, run_dir)
             with ui.tab_panel(t_cfg):
                 ui.code(data.read_config(run_dir)[0], language="toml").classes("w-full run-config")
             with ui.tab_panel(t_log):
                 log = ui.code("", language="text").classes("w-full run-log")
-        log.set_content("\n".join(data.log_tail(run_dir, 60)))
+                err_label = ui.label("").classes("font-bold mt-2 stderr-title")
+                err = ui.code("", language="text").classes("w-full run-stderr")
+
+        def show_log() -> None:
+            log.set_content("\n".join(data.log_tail(run_dir, 60)))
+            name, lines = run_files.stderr_tail(run_dir, 40)
+            n = len(lines)
+            err_label.set_text(f"stderr ({name}, last {n} line{'s' * (n != 1)})" if name else
+                               "stderr: not recorded (a run started in a terminal printed it "
+                               "there)")
+            err.set_content("\n".join(lines))
+            err.set_visibility(bool(name))
+
+        cfg = data.read_config(run_dir)[1]
+        show_log()
         tick()
         ui.timer(1.0, tick)
 
