@@ -299,3 +299,32 @@ def test_metrics_tab_plots_any_column_with_log_scale(page, studio):
     page.locator(".metric-log").click()
     page.wait_for_timeout(500)
     page.screenshot(path=str(root / "metrics.png"))
+
+
+def test_compare_groups_by_a_config_key_shows_the_diff_and_writes_the_url(page, studio):
+    """Issue 35: runs grouped by any config key (within a study), a config-diff table, and the
+    selection written back to the URL."""
+    import shutil
+
+    base, root = studio
+    other = root / "functions-seed7"
+    shutil.copytree(root / "functions", other)
+    cfg = other / "config.toml"
+    cfg.write_text(cfg.read_text().replace("seed = 0", "seed = 7", 1))
+    try:
+        page.goto(f"{base}/compare?runs=functions,functions-seed7&by=run.seed")
+        page.wait_for_selector(".compare-chart canvas")
+        _wait(lambda: "2 groups" in page.locator(".compare-note").inner_text(), 20,
+              "two groups by seed")
+        _wait(lambda: "run.seed" in page.locator(".compare-diff").inner_text(), 20,
+              "the diff table")
+        assert "7" in page.locator(".compare-diff").inner_text()
+        page.locator(".compare-by").click()
+        page.get_by_role("option", name="study", exact=True).click()
+        _wait(lambda: "1 group:" in page.locator(".compare-note").inner_text(), 20,
+              "one group by study")
+        _wait(lambda: page.evaluate("location.search") ==
+              "?runs=functions,functions-seed7", 20, "the URL")
+        page.screenshot(path=str(root / "compare.png"), full_page=True)
+    finally:
+        shutil.rmtree(other, ignore_errors=True)

@@ -354,16 +354,17 @@ def best_curve(run_dir: Path) -> tuple[np.ndarray, np.ndarray]:
 
 
 def compare_groups(run_dirs: list[Path], points: int = 200,
-                   labels: list[str] | None = None) -> list[dict]:
+                   labels: list[str] | None = None, group_of: Any = None) -> list[dict]:
     """The runs grouped by study (their fitnesses are on different scales, so runs of
     different studies are never pooled; issue 35): per study, in the order first selected,
     ``{"study", "names": [run names], **compare_runs(its runs), "curves": [{"run", "evaluations",
     "best"}]}`` with each run's own best-so-far curve (finite rows only); ``labels``: the
-    runs' names (default their folder names)."""
+    runs' names (default their folder names); ``group_of(run_dir)``: a finer group label
+    that includes the study (``studio/compare.py``; default the study)."""
     names = dict(zip(run_dirs, labels or [d.name for d in run_dirs], strict=True))
     groups: dict[str, list[Path]] = {}
     for d in run_dirs:
-        groups.setdefault(study_name(d), []).append(d)
+        groups.setdefault((group_of or study_name)(d), []).append(d)
     out = []
     for study, dirs in groups.items():
         curves = []

@@ -285,12 +285,17 @@ def build(root: Path) -> None:
         ui.timer(1.0, tick)
 
     @ui.page("/compare")
-    def compare_page(runs: str = "") -> None:
+    def compare_page(runs: str = "", by: str = "study") -> None:
+        from evomotion.studio import compare
+
         header(ui, "compare")
         names = [r.name for r in data.list_runs(root)]
         chosen = [n for n in runs.split(",") if n in names]
-        pick = ui.select(names, value=chosen, multiple=True, label="runs",
-                         with_input=True).classes("w-full compare-pick")
+        with ui.row().classes("w-full items-end"):
+            pick = ui.select(names, value=chosen, multiple=True, label="runs",
+                             with_input=True).classes("grow compare-pick")
+            group = ui.select(list(compare.ALWAYS), value="study", label="group by") \
+                .classes("w-64 compare-by")
         note = ui.label().classes("text-slate-600 compare-note")
         chart = ui.echart({
             "animation": False, "tooltip": TOOLTIP, "legend": {"top": 0, "data": []},
@@ -298,23 +303,44 @@ def build(root: Path) -> None:
                       "nameGap": 25, "minInterval": 1},
             "yAxis": {"type": "value", "scale": True, "name": "best so far"},
             "series": []}).classes("w-full h-96 compare-chart")
+        ui.label("where the selected runs' configs differ").classes("font-bold mt-2")
+        diff = ui.table(columns=[], rows=[], row_key="key").classes("w-full compare-diff")
 
         def redraw() -> None:
             names = list(pick.value or [])
-            groups = data.compare_groups([root / n for n in names], labels=names)
+            dirs = [root / n for n in names]
+            flat = dict(zip(dirs, compare.configs(dirs), strict=True))
+            choices = compare.group_choices(list(flat.values()))
+            if by_key["value"] not in choices:
+                choices.append(by_key["value"])
+            group.set_options(choices, value=by_key["value"])
+            groups = data.compare_groups(dirs, labels=names, group_of=lambda d: compare
+                                         .group_label(flat[d], by_key["value"]))
             series, legend = compare_series(groups)
             chart.options["series"], chart.options["legend"]["data"] = series, legend
             chart.update()
-            studies = len(groups)
+            cols, rows = compare.diff_table(names, list(flat.values()))
+            diff.columns, diff.rows = cols, rows
+            diff.update()
+            studies = len({c.get("study") for c in flat.values()})
             note.set_text(
-                f"{len(names)} runs" + (f" of {studies} studies: one median and "
-                                        "interquartile band per study (their fitnesses are "
-                                        "not comparable, so they are never pooled)"
-                                        if studies > 1 else
-                                        ": median and interquartile band") +
-                " of the best fitness so far; a thin line per run")
+                f"{len(names)} runs of {studies} stud{'ies' if studies != 1 else 'y'} in "
+                f"{len(groups)} group{'s' * (len(groups) != 1)}: one median and interquartile "
+                "band per group of the best fitness so far, a thin line per run" +
+                ("; runs of different studies are never pooled (their fitnesses are not "
+                 "comparable)" if studies > 1 else ""))
+            url = compare.page_url(names, by_key["value"])  # the selection is shareable
+            ui.run_javascript(f"history.replaceState(null, '', {json.dumps(url)})")
+
+        by_key = {"value": by or "study"}
+
+        def regroup(value: str) -> None:
+            if value and value != by_key["value"]:
+                by_key["value"] = value
+                redraw()
 
         pick.on_value_change(lambda _: redraw())
+        group.on_value_change(lambda e: regroup(e.value))
         redraw()
 
     form.build(root)
