@@ -43,7 +43,7 @@ def _wait(cond, timeout=30.0, what="condition"):
         if cond():
             return
         time.sleep(0.25)
-    raise AssertionError(f"timed out waiting for {what}")
+    raise AssertionError(f"timed out waiting for {what() if callable(what) else what}")
 
 
 def test_every_study_has_a_view():
@@ -328,3 +328,35 @@ def test_compare_groups_by_a_config_key_shows_the_diff_and_writes_the_url(page, 
         page.screenshot(path=str(root / "compare.png"), full_page=True)
     finally:
         shutil.rmtree(other, ignore_errors=True)
+
+
+def test_clone_a_run_name_it_and_extend_it_from_the_page(page, studio):
+    """Issue 35: the form starts from a run's config (clone), the new run gets the name typed,
+    and a finished run is extended from its page (resume --set run.generations=N)."""
+    import shutil
+
+    base, root = studio
+    page.goto(f"{base}/new?study=functions&clone=functions")
+    page.wait_for_selector(".clone-note")
+    # the smoke run's settings are filled in where they differ from the defaults
+    _wait(lambda: "run.generations=5" in page.locator(".new-command").inner_text(), 10,
+          "the cloned generations")
+    assert "run.videos=false" in page.locator(".new-command").inner_text()
+    page.locator(".new-name input").fill("functions")  # taken
+    page.wait_for_selector(".name-error:has-text('exists already')")
+    assert page.locator(".start-button").is_disabled()
+    page.locator(".new-name input").fill("my-clone")
+    _wait(lambda: page.locator(".name-error").inner_text() == "", 10, "the name accepted")
+    page.locator(".start-button").click()
+    page.wait_for_url("**/run?name=my-clone")
+    run = root / "my-clone"
+    try:
+        _wait(lambda: "finished" in page.locator(".run-status").inner_text(), 60, "the run")
+        last = int(read_stats(run / "stats.csv")["generation"][-1])
+        page.locator(".extend-to input").fill(str(last + 2))
+        page.locator(".extend-button").click()
+        _wait(lambda: int(read_stats(run / "stats.csv")["generation"][-1]) == last + 2, 60,
+              lambda: f"the extended run ({page.locator('.action-message').inner_text()})")
+        assert "resumed at generation" in (run / "log.txt").read_text()
+    finally:
+        shutil.rmtree(run, ignore_errors=True)

@@ -19,6 +19,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -81,16 +82,34 @@ def new_run_dir(root: Path, study: str) -> Path:
     return path
 
 
-def make_run_folder(root: Path, study: str) -> Path:
-    """A new folder ``ROOT/STUDY-STAMP[-N]`` marked as a run folder of ``study`` that names
-    :data:`STDERR_NAME` as the run's (made here, never one that exists)."""
+#: a run name the user gives (the run folder's name below the runs folder)
+RUN_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,79}$")
+
+
+def check_run_name(root: Path, name: str) -> None:
+    """One :class:`InputError` line for a name that is not a plain folder name or is taken."""
+    if not RUN_NAME.match(name):
+        raise InputError(f"run name {one_line(name, 40)!r}: expected 1-80 letters, digits, "
+                         "'.', '_' or '-', starting with a letter or digit")
+    if os.path.lexists(Path(root) / name):
+        raise InputError(f"run name {name!r}: {Path(root) / name} exists already")
+
+
+def make_run_folder(root: Path, study: str, name: str = "") -> Path:
+    """A new folder ``ROOT/NAME`` (or ``ROOT/STUDY-STAMP[-N]``) marked as a run folder of
+    ``study`` that names :data:`STDERR_NAME` as the run's (made here, never one that
+    exists)."""
     from evomotion.outfile import WriteError, reason, write_marker
 
-    for _ in range(1000):
-        out = new_run_dir(root, study)
+    if name:
+        check_run_name(root, name)
+    for _ in range(1 if name else 1000):
+        out = Path(root) / name if name else new_run_dir(root, study)
         try:
             out.mkdir()
         except FileExistsError:
+            if name:
+                raise InputError(f"run name {name!r}: {out} exists already") from None
             continue  # taken meanwhile (another studio, the same second)
         except OSError as e:
             raise WriteError(f"{out}: cannot create the run folder ({reason(e)})") from None
@@ -102,10 +121,14 @@ def make_run_folder(root: Path, study: str) -> Path:
     raise WriteError(f"{root}: no free name for a new run folder of {study}")
 
 
-def start_run(root: Path, study: str, preset: str | None, sets: list[str]) -> tuple[Path, Any]:
-    """Check the settings (one-line error), then start the run; ``(run folder, process)``."""
+def start_run(root: Path, study: str, preset: str | None, sets: list[str],
+              name: str = "") -> tuple[Path, Any]:
+    """Check the settings (one-line error), then start the run in ``ROOT/name`` (or a
+    stamped folder); ``(run folder, process)``."""
     check_new_run(study, preset, sets)
-    out = make_run_folder(root, study)
+    if name:
+        check_run_name(root, name)
+    out = make_run_folder(root, study, name)
     proc = _spawn(run_command(study, preset, sets, out), out)
     _await_start(proc, out)
     return out, proc
@@ -151,6 +174,28 @@ def resume_run(root: Path, name: str) -> Any:
         raise InputError(f"{one_line(name, 120)}: only an interrupted run with checkpoints can "
                          f"be resumed (this one is {status})")
     return _spawn(["resume", str(run_dir), "--quiet"], run_dir)
+
+
+def extend_run(root: Path, name: str, generations: int) -> Any:
+    """``evomotion resume RUN --set run.generations=N``: a finished (or interrupted) run with
+    checkpoints goes on to ``generations``, more than it was set to run."""
+    from evomotion.studio.data import read_config
+
+    run_dir = resolve_run(root, name)
+    status, _, _ = run_status(run_dir)
+    if status != "finished" and not is_resumable(run_dir, status):
+        raise InputError(f"{one_line(name, 120)}: only a finished or interrupted run with "
+                         f"checkpoints can be extended (this one is {status})")
+    if not any((run_dir / "checkpoints").glob("gen-*.json")):
+        raise InputError(f"{one_line(name, 120)}: no checkpoint to extend from")
+    run = read_config(run_dir)[1].get("run", {})
+    now = run.get("generations", 0) if isinstance(run, dict) else 0
+    if not isinstance(generations, int) or isinstance(generations, bool) or \
+            not isinstance(now, int) or generations <= now:
+        raise InputError(f"generations: expected a whole number above the run's {now}, got "
+                         f"{generations!r}")
+    return _spawn(["resume", str(run_dir), "--set", f"run.generations={generations}",
+                   "--quiet"], run_dir)
 
 
 # --- the new-run form: fields from the study's config schema ------------------------------

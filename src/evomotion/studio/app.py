@@ -92,6 +92,13 @@ def add_api(app: Any, root: Path) -> None:
         except InputError as e:
             return fail(e)
 
+    @app.post("/api/extend")
+    def extend(name: str, generations: int):
+        try:
+            return {"pid": actions.extend_run(root, name, generations).pid}
+        except InputError as e:
+            return fail(e)
+
     @app.post("/api/start")
     def start(body: Any = Body(None)):  # noqa: B008 - FastAPI's way to take a JSON body
         # ``Any`` (a name in this module's globals) rather than ``Request`` imported here:
@@ -99,26 +106,30 @@ def add_api(app: Any, root: Path) -> None:
         # the globals, and a local ``Request`` made ``request`` a query parameter (every POST
         # answered 422; issue 35)
         try:
-            study, preset, sets = _start_body(body)
-            out, proc = actions.start_run(root, study, preset, sets)
+            study, preset, sets, name = _start_body(body)
+            out, proc = actions.start_run(root, study, preset, sets, name)
         except InputError as e:
             return fail(e)
         return {"name": out.relative_to(root).as_posix(), "pid": proc.pid}
 
 
-def _start_body(body: Any) -> tuple[str, str | None, list[str]]:
-    """(study, preset, sets) of a ``/api/start`` JSON body, or one-line :class:`InputError`."""
+def _start_body(body: Any) -> tuple[str, str | None, list[str], str]:
+    """(study, preset, sets, name) of a ``/api/start`` JSON body, or one-line
+    :class:`InputError`."""
     if not isinstance(body, dict):
         raise InputError("expected a JSON object {\"study\": ..., \"preset\": ..., "
-                         "\"sets\": [...]}")
+                         "\"sets\": [...], \"name\": ...}")
     study, preset, sets = body.get("study"), body.get("preset"), body.get("sets", [])
+    name = body.get("name") or ""
+    if not isinstance(name, str):
+        raise InputError("name: expected a run name (a string) or null")
     if not isinstance(study, str):
         raise InputError("study: expected a study name (a string)")
     if preset is not None and not isinstance(preset, str):
         raise InputError("preset: expected a name or null")
     if not isinstance(sets, list) or not all(isinstance(x, str) for x in sets):
         raise InputError("sets: expected a list of 'key=value' strings")
-    return study, preset, sets
+    return study, preset, sets, name
 
 
 def serve(root: Path, host: str = "127.0.0.1", port: int = 8765,

@@ -12,7 +12,7 @@ from pathlib import Path
 from urllib.parse import quote
 
 from evomotion.errors import InputError
-from evomotion.studio import actions
+from evomotion.studio import actions, form_schema
 
 
 def build(root: Path) -> None:
@@ -23,8 +23,10 @@ def build(root: Path) -> None:
     from evomotion.studio.pages import header
 
     @ui.page("/new")
-    def new_page(study: str = "") -> None:
+    def new_page(study: str = "", clone: str = "") -> None:
         header(ui, "new run")
+        cloned, note = _cloned(root, clone) if clone else ({}, "")
+        study = cloned.get("study", study) if isinstance(cloned.get("study"), str) else study
         if study not in STUDIES:
             study = next(iter(STUDIES))  # the registry's first (the quickest to try)
         s = get_study(study)
@@ -32,16 +34,26 @@ def build(root: Path) -> None:
             pick = ui.select(list(STUDIES), value=study, label="study").classes("w-56 new-study")
             presets = {"": "default (best known)", **{p: f"{p}: {s.preset_notes.get(p, '')}"
                                                       for p in s.presets}}
-            preset = ui.select(presets, value="", label="preset").classes("w-96 new-preset")
+            preset0 = cloned.get("preset") if cloned.get("preset") in s.presets else ""
+            preset = ui.select(presets, value=preset0, label="preset") \
+                .classes("w-96 new-preset")
             algs = list(study_algorithms(s))
-            alg = ui.select(algs, value=default_algorithm(s), label="algorithm.name") \
-                .classes("w-56 new-algorithm")
+            alg0 = (cloned.get("algorithm") or {}).get("name") \
+                if isinstance(cloned.get("algorithm"), dict) else None
+            alg = ui.select(algs, value=alg0 if alg0 in algs else default_algorithm(s),
+                            label="algorithm.name").classes("w-56 new-algorithm")
+            run_name = ui.input("run name (optional)", placeholder=f"{study}-YYYYmmdd-HHMMSS") \
+                .classes("w-72 new-name")
+        if note:
+            ui.label(note).classes("text-slate-700 clone-note")
         pick.on_value_change(lambda e: ui.navigate.to(f"/new?study={quote(e.value)}"))
+        name_error = ui.label().classes("text-red-700 text-xs name-error")
+        run_name.on_value_change(lambda _: check())
         fields_box = ui.column().classes("w-full")
         error_top = ui.label().classes("text-red-700 form-error")
         command = ui.code("", language="bash").classes("w-full new-command")
         start = ui.button("start run", icon="rocket_launch").classes("start-button")
-        state: dict = {"fields": [], "inputs": {}, "errors": {}}
+        state: dict = {"fields": [], "inputs": {}, "errors": {}, "clone_values": {}}
 
         def current_sets() -> list[str]:
             values = {k: (("true" if w.value else "false") if isinstance(w.value, bool)
@@ -55,6 +67,13 @@ def build(root: Path) -> None:
             error_top.set_text("")
             sets = current_sets()
             p = preset.value or None
+            name = (run_name.value or "").strip()
+            try:
+                if name:
+                    actions.check_run_name(root, name)
+                name_error.set_text("")
+            except InputError as e:
+                name_error.set_text(f"error: {e}")
             command.set_content("evomotion " + " ".join(
                 _quote(a) for a in actions.run_command(study, p, sets, Path("RUN_DIR"))))
             errors = actions.form_errors(study, p, sets, list(state["errors"]))
@@ -63,8 +82,9 @@ def build(root: Path) -> None:
             if len(errors) > 1:
                 error_top.set_text(f"{len(errors)} errors: see the fields marked below" +
                                    (f"; error: {errors[None]}" if None in errors else ""))
-            start.set_enabled(not errors)
-            return not errors
+            ok = not errors and not name_error.text
+            start.set_enabled(ok)
+            return ok
 
         def rebuild() -> None:
             fields_box.clear()
@@ -78,6 +98,14 @@ def build(root: Path) -> None:
                 error_top.set_text(f"error: {e}")
                 return
             state["inputs"], state["errors"] = {}, {}
+            state["clone_values"] = {}
+            for f in state["fields"]:  # a cloned run's values where they differ
+                sec, key = f.key.split(".", 1)
+                table = cloned.get(sec) if isinstance(cloned.get(sec), dict) else {}
+                if key in table:
+                    text = form_schema.shown_text(f.kind, table[key])
+                    if text != f.shown:
+                        state["clone_values"][f.key] = text
             with fields_box:
                 common = [f for f in state["fields"] if f.common]
                 _fields(ui, common, state, check)
@@ -94,7 +122,8 @@ def build(root: Path) -> None:
             start.disable()
             try:  # waits until the run wrote its config.toml: off the event loop
                 out, _proc = await run.io_bound(actions.start_run, root, study,
-                                                preset.value or None, current_sets())
+                                                preset.value or None, current_sets(),
+                                                (run_name.value or "").strip())
             except InputError as e:
                 start.enable()
                 error_top.set_text(f"error: {e}")
@@ -115,6 +144,21 @@ def build(root: Path) -> None:
         rebuild()
 
 
+def _cloned(root: Path, name: str) -> tuple[dict, str]:
+    """The config table of run ``name`` to start the form from, and a line saying so (or
+    why not: the form then starts from the defaults)."""
+    from evomotion.studio.data import read_config, resolve_run
+
+    try:
+        text, table = read_config(resolve_run(root, name))
+    except InputError as e:
+        return {}, f"not cloned: {e}"
+    if not table:
+        return {}, f"not cloned: {name}'s config.toml does not parse ({text[:80]})"
+    return table, (f"cloned from {name}: its preset, algorithm and every value it set are "
+                   "filled in (the fields that differ from the defaults)")
+
+
 def _fields(ui, fields: list, state: dict, check) -> None:
     """The inputs of ``fields`` by section: a checkbox, a select (a registry's names; free
     text where other values are allowed) or a text input, each with its documentation as a
@@ -130,16 +174,18 @@ def _fields(ui, fields: list, state: dict, check) -> None:
                     hint = f.doc + (f" (exactly {f.value})" if f.shown != f.value
                                     and f.kind == "float" else "")
                     if f.kind == "bool":
-                        w = ui.checkbox(f.key, value=f.shown == "true")
+                        w = ui.checkbox(f.key, value=state["clone_values"].get(
+                            f.key, f.shown) == "true")
                         if hint:
                             w.tooltip(hint)
                     elif f.choices:
-                        opts = list(dict.fromkeys([*f.choices, f.shown]))
-                        w = ui.select(opts, value=f.shown, label=f.key,
+                        v = state["clone_values"].get(f.key, f.shown)
+                        opts = list(dict.fromkeys([*f.choices, f.shown, v]))
+                        w = ui.select(opts, value=v, label=f.key,
                                       with_input=f.free,
                                       new_value_mode="add-unique" if f.free else None)
                     else:
-                        w = ui.input(f.key, value=f.shown)
+                        w = ui.input(f.key, value=state["clone_values"].get(f.key, f.shown))
                     if hint and f.kind != "bool":
                         w.props["hint"] = hint  # a dict item: no quoting of the text
                     w.classes("w-full").props(f"data-key={f.key}")

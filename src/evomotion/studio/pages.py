@@ -168,6 +168,11 @@ def build(root: Path) -> None:
             badge = ui.badge("").classes("run-status")
             stop_b = ui.button("stop", icon="stop").classes("stop-button")
             resume_b = ui.button("resume", icon="play_arrow").classes("resume-button")
+            more = ui.number("extend to generations", value=None, min=1, precision=0) \
+                .classes("w-48 extend-to")
+            extend_b = ui.button("extend", icon="fast_forward").classes("extend-button")
+            ui.link("clone", f"/new?study={quote(study)}&clone={quote(name)}") \
+                .classes("clone-link")
             msg = ui.label().classes("text-red-700 action-message")
         with ui.row().classes("items-center"):
             xaxis = ui.toggle({"generation": "generation", "evaluations": "evaluations"},
@@ -201,6 +206,9 @@ def build(root: Path) -> None:
             badge.props(f"color={STATUS_COLOURS.get(s, 'grey')}")
             stop_b.set_enabled(s == "running")
             resume_b.set_enabled(data.is_resumable(run_dir, s))
+            can_extend = s == "finished" or data.is_resumable(run_dir, s)
+            extend_b.set_enabled(can_extend)
+            more.set_enabled(can_extend)
 
         seen = {"signature": data.artifact_signature(run_dir), "ticks": 0}
 
@@ -243,6 +251,8 @@ def build(root: Path) -> None:
 
         stop_b.on_click(lambda: act(actions.stop_run))
         resume_b.on_click(lambda: act(actions.resume_run))
+        extend_b.on_click(lambda: act(lambda r, n: actions.extend_run(
+            r, n, int(more.value) if isinstance(more.value, int | float) else -1)))
         xaxis.on_value_change(lambda _: redraw())
         with ui.tabs().classes("w-full") as tabs:
             t_view = ui.tab("study view")
