@@ -360,3 +360,36 @@ def test_clone_a_run_name_it_and_extend_it_from_the_page(page, studio):
         assert "resumed at generation" in (run / "log.txt").read_text()
     finally:
         shutil.rmtree(run, ignore_errors=True)
+
+
+def test_the_3d_player_plays_in_the_browser_pauses_steps_and_slows(page, studio):
+    """Issue 35: the poses are animated in the browser (no message per frame; it played at
+    about 14 frames/s, 0.9x real time), with pause, frame stepping and slow motion."""
+    base, _ = studio
+    page.goto(f"{base}/run?name=humanoid-step")
+    page.wait_for_function("Object.values(window.evoPlayers || {}).length > 0", timeout=60000)
+    probe = "() => { const p = Object.values(window.evoPlayers)[0]; return [p.t, p.applied] }"
+    t0, n0 = page.evaluate(probe)
+    page.wait_for_timeout(1000)
+    t1, n1 = page.evaluate(probe)
+    assert n1 - n0 >= 10 and t1 != t0  # it plays by itself
+    page.locator(".nao-controls .nao-play").click()
+    page.wait_for_timeout(100)
+    paused = page.evaluate(probe)[0]
+    page.wait_for_timeout(500)
+    assert page.evaluate(probe)[0] == paused
+    assert page.locator(".nao-controls .nao-play").inner_text().lower() == "play"
+    page.locator(".nao-controls .nao-fwd").click()
+    page.wait_for_timeout(100)
+    dt = 0.04  # frames recorded at 25 per second
+    last = round(page.evaluate("() => Object.values(window.evoPlayers)[0].duration") / dt)
+    assert page.evaluate(probe)[0] == pytest.approx(min(round(paused / dt) + 1, last) * dt,
+                                                    abs=1e-6)
+    page.locator(".nao-controls .nao-speed").select_option("0.25")
+    page.locator(".nao-controls .nao-play").click()
+    a = page.evaluate("() => [Object.values(window.evoPlayers)[0].t, performance.now()]")
+    page.wait_for_timeout(400)
+    b = page.evaluate("() => [Object.values(window.evoPlayers)[0].t, performance.now()]")
+    duration = page.evaluate("() => Object.values(window.evoPlayers)[0].duration")
+    rate = ((b[0] - a[0]) % duration) / ((b[1] - a[1]) / 1000)
+    assert 0.1 < rate < 0.5  # a quarter of real time

@@ -53,3 +53,17 @@ def test_smoothing_is_a_debiased_moving_average_that_skips_gaps():
     assert out[1] is None and out[0] == pytest.approx(2.0) and out[3] == pytest.approx(2.0)
     assert smooth([0.0, 10.0], 0.5)[1] == pytest.approx(10.0 * 0.5 / 0.75)
     assert metric_columns(["generation", "evaluations", "best"]) == ["evaluations", "best"]
+
+
+def test_decimation_keeps_the_envelope_the_ends_and_the_gaps():
+    from evomotion.studio.run_tabs import decimate
+
+    x = list(range(10000))
+    y = [float(i % 7) for i in x]
+    y[5000] = 100.0  # a spike
+    y[7000] = None
+    out = decimate(x, y, 2000)
+    assert len(out) <= 2002 and out[0] == [0, 0.0] and out[-1][0] == 9999
+    assert [5000, 100.0] in out and max(p[1] for p in out if p[1] is not None) == 100.0
+    assert min(p[1] for p in out if p[1] is not None) == 0.0
+    assert decimate([0, 1], [None, 2.0]) == [[0, None], [1, 2.0]]

@@ -250,30 +250,52 @@ def _add_geom(scene: Any, g: dict[str, Any]) -> None:
     obj.move(*g["pos"]).rotate_R(mat.tolist())
 
 
+#: NiceGUI's own render rate of the 3D scene: low, since the player renders the scene at every
+#: animation frame itself (NiceGUI's loop, an animation frame then a 1 / fps s timeout, drew
+#: one frame in two: 14-19 frames/s in headless Chromium's software WebGL)
+SCENE_FPS = 5
+#: playback speeds offered (slow motion)
+SPEEDS = (1.0, 0.5, 0.25, 0.1)
+
+
+def pose_stream(rec: dict[str, Any]) -> str:
+    """The recording's body poses for the browser: float32 ``[frames, bodies, 7]`` (position,
+    quaternion x y z w), base64."""
+    from scipy.spatial.transform import Rotation
+
+    f, b = rec["body_pos"].shape[:2]
+    quat = Rotation.from_matrix(rec["body_mat"].reshape(-1, 3, 3)).as_quat().reshape(f, b, 4)
+    out = np.concatenate([rec["body_pos"], quat], axis=2).astype("<f4")
+    return base64.b64encode(out.tobytes()).decode()
+
+
+def _player_js() -> str:
+    from importlib.resources import files
+
+    return (files("evomotion.studio") / "nao_player.js").read_text(encoding="utf-8")
+
+
 class NaoPlayer:
-    """The motion playing in 3D (looping), with play/pause, a frame slider (``nao-scrub``),
-    the time and whether the robot fell; built in the current NiceGUI container."""
+    """The motion playing in 3D (looping) in the browser: the poses are sent once and animated
+    there (``nao_player.js``), with play/pause, frame stepping, a scrub slider
+    (``nao-scrub``), slow motion, the time and whether the robot fell; built in the current
+    NiceGUI container."""
 
     def __init__(self, motion_path: Path | str, scene: str = "nao", height: int = 420,
                  width: int = 640, fps: float = 25.0) -> None:
+        import html
+        import json
+
         from nicegui import ui
 
         self.rec = rec = record_poses(motion_path, scene, fps)
         geoms = geom_table(load_scene_model(scene))
         self.nframe = len(rec["t_s"])
-        self.frame, self.playing = 0, True
-        with ui.row().classes("items-center gap-4"):
-            self.play_button = ui.button(icon="pause", on_click=self.toggle) \
-                .props("flat round dense").classes("nao-play")
-            self.slider = ui.slider(min=0, max=self.nframe - 1, value=0,
-                                    on_change=lambda e: self.show(int(e.value))) \
-                .classes("w-80 nao-scrub")
-            self.label = ui.label().classes("nao-time font-mono")
-            fell = f"fell at {rec['fall_time_s']:.2f} s" if rec["fell"] else "stayed up"
-            ui.label(fell).classes("text-red-700" if rec["fell"] else "text-green-700")
         camera = ui.scene.perspective_camera(fov=45, near=0.01, far=100)
+        fell = f"fell at {rec['fall_time_s']:.2f} s" if rec["fell"] else "stayed up"
+        controls = ui.html("", sanitize=False).classes("nao-controls")
         with ui.scene(width=width, height=height, grid=(6, 60), camera=camera,
-                      background_color="#f4f6f8") as self.scene:
+                      background_color="#f4f6f8", fps=SCENE_FPS) as self.scene:
             self.scene.classes("nao-scene").props("data-testid=nao-scene")
             self.groups = []
             for b in rec["bodies"]:
@@ -282,6 +304,19 @@ class NaoPlayer:
                         if g["body"] == b:
                             _add_geom(self.scene, g)
                 self.groups.append(group)
+        box = f"evo-player-{self.scene.id}"
+        speeds = "".join(f'<option value="{v}">{v:g}x</option>' for v in SPEEDS)
+        controls.set_content(
+            f'<div id="{box}" class="flex items-center gap-3">'
+            '<button class="nao-play q-btn px-2">pause</button>'
+            '<button class="nao-back px-1" title="one frame back">&#9664;|</button>'
+            '<button class="nao-fwd px-1" title="one frame on">|&#9654;</button>'
+            f'<input type="range" class="nao-scrub w-80" min="0" max="{self.nframe - 1}" '
+            'step="1" value="0">'
+            '<span class="nao-time font-mono"></span>'
+            f'<select class="nao-speed" title="playback speed">{speeds}</select>'
+            f'<span class="{"text-red-700" if rec["fell"] else "text-green-700"}">'
+            f'{html.escape(fell)}</span></div>')
         declared = None if scene.startswith("robot:") else _study_scene(scene)
         look_x = declared.look_x_m if declared is not None else 0.0
         size = 1.0  # the NAO's camera, scaled for another robot by its torso height
@@ -290,25 +325,19 @@ class NaoPlayer:
         self.scene.move_camera(x=look_x + 0.75 * size, y=-0.6 * size, z=0.5 * size,
                                look_at_x=look_x, look_at_y=0.0, look_at_z=0.25 * size,
                                duration=0)
-        self.show(0)
-        self.timer = ui.timer(rec["frame_dt_s"], self.advance)
+        self.show(0)  # the first pose, before the browser animates
+        dt = float(rec["frame_dt_s"])
+        cfg = {"scene": self.scene.id, "groups": [g.id for g in self.groups],
+               "controls": box, "data": pose_stream(rec), "nframe": self.nframe, "dt": dt,
+               "duration": max(dt, (self.nframe - 1) * dt)}
+        code = _player_js() + f"\nwindow.evoStartPlayer({json.dumps(cfg)});"
+        ui.timer(0.05, lambda: ui.run_javascript(code), once=True)
 
     def show(self, k: int) -> None:
-        """Put the bodies at frame ``k`` (one batched message to the browser)."""
-        self.frame = k = max(0, min(int(k), self.nframe - 1))
+        """Put the bodies at frame ``k`` from the server (the initial pose)."""
+        k = max(0, min(int(k), self.nframe - 1))
         batch = getattr(self.scene, "_batch_calls", None)  # NiceGUI's own batching
         with batch() if batch is not None else contextlib.nullcontext():
             for group, p, m in zip(self.groups, self.rec["body_pos"][k],
                                    self.rec["body_mat"][k], strict=True):
                 group.move(*p.tolist()).rotate_R(m.tolist())
-        self.label.set_text(f"t = {self.rec['t_s'][k]:5.2f} s / {self.rec['duration_s']:.2f} s")
-
-    def advance(self) -> None:
-        """The timer's tick: the next frame while playing (after the last: the first)."""
-        if self.playing:
-            self.slider.set_value((self.frame + 1) % self.nframe)  # its handler shows it
-
-    def toggle(self) -> None:
-        """Play or pause."""
-        self.playing = not self.playing
-        self.play_button.props(f"icon={'pause' if self.playing else 'play_arrow'}")

@@ -191,7 +191,7 @@ def build(root: Path) -> None:
         def redraw() -> None:
             x = st.column(xaxis.value)
             for i, (k, _lab) in enumerate(CURVES):
-                pts = [list(p) for p in zip(x, st.column(k), strict=False)]
+                pts = run_tabs.decimate(x, st.column(k))
                 chart.options["series"][i]["data"] = pts
                 # a curve of few finite points (best_so_far inf, then one value) drew nothing
                 chart.options["series"][i]["showSymbol"] = \
