@@ -373,6 +373,13 @@ def test_the_3d_player_plays_in_the_browser_pauses_steps_and_slows(page, studio)
     page.wait_for_timeout(1000)
     t1, n1 = page.evaluate(probe)
     assert n1 - n0 >= 10 and t1 != t0  # it plays by itself
+    # motion analysis: angles and support plotted, a cursor at the playing time on each
+    page.wait_for_selector(".motion-angles canvas")
+    page.wait_for_selector(".motion-support canvas")
+    cursor = "() => [...document.querySelectorAll('.nao-cursor')].map(e => e.style.left)"
+    c0 = page.evaluate(cursor)
+    page.wait_for_timeout(300)
+    assert len(c0) == 2 and page.evaluate(cursor) != c0
     page.locator(".nao-controls .nao-play").click()
     page.wait_for_timeout(100)
     paused = page.evaluate(probe)[0]

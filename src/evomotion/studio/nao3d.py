@@ -195,7 +195,7 @@ def _record(path: Path, scene: str, fps: float, hold_s: float) -> dict[str, Any]
         pos[k], mat[k] = data.geom_xpos[geoms], data.geom_xmat[geoms].reshape(-1, 3, 3)
         bpos[k], bmat[k] = data.xpos[bodies], data.xmat[bodies].reshape(-1, 3, 3)
     rec = {"t_s": steps * dt, "geoms": geoms, "pos": pos, "mat": mat, "bodies": bodies,
-           "body_pos": bpos, "body_mat": bmat}
+           "body_pos": bpos, "body_mat": bmat, "qpos": np.asarray(qpos, float)}
     for a in rec.values():
         a.setflags(write=False)  # shared through the cache
     rec.update(scene=scene, frame_dt_s=every * dt, duration_s=nstep * dt,
@@ -282,7 +282,7 @@ class NaoPlayer:
     NiceGUI container."""
 
     def __init__(self, motion_path: Path | str, scene: str = "nao", height: int = 420,
-                 width: int = 640, fps: float = 25.0) -> None:
+                 width: int = 640, fps: float = 25.0, analysis: bool = True) -> None:
         import html
         import json
 
@@ -326,12 +326,50 @@ class NaoPlayer:
                                look_at_x=look_x, look_at_y=0.0, look_at_z=0.25 * size,
                                duration=0)
         self.show(0)  # the first pose, before the browser animates
+        charts = self._analysis(ui, scene) if analysis else []
         dt = float(rec["frame_dt_s"])
         cfg = {"scene": self.scene.id, "groups": [g.id for g in self.groups],
                "controls": box, "data": pose_stream(rec), "nframe": self.nframe, "dt": dt,
-               "duration": max(dt, (self.nframe - 1) * dt)}
+               "duration": max(dt, (self.nframe - 1) * dt), "charts": [c.id for c in charts]}
         code = _player_js() + f"\nwindow.evoStartPlayer({json.dumps(cfg)});"
         ui.timer(0.05, lambda: ui.run_javascript(code), once=True)
+
+    def _analysis(self, ui, scene: str) -> list[Any]:
+        """Under the player: joint angles and tilt (pick any), foot contacts and heights, each
+        with a cursor at the playing time (``nao_player.js`` moves it)."""
+        from evomotion.sim.robots import load_robot
+        from evomotion.studio import motion_traces as mt
+
+        robot = _robot(scene) if scene.startswith("robot:") else load_robot("nao")
+        tr = mt.traces(load_scene_model(scene), self.rec["qpos"], dict(robot.spec.feet))
+        t = np.asarray(self.rec["t_s"], float)
+        angles = mt.angle_series(tr, t)
+        legs = [n for n in angles if any(k in n for k in ("KneePitch", "knee", "Knee"))][:2]
+        shown = ["torso tilt", *legs]
+        base = {"animation": False, "legend": {"top": 0},
+                "tooltip": {"trigger": "axis", ":valueFormatter": "v => v == null ? '-' : "
+                            "String(Number(Number(v).toPrecision(4)))"},
+                "grid": {"left": 60, "right": 60, "top": 35, "bottom": 30},
+                "xAxis": {"type": "value", "name": "t (s)", "min": 0, "max": float(t[-1])}}
+        pick = ui.select(list(angles), multiple=True, value=shown, label="angles (°)") \
+            .classes("w-full motion-angles-pick").props("use-chips")
+        angle_chart = ui.echart({**base, "yAxis": {"type": "value", "name": "°",
+                                                   "scale": True},
+                                 "series": [{"name": k, "type": "line", "showSymbol": False,
+                                             "data": angles[k]} for k in shown]}) \
+            .classes("w-full h-64 motion-angles")
+
+        def repick() -> None:
+            angle_chart.options["series"] = [{"name": k, "type": "line", "showSymbol": False,
+                                              "data": angles[k]} for k in pick.value or []]
+            angle_chart.update()
+
+        pick.on_value_change(lambda _: repick())
+        support = ui.echart({**base, "yAxis": [
+            {"type": "value", "name": "feet", "min": 0, "max": max(1, len(tr["contact"])),
+             "interval": 1}, {"type": "value", "name": "m", "scale": True}],
+            "series": mt.support_series(tr, t)}).classes("w-full h-56 motion-support")
+        return [angle_chart, support]
 
     def show(self, k: int) -> None:
         """Put the bodies at frame ``k`` from the server (the initial pose)."""

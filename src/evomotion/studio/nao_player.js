@@ -35,6 +35,24 @@
                  duration: cfg.duration };
     window.evoPlayers[cfg.scene] = st;
 
+    // a cursor on each analysis chart at the playing time
+    const cursors = (cfg.charts || []).map((id) => {
+      const el = document.createElement("div");
+      el.className = "nao-cursor";
+      el.style.cssText = "position:absolute;top:30px;bottom:30px;width:2px;" +
+        "background:#e53935;pointer-events:none;z-index:5";
+      const c = getElement(id);
+      if (c && c.$el) { c.$el.style.position = "relative"; c.$el.appendChild(el); }
+      return { id, el };
+    });
+    function moveCursors(t) {
+      for (const { id, el } of cursors) {
+        const chart = getElement(id)?.chart;
+        const x = chart ? chart.convertToPixel({ xAxisIndex: 0 }, t) : null;
+        if (x != null && isFinite(x)) el.style.left = `${x - 1}px`;
+      }
+    }
+
     function apply(t) {
       const x = Math.min(Math.max(t / cfg.dt, 0), n - 1);
       const k = Math.floor(x), k1 = Math.min(k + 1, n - 1), a = x - k;
@@ -50,6 +68,7 @@
       q(".nao-time").textContent =
         `t = ${t.toFixed(2).padStart(5)} s / ${cfg.duration.toFixed(2)} s`;
       if (!st.dragging) q(".nao-scrub").value = String(Math.round(x));
+      moveCursors(t);
     }
 
     function loop(now) {
