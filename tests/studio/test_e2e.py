@@ -16,7 +16,7 @@ import pytest
 from studio_helpers import TOKEN, get, smoke_sets
 
 from evomotion.run.stats import read_stats
-from evomotion.studies import STUDIES
+from evomotion.studies import STUDIES, get_study
 
 pytestmark = pytest.mark.slow
 
@@ -73,6 +73,9 @@ def test_run_page_shows_curves_and_the_study_view(page, studio, name):
     if VIEW[name] == ".view-image":  # a rendered figure, stepped back one generation
         src = page.locator(".view-image img").get_attribute("src")
         assert src and src.startswith("data:image/png")
+    if name in STUDIES and get_study(name).view and get_study(name).view.motions:
+        page.wait_for_selector(".nao-scene", timeout=60000)  # the kick's failed after its table
+    assert page.locator(".view-error").count() == 0, page.locator(".view-error").inner_text()
     page.locator(".q-tab", has_text="config").click()
     page.wait_for_selector(".run-config", state="visible")  # its text arrives after it
     _wait(lambda: f'study = "{name}"' in page.locator(".run-config").inner_text(),
@@ -380,23 +383,42 @@ def test_the_3d_player_plays_in_the_browser_pauses_steps_and_slows(page, studio)
     c0 = page.evaluate(cursor)
     page.wait_for_timeout(300)
     assert len(c0) == 2 and page.evaluate(cursor) != c0
-    page.locator(".nao-controls .nao-play").click()
+    page.locator(".nao-controls .nao-play").first.click()
     page.wait_for_timeout(100)
     paused = page.evaluate(probe)[0]
     page.wait_for_timeout(500)
     assert page.evaluate(probe)[0] == paused
-    assert page.locator(".nao-controls .nao-play").inner_text().lower() == "play"
-    page.locator(".nao-controls .nao-fwd").click()
+    assert page.locator(".nao-controls .nao-play").first.inner_text().lower() == "play"
+    page.locator(".nao-controls .nao-fwd").first.click()
     page.wait_for_timeout(100)
     dt = 0.04  # frames recorded at 25 per second
     last = round(page.evaluate("() => Object.values(window.evoPlayers)[0].duration") / dt)
     assert page.evaluate(probe)[0] == pytest.approx(min(round(paused / dt) + 1, last) * dt,
                                                     abs=1e-6)
-    page.locator(".nao-controls .nao-speed").select_option("0.25")
-    page.locator(".nao-controls .nao-play").click()
+    page.locator(".nao-controls .nao-speed").first.select_option("0.25")
+    page.locator(".nao-controls .nao-play").first.click()
     a = page.evaluate("() => [Object.values(window.evoPlayers)[0].t, performance.now()]")
     page.wait_for_timeout(400)
     b = page.evaluate("() => [Object.values(window.evoPlayers)[0].t, performance.now()]")
     duration = page.evaluate("() => Object.values(window.evoPlayers)[0].duration")
     rate = ((b[0] - a[0]) % duration) / ((b[1] - a[1]) / 1000)
     assert 0.1 < rate < 0.5  # a quarter of real time
+
+
+def test_the_best_of_any_generation_is_replayed(page, studio):
+    """Issue 35: a slider over the recorded generations (run.history_every) replays the best of
+    generation g in 3D (humanoid-step declares how a genome becomes a motion)."""
+    base, root = studio
+    page.goto(f"{base}/run?name=humanoid-step")
+    page.wait_for_selector(".generation-step")
+    _wait(lambda: "generation 5: its best" in page.locator(".generation-caption").inner_text(),
+          30, "the last generation's best")
+    slider = page.locator(".generation-step")
+    slider.scroll_into_view_if_needed()
+    box = slider.bounding_box()
+    page.mouse.click(box["x"] + 1, box["y"] + box["height"] / 2)  # its left end
+    _wait(lambda: "generation 0: its best" in page.locator(".generation-caption").inner_text(),
+          30, "generation 0")
+    _wait(lambda: page.evaluate("Object.keys(window.evoPlayers || {}).length") >= 2, 30,
+          "a second player (best.motion and the generation's best)")
+

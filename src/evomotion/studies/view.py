@@ -87,6 +87,9 @@ class StudyView:
     #: an elite whose objective is at or below this fell (grey on the map, never played)
     archive_fallen_at: float | None = None
     frames: Callable[[RunFiles], Frames] | None = None
+    #: ``genome_motion(problem, genome)``: a genome as a motion, so the studio replays the best
+    #: of any generation recorded in ``population.bin`` (``run.history_every``)
+    genome_motion: Callable[[Problem, np.ndarray], Any] | None = None
 
 
 def lazy(module: str, name: str) -> Callable[..., Any]:

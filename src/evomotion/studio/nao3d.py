@@ -150,8 +150,10 @@ def _robot(scene: str) -> Any:
     return load_robot(check_robot(scene.split(":", 1)[1]))
 
 
-def _record(path: Path, scene: str, fps: float, hold_s: float) -> dict[str, Any]:
-    from evomotion.sim.motion import read_motion
+def _record(path: Any, scene: str, fps: float, hold_s: float) -> dict[str, Any]:
+    """The recording of a ``.motion`` file ``path`` or of a :class:`Motion` (a study's
+    genome turned into a motion)."""
+    from evomotion.sim.motion import Motion, read_motion
     from evomotion.sim.robots import nao
     from evomotion.sim.robots.nao.replay import MAX_HOLD_S, motion_targets
     from evomotion.sim.rollout import BatchSimulator, fall_step, torso_track
@@ -160,7 +162,8 @@ def _record(path: Path, scene: str, fps: float, hold_s: float) -> dict[str, Any]
     check_number("hold_s", hold_s, lo=0.0, hi=MAX_HOLD_S)
     model = load_scene_model(scene)
     robot = _robot(scene) if scene.startswith("robot:") else None
-    motion = read_motion(path, None if robot is None else robot.joints)
+    motion = path if isinstance(path, Motion) else \
+        read_motion(path, None if robot is None else robot.joints)
     if not motion.duration_s <= MAX_PLAY_S:
         raise InputError(f"{path}: the 3D player plays motions of at most {MAX_PLAY_S:g} s, "
                          f"this one lasts {motion.duration_s:g} s")
@@ -204,17 +207,29 @@ def _record(path: Path, scene: str, fps: float, hold_s: float) -> dict[str, Any]
     return rec
 
 
-def record_poses(motion_path: Path | str, scene: str = "nao", fps: float = 25.0,
+def record_poses(motion_path: Any, scene: str = "nao", fps: float = 25.0,
                  hold_s: float = 0.5) -> dict[str, Any]:
     """Replay the motion (and hold its last pose ``hold_s``) and record, at ``fps``:
     ``t_s[T]`` (from 0), ``geoms[G]`` (the ids of :func:`geom_table`), their world poses
     ``pos[T, G, 3]`` and ``mat[T, G, 3, 3]``, the bodies holding them ``bodies[B]`` with
     ``body_pos[T, B, 3]``/``body_mat[T, B, 3, 3]``; ``fell``, ``fall_time_s``, ``duration_s``
     (motion + hold), ``motion_s``, ``frame_dt_s``. Cached (read only) by file, mtime and
-    arguments (the last few)."""
-    path = Path(motion_path)
-    key = (str(path.resolve()), path.stat().st_mtime_ns, scene, float(fps), float(hold_s))
-    rec = _CACHE.pop(key, None) or _record(path, scene, fps, hold_s)
+    arguments (the last few). ``motion_path`` may also be a
+    :class:`~evomotion.sim.motion.Motion` (cached by its content)."""
+    from evomotion.sim.motion import Motion
+
+    if isinstance(motion_path, Motion):
+        import hashlib
+
+        m = motion_path
+        digest = hashlib.sha256(repr(m.joints).encode() + np.asarray(m.times_ms).tobytes() +
+                                np.asarray(m.values, float).tobytes()).hexdigest()
+        key: tuple = ("motion", digest, scene, float(fps), float(hold_s))
+        source: Any = m
+    else:
+        source = path = Path(motion_path)
+        key = (str(path.resolve()), path.stat().st_mtime_ns, scene, float(fps), float(hold_s))
+    rec = _CACHE.pop(key, None) or _record(source, scene, fps, hold_s)
     _CACHE[key] = rec  # most recently used last
     while len(_CACHE) > _CACHE_SIZE:
         _CACHE.pop(next(iter(_CACHE)))
@@ -281,7 +296,7 @@ class NaoPlayer:
     (``nao-scrub``), slow motion, the time and whether the robot fell; built in the current
     NiceGUI container."""
 
-    def __init__(self, motion_path: Path | str, scene: str = "nao", height: int = 420,
+    def __init__(self, motion_path: Any, scene: str = "nao", height: int = 420,
                  width: int = 640, fps: float = 25.0, analysis: bool = True) -> None:
         import html
         import json

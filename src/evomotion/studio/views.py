@@ -99,14 +99,17 @@ def render(study: str, root: Path, run_dir: Path) -> None:
         if view is None:
             ui.label("this study has no view of its own: its curves are above")
             return
+        scene = view.scene.name if view.scene is not None else None  # a declared scene
         if view.table:
             _table(ui, run_dir / view.table, view.table_title)
         if view.archive_map:
-            _repertoire(ui, run_dir, view.scene, view.archive_fallen_at)
+            _repertoire(ui, run_dir, scene, view.archive_fallen_at)
         elif view.motions:
-            _nao(ui, run_dir, motions_of(run_dir), scene=view.scene)
+            _nao(ui, run_dir, motions_of(run_dir), scene=scene)
         if view.frames is not None:
             _frames(ui, view.frames, StudioRunFiles(study, run_dir))
+        if view.genome_motion is not None:
+            _generations(ui, StudioRunFiles(study, run_dir), view)
     except NothingYetError as e:
         ui.label(one_line(e)).classes("view-empty")
     except InputError as e:  # a file of the run the studio refuses to read or load
@@ -283,6 +286,40 @@ def _repertoire(ui, run_dir: Path, scene: str | None = None,
         on_point_click=clicked).classes("w-full h-96 repertoire-map")
     message = ui.label("").classes("text-slate-700 repertoire-message")
     shown["pick"] = _nao(ui, run_dir, motions, scene=scene)
+
+
+def _generations(ui, files: StudioRunFiles, view: Any) -> None:
+    """The best individual of any recorded generation replayed in 3D (a slider over the
+    generations of ``population.bin``)."""
+    from evomotion.studio.nao3d import NaoPlayer
+
+    ui.label("the best of each recorded generation").classes("font-bold mt-4")
+    try:
+        hist = files.history()
+    except NothingYetError as e:
+        ui.label(one_line(e)).classes("text-slate-600 generations-empty")
+        return
+    problem = files.problem()
+    sense = getattr(problem, "sense", "max")
+    scene = view.scene.name if view.scene is not None else scene_of(files.run_dir)
+    box = ui.column().classes("w-full")
+    caption = ui.label().classes("text-slate-600 generation-caption")
+
+    def show(k: int) -> None:
+        gen, pop, fit = hist[int(k)]
+        f = np.where(np.isfinite(fit), fit, -np.inf if sense == "max" else np.inf)
+        i = int(np.argmax(f) if sense == "max" else np.argmin(f))
+        caption.set_text(f"generation {gen}: its best, fitness {fit[i]:.6g} "
+                         f"(individual {i} of {len(fit)})")
+        box.clear()
+        with box:
+            NaoPlayer(view.genome_motion(problem, pop[i]), scene=scene, analysis=False)
+
+    with ui.row().classes("items-center"):
+        slider = ui.slider(min=0, max=len(hist) - 1, value=len(hist) - 1,
+                           on_change=lambda e: show(e.value)).classes("w-96 generation-step")
+        ui.label(f"{len(hist)} generations recorded")
+    show(slider.value)
 
 
 def _stepper(ui, n: int, draw, label: str = "generation") -> None:

@@ -9,7 +9,7 @@ import typer
 from evomotion.studies.base import Study
 from evomotion.studies.humanoid_step.artifacts import finalize, on_checkpoint
 from evomotion.studies.humanoid_step.problem import HumanoidStepConfig, HumanoidStepProblem
-from evomotion.studies.view import StudyView
+from evomotion.studies.view import StudyView, lazy
 
 cli = typer.Typer(help="Paper 000: a forward step of the NAO, evolved by a GA.",
                   no_args_is_help=True)
@@ -80,7 +80,8 @@ STUDY = Study(
     on_checkpoint=on_checkpoint,
     finalize=finalize,
     cli=cli,
-    view=StudyView(motions=True),
+    view=StudyView(motions=True, genome_motion=lazy("evomotion.studies.humanoid_step.artifacts",
+                                                   "genome_motion")),
     smoke=(
         "algorithm.pop_size=6",
         "problem.motion_s=0.4",
