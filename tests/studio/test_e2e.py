@@ -379,7 +379,7 @@ def test_the_3d_player_plays_in_the_browser_pauses_steps_and_slows(page, studio)
     # motion analysis: angles and support plotted, a cursor at the playing time on each
     page.wait_for_selector(".motion-angles canvas")
     page.wait_for_selector(".motion-support canvas")
-    cursor = "() => [...document.querySelectorAll('.nao-cursor')].map(e => e.style.left)"
+    cursor = "() => [...document.querySelectorAll('.nao-cursor')].map(e => e.style.transform)"
     c0 = page.evaluate(cursor)
     page.wait_for_timeout(300)
     assert len(c0) == 2 and page.evaluate(cursor) != c0

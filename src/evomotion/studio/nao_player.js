@@ -39,17 +39,20 @@
     const cursors = (cfg.charts || []).map((id) => {
       const el = document.createElement("div");
       el.className = "nao-cursor";
-      el.style.cssText = "position:absolute;top:30px;bottom:30px;width:2px;" +
-        "background:#e53935;pointer-events:none;z-index:5";
+      el.style.cssText = "position:absolute;left:0;top:30px;bottom:30px;width:2px;" +
+        "background:#e53935;pointer-events:none;z-index:5;will-change:transform";
       const c = getElement(id);
       if (c && c.$el) { c.$el.style.position = "relative"; c.$el.appendChild(el); }
       return { id, el };
     });
     function moveCursors(t) {
-      for (const { id, el } of cursors) {
-        const chart = getElement(id)?.chart;
-        const x = chart ? chart.convertToPixel({ xAxisIndex: 0 }, t) : null;
-        if (x != null && isFinite(x)) el.style.left = `${x - 1}px`;
+      for (const c of cursors) {
+        const chart = getElement(c.id)?.chart;
+        const x = chart ? Math.round(chart.convertToPixel({ xAxisIndex: 0 }, t)) : null;
+        if (x != null && isFinite(x) && x !== c.x) {  // moved: a compositor-only transform
+          c.x = x;
+          c.el.style.transform = `translateX(${x - 1}px)`;
+        }
       }
     }
 
