@@ -25,7 +25,7 @@ VIEW = {"arm-ik": ".view-image", "grid-path": ".view-image", "quadruped-plan": "
         "biped-kick": ".kick-table", "humanoid-repertoire": ".repertoire-map",
         "functions": "text=no view of its own", "gym": "text=no view of its own",
         "humanoid-balance": "text=no view of its own",
-        "humanoid-omniwalk": "text=no view of its own"}
+        "humanoid-omniwalk": ".drive-scene"}
 
 
 def _rows(page) -> int:
@@ -421,4 +421,33 @@ def test_the_best_of_any_generation_is_replayed(page, studio):
           30, "generation 0")
     _wait(lambda: page.evaluate("Object.keys(window.evoPlayers || {}).length") >= 2, 30,
           "a second player (best.motion and the generation's best)")
+
+
+def test_drive_the_walk_controller_live_from_the_keyboard(page, studio):
+    """Issue 35: a walk controller driven live: a held key sets the command, the simulation
+    runs in real time on the server, restart (R) starts it again."""
+    import re
+
+    base, _ = studio
+    page.goto(f"{base}/run?name=humanoid-omniwalk")
+    page.wait_for_selector(".drive-scene")
+
+    def status() -> str:
+        return page.locator(".drive-status").inner_text()
+
+    def sim_t() -> float:
+        m = re.search(r"t\s+([\d.]+) s", status())
+        return float(m.group(1)) if m else -1.0
+
+    _wait(lambda: sim_t() > 0.3, 20, "the simulation to run")
+    page.locator("body").click(position={"x": 5, "y": 5})  # the page has the focus
+    page.keyboard.down("w")
+    _wait(lambda: "command +0.45" in status() or "FELL" in status(), 10,
+          lambda: f"the forward command ({status()})")
+    page.keyboard.up("w")
+    a = sim_t()
+    page.wait_for_timeout(1000)
+    assert "FELL" in status() or 0.6 < sim_t() - a < 1.4  # real time while standing
+    page.keyboard.press("r")
+    _wait(lambda: 0 <= sim_t() < 0.6 and "FELL" not in status(), 10, "the restart")
 

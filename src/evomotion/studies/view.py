@@ -90,6 +90,8 @@ class StudyView:
     #: ``genome_motion(problem, genome)``: a genome as a motion, so the studio replays the best
     #: of any generation recorded in ``population.bin`` (``run.history_every``)
     genome_motion: Callable[[Problem, np.ndarray], Any] | None = None
+    #: the run's walk controller (policy.json with vx, vy, yaw_rate commands) driven live
+    drive: bool = False
 
 
 def lazy(module: str, name: str) -> Callable[..., Any]:

@@ -110,6 +110,10 @@ def render(study: str, root: Path, run_dir: Path) -> None:
             _frames(ui, view.frames, StudioRunFiles(study, run_dir))
         if view.genome_motion is not None:
             _generations(ui, StudioRunFiles(study, run_dir), view)
+        if view.drive:
+            from evomotion.studio.drive import drive_panel
+
+            drive_panel(ui, run_dir)
     except NothingYetError as e:
         ui.label(one_line(e)).classes("view-empty")
     except InputError as e:  # a file of the run the studio refuses to read or load

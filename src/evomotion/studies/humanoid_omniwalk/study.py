@@ -18,7 +18,7 @@ import typer
 from evomotion.studies.base import Study, lazy_hook
 from evomotion.studies.humanoid_omniwalk.problem import OmniWalkConfig, OmniWalkProblem
 from evomotion.studies.policy_search import policy_algorithms
-from evomotion.studies.view import lazy
+from evomotion.studies.view import StudyView, lazy
 
 ARTIFACTS = "evomotion.studies.humanoid_omniwalk.artifacts"
 
@@ -64,6 +64,7 @@ STUDY = Study(
     replay_run=lazy("evomotion.studies.humanoid_omniwalk.replay", "replay_walk_command"),
     run_record=None,
     cli=cli,
+    view=StudyView(drive=True),  # the studio drives the controller live
     smoke=("problem.duration_s=1.0", "problem.eval_episodes=1", "problem.episodes=1",
            "problem.threads=1", "algorithm.pop_size=4", "algorithm.top_directions=0"),
 )
