@@ -249,8 +249,10 @@ def test_the_study_view_updates_when_a_motion_appears(page, studio):
         _wait(lambda: "no .motion in this run yet" in page.locator(".study-view").inner_text(),
               what="the empty view")
         shutil.copy(root / "humanoid-step" / "best.motion", late / "best.motion")
-        page.wait_for_selector(VIEW["humanoid-step"], timeout=30000)
-        assert "no .motion in this run yet" not in page.locator(".study-view").inner_text()
+        # (the generation player shows a scene already: wait for the motion's own player)
+        _wait(lambda: "no .motion in this run yet" not in
+              page.locator(".study-view").inner_text(), 30, "the redrawn view")
+        assert "best.motion" in page.locator(".motion-pick").inner_text()
     finally:  # the other tests count the session's runs
         shutil.rmtree(late)
 
@@ -375,14 +377,14 @@ def test_the_3d_player_plays_in_the_browser_pauses_steps_and_slows(page, studio)
     t0, n0 = page.evaluate(probe)
     page.wait_for_timeout(1000)
     t1, n1 = page.evaluate(probe)
-    assert n1 - n0 >= 10 and t1 != t0  # it plays by itself
+    assert n1 - n0 >= 3 and t1 != t0  # it plays by itself (slowly under a loaded CI)
     # motion analysis: angles and support plotted, a cursor at the playing time on each
     page.wait_for_selector(".motion-angles canvas")
     page.wait_for_selector(".motion-support canvas")
     cursor = "() => [...document.querySelectorAll('.nao-cursor')].map(e => e.style.transform)"
     c0 = page.evaluate(cursor)
-    page.wait_for_timeout(300)
-    assert len(c0) == 2 and page.evaluate(cursor) != c0
+    assert len(c0) == 2
+    _wait(lambda: page.evaluate(cursor) != c0, 10, "the cursors to follow the playback")
     page.locator(".nao-controls .nao-play").first.click()
     page.wait_for_timeout(100)
     paused = page.evaluate(probe)[0]
@@ -398,7 +400,7 @@ def test_the_3d_player_plays_in_the_browser_pauses_steps_and_slows(page, studio)
     page.locator(".nao-controls .nao-speed").first.select_option("0.25")
     page.locator(".nao-controls .nao-play").first.click()
     a = page.evaluate("() => [Object.values(window.evoPlayers)[0].t, performance.now()]")
-    page.wait_for_timeout(400)
+    page.wait_for_timeout(1200)
     b = page.evaluate("() => [Object.values(window.evoPlayers)[0].t, performance.now()]")
     duration = page.evaluate("() => Object.values(window.evoPlayers)[0].duration")
     rate = ((b[0] - a[0]) % duration) / ((b[1] - a[1]) / 1000)

@@ -30,8 +30,10 @@ def test_every_declared_view_is_well_formed(name):
     if view is None:
         return
     assert isinstance(view, StudyView)
-    assert view.motions or view.frames is not None or view.table or view.archive_map
+    assert view.motions or view.frames is not None or view.table or view.archive_map or \
+        view.drive
     assert view.frames is None or callable(view.frames)
+    assert view.genome_motion is None or (callable(view.genome_motion) and view.motions)
     if view.scene is not None:
         assert isinstance(view.scene, Scene) and view.scene.name != "nao"
         assert callable(view.scene.load_model) and callable(view.scene.initial_state)
