@@ -383,7 +383,7 @@ def test_the_3d_player_plays_in_the_browser_pauses_steps_and_slows(page, studio)
     page.wait_for_selector(".motion-support canvas")
     cursor = "() => [...document.querySelectorAll('.nao-cursor')].map(e => e.style.transform)"
     c0 = page.evaluate(cursor)
-    assert len(c0) == 2
+    assert len(c0) == 3
     _wait(lambda: page.evaluate(cursor) != c0, 10, "the cursors to follow the playback")
     page.locator(".nao-controls .nao-play").first.click()
     page.wait_for_timeout(100)

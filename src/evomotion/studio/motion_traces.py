@@ -1,6 +1,7 @@
 """What a played motion does, frame by frame, for the plots under the 3D player (issue 35's
 motion analysis): every hinge joint's angle, the torso's tilt and height, the centre of mass,
-and which feet touch the floor.
+which feet touch the floor, and the ZMP (the centre of pressure of the robot's floor contacts,
+``sim/zmp.py``; on flat ground they are the same point).
 
 Computed from the same recorded frames the player shows (``qpos`` of the physics replay):
 ``mj_fwdPosition`` per frame gives the centre of mass (``subtree_com`` of the robot's root
@@ -54,6 +55,48 @@ def traces(model: mujoco.MjModel, qpos: np.ndarray, feet: dict[str, str]) -> dic
               np.degrees(qpos[:, model.jnt_qposadr[j]]) for j in hinge}
     return {"joints": joints, "tilt_deg": tilt, "torso_z_m": z, "com_m": com,
             "contact": contact}
+
+
+def zmp_trace(model: mujoco.MjModel, states: np.ndarray, ctrl: np.ndarray) -> np.ndarray:
+    """``[F, 2]`` ZMP (x, y; m) of each frame's full state under its servo targets (NaN while
+    no foot carries load); only the robot's contacts with the floor plane count."""
+    from evomotion.sim.state import STATE_SPEC
+    from evomotion.sim.zmp import centre_of_pressure, floor_contacts
+
+    planes = np.flatnonzero(model.geom_type == mujoco.mjtGeom.mjGEOM_PLANE)
+    out = np.full((len(states), 2), np.nan)
+    if not planes.size:
+        return out
+    root = _root_body(model)
+    robot = {b for b in range(model.nbody) if b == root or _descends(model, b, root)}
+    data = mujoco.MjData(model)
+    for k, (state, u) in enumerate(zip(states, ctrl, strict=True)):
+        mujoco.mj_setState(model, data, state, STATE_SPEC)
+        data.ctrl[:] = u
+        mujoco.mj_forward(model, data)
+        pos, force = floor_contacts(model, data, int(planes[0]), robot)
+        out[k] = centre_of_pressure(pos, force)[0]
+    return out
+
+
+def _descends(model: mujoco.MjModel, body: int, root: int) -> bool:
+    while body > 0:
+        if body == root:
+            return True
+        body = int(model.body_parentid[body])
+    return False
+
+
+def balance_series(tr: dict[str, Any], zmp: np.ndarray, t: np.ndarray) -> list[dict]:
+    """ZMP and CoM, x and y (m), against time."""
+    out = []
+    for name, v in (("ZMP x", zmp[:, 0]), ("CoM x", tr["com_m"][:, 0]), ("ZMP y", zmp[:, 1]),
+                    ("CoM y", tr["com_m"][:, 1])):
+        pts = [[float(a), None if not np.isfinite(b) else round(float(b), 4)]
+               for a, b in zip(t, v, strict=True)]
+        out.append({"name": f"{name} (m)", "type": "line", "showSymbol": False, "data": pts,
+                    "lineStyle": {"type": "dashed"} if name.startswith("CoM") else {}})
+    return out
 
 
 def angle_series(tr: dict[str, Any], t: np.ndarray) -> dict[str, list]:

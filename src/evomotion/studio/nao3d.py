@@ -185,6 +185,9 @@ def _record(path: Any, scene: str, fps: float, hold_s: float) -> dict[str, Any]:
     steps = np.arange(0, nstep + 1, every)  # physics steps done before each frame
     qpos = np.concatenate([nao.state_qpos_all(model, state0)[None],
                            nao.state_qpos_all(model, states[steps[1:] - 1])])
+    # each frame's full state and the targets of the step after it (the analysis's forces)
+    frame_states = np.concatenate([np.asarray(state0, float)[None], states[steps[1:] - 1]])
+    frame_ctrl = np.asarray(ctrl, float)[np.minimum(steps, len(ctrl) - 1)]
     table = geom_table(model)
     geoms = np.array([g["id"] for g in table], dtype=int)
     bodies = np.array(sorted({g["body"] for g in table}), dtype=int)
@@ -198,7 +201,8 @@ def _record(path: Any, scene: str, fps: float, hold_s: float) -> dict[str, Any]:
         pos[k], mat[k] = data.geom_xpos[geoms], data.geom_xmat[geoms].reshape(-1, 3, 3)
         bpos[k], bmat[k] = data.xpos[bodies], data.xmat[bodies].reshape(-1, 3, 3)
     rec = {"t_s": steps * dt, "geoms": geoms, "pos": pos, "mat": mat, "bodies": bodies,
-           "body_pos": bpos, "body_mat": bmat, "qpos": np.asarray(qpos, float)}
+           "body_pos": bpos, "body_mat": bmat, "qpos": np.asarray(qpos, float),
+           "frame_states": frame_states, "frame_ctrl": frame_ctrl}
     for a in rec.values():
         a.setflags(write=False)  # shared through the cache
     rec.update(scene=scene, frame_dt_s=every * dt, duration_s=nstep * dt,
@@ -384,7 +388,12 @@ class NaoPlayer:
             {"type": "value", "name": "feet", "min": 0, "max": max(1, len(tr["contact"])),
              "interval": 1}, {"type": "value", "name": "m", "scale": True}],
             "series": mt.support_series(tr, t)}).classes("w-full h-56 motion-support")
-        return [angle_chart, support]
+        zmp = mt.zmp_trace(load_scene_model(scene), self.rec["frame_states"],
+                           self.rec["frame_ctrl"])
+        balance = ui.echart({**base, "yAxis": {"type": "value", "name": "m", "scale": True},
+                             "series": mt.balance_series(tr, zmp, t)}) \
+            .classes("w-full h-56 motion-balance")
+        return [angle_chart, support, balance]
 
     def show(self, k: int) -> None:
         """Put the bodies at frame ``k`` from the server (the initial pose)."""

@@ -10,6 +10,7 @@ from evomotion.errors import InputError
 from evomotion.sim.motion import format_motion, parse_motion
 from evomotion.sim.robots import nao
 from evomotion.sim.robots.nao.joint_limits import check_speeds
+from evomotion.sim.zmp import centre_of_pressure, floor_contacts
 from evomotion.studies.biped_kick import scene
 from evomotion.studies.biped_kick.experiment import on_grid, run_experiment
 from evomotion.studies.biped_kick.keyframe import keyframe_kicks, kicking_foot, shoot_motion
@@ -33,7 +34,6 @@ from evomotion.studies.biped_kick.problem import (
     KickProblem,
     support_margin_batch,
 )
-from evomotion.studies.biped_kick.zmp import centre_of_pressure, floor_contacts
 
 LO = np.array([g[1] for g in GENES])
 HI = np.array([g[2] for g in GENES])

@@ -1,4 +1,5 @@
-"""ZMP stability check from simulated contact forces (paper 002, step 5).
+"""ZMP stability check from simulated contact forces (paper 002, step 5; the kick study and the
+studio's motion analysis use it).
 
 On flat ground the zero-moment point equals the centre of pressure (CoP) of the vertical
 ground-reaction forces (Vukobratović & Borovac, "Zero-Moment Point — Thirty Five Years of its
@@ -18,15 +19,19 @@ import mujoco
 import numpy as np
 
 
-def floor_contacts(model: mujoco.MjModel, data: mujoco.MjData,
-                   floor_geom: int) -> tuple[np.ndarray, np.ndarray]:
+def floor_contacts(model: mujoco.MjModel, data: mujoco.MjData, floor_geom: int,
+                   bodies: set[int] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """World positions ``[k, 3]`` and world forces ``[k, 3]`` (on the body, from the floor)
-    of the ``k`` active contacts that involve ``floor_geom``."""
+    of the ``k`` active contacts that involve ``floor_geom`` (and, with ``bodies``, a geom
+    of one of those bodies: the robot's feet, not a ball on the same floor)."""
     pos, force = [], []
     f6 = np.zeros(6)
     for i in range(data.ncon):
         c = data.contact[i]
         if floor_geom not in (c.geom1, c.geom2):
+            continue
+        other = c.geom2 if c.geom1 == floor_geom else c.geom1
+        if bodies is not None and int(model.geom_bodyid[other]) not in bodies:
             continue
         mujoco.mj_contactForce(model, data, i, f6)
         fw = c.frame.reshape(3, 3).T @ f6[:3]  # force of geom1 on geom2, world frame

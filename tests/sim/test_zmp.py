@@ -5,7 +5,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from evomotion.studies.biped_kick.zmp import (
+from evomotion.sim.zmp import (
     centre_of_pressure,
     convex_hull,
     floor_contacts,
