@@ -407,11 +407,12 @@ def test_the_3d_player_plays_in_the_browser_pauses_steps_and_slows(page, studio)
     assert 0.1 < rate < 0.5  # a quarter of real time
 
 
-def test_the_best_of_any_generation_is_replayed(page, studio):
+@pytest.mark.parametrize("name", ["humanoid-step", "humanoid-walk", "biped-kick"])
+def test_the_best_of_any_generation_is_replayed(page, studio, name):
     """Issue 35: a slider over the recorded generations (run.history_every) replays the best of
-    generation g in 3D (humanoid-step declares how a genome becomes a motion)."""
+    generation g in 3D (the study declares how a genome becomes a motion)."""
     base, root = studio
-    page.goto(f"{base}/run?name=humanoid-step")
+    page.goto(f"{base}/run?name={name}")
     page.wait_for_selector(".generation-step")
     _wait(lambda: "generation 5: its best" in page.locator(".generation-caption").inner_text(),
           30, "the last generation's best")

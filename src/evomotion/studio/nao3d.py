@@ -369,7 +369,8 @@ class NaoPlayer:
                 "tooltip": {"trigger": "axis", ":valueFormatter": "v => v == null ? '-' : "
                             "String(Number(Number(v).toPrecision(4)))"},
                 "grid": {"left": 60, "right": 60, "top": 35, "bottom": 30},
-                "xAxis": {"type": "value", "name": "t (s)", "min": 0, "max": float(t[-1])}}
+                "xAxis": {"type": "value", "name": "t (s)", "min": 0,
+                          "max": round(float(t[-1]), 3)}}
         pick = ui.select(list(angles), multiple=True, value=shown, label="angles (°)") \
             .classes("w-full motion-angles-pick").props("use-chips")
         angle_chart = ui.echart({**base, "yAxis": {"type": "value", "name": "°",

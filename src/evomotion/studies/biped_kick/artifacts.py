@@ -22,7 +22,7 @@ import numpy as np
 
 from evomotion.outfile import atomic_write_text, write_json
 from evomotion.run.context import RunContext
-from evomotion.sim.motion import format_motion
+from evomotion.sim.motion import Motion, format_motion
 from evomotion.studies.biped_kick.motion import ball_offset, named
 
 AIMS_DEG = (-30, -20, -10, 0, 10, 20, 30)
@@ -48,6 +48,11 @@ def write_motions(ctx: RunContext) -> None:
         motion = kick_motion(ctx.best_genome, np.radians(a))
         atomic_write_text(ctx.out_dir / "kicks" / f"aim_{a:+d}.motion", format_motion(motion),
                           "aimed kick", mkdir=True)
+
+
+def genome_motion(problem: Any, genome: np.ndarray) -> Motion:
+    """The straight kick of ``genome`` (the studio replays a generation's best with it)."""
+    return problem.kicker.kick_motion(genome)
 
 
 def on_checkpoint(ctx: RunContext) -> None:

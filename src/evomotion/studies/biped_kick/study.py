@@ -209,7 +209,8 @@ STUDY = Study(
                    scene=Scene("kick", lazy("evomotion.studies.biped_kick.scene", "load_scene"),
                                lazy("evomotion.studies.biped_kick.scene", "studio_state"),
                                look_x_m=0.1),
-                   table_title="the kick plan: the best kick aimed at each angle"),
+                   table_title="the kick plan: the best kick aimed at each angle",
+                   genome_motion=lazy(ARTIFACTS, "genome_motion")),
     smoke=(
         "algorithm.pop_size=4",
         "run.max_evaluations=0",

@@ -44,6 +44,14 @@ def best_record(ctx: RunContext) -> dict[str, Any]:
                        "total_s": assemble(parts).duration_s}}
 
 
+def genome_motion(problem: Any, genome: np.ndarray) -> Motion:
+    """The whole walk of ``genome`` as ``best.motion`` holds it (the studio replays a
+    generation's best with it)."""
+    if problem.gait.name != "foot":
+        return problem.motion(genome)
+    return assemble(walk_parts(genome, problem.cfg.walk_s))
+
+
 def write_motions(ctx: RunContext) -> Motion | None:
     """``best.motion`` and its three parts; the whole walk (``None`` without a best)."""
     if not _ok(ctx.best_genome):

@@ -8,7 +8,7 @@ import typer
 
 from evomotion.studies.base import Study, lazy_hook
 from evomotion.studies.humanoid_walk.problem import HumanoidWalkConfig, make_problem
-from evomotion.studies.view import StudyView
+from evomotion.studies.view import StudyView, lazy
 
 cli = typer.Typer(help="A NAO walk: 14 gait parameters evolved by CMA-ES.",
                   no_args_is_help=True)
@@ -54,7 +54,7 @@ STUDY = Study(
     finalize=lazy_hook(ARTIFACTS, "finalize"),
     best_record=lazy_hook(ARTIFACTS, "best_record"),
     cli=cli,
-    view=StudyView(motions=True),
+    view=StudyView(motions=True, genome_motion=lazy(ARTIFACTS, "genome_motion")),
     smoke=(
         "algorithm.pop_size=4",
         "problem.walk_s=0.5",
