@@ -427,30 +427,56 @@ def test_the_best_of_any_generation_is_replayed(page, studio, name):
 
 
 def test_drive_the_walk_controller_live_from_the_keyboard(page, studio):
-    """Issue 35: a walk controller driven live: a held key sets the command, the simulation
-    runs in real time on the server, restart (R) starts it again."""
+    """Issue 35: a walk controller driven live: a held key or the on-screen joystick sets the
+    command, the simulation runs in real time on the server, restart (R) starts it again. The
+    run is the smoke run with the kick study's shipped walk controller (a smoke-trained one
+    falls at once)."""
     import re
+    import shutil
+    from importlib.resources import files
 
-    base, _ = studio
-    page.goto(f"{base}/run?name=humanoid-omniwalk")
-    page.wait_for_selector(".drive-scene")
+    base, root = studio
+    run = root / "drive-shipped"
+    shutil.copytree(root / "humanoid-omniwalk", run)
+    for name in ("policy.json", "policy.npz"):
+        (run / name).write_bytes(
+            (files("evomotion.studies.biped_kick") / "default_walk" / name).read_bytes())
+    try:
+        page.goto(f"{base}/run?name=drive-shipped")
+        page.wait_for_selector(".drive-scene")
 
-    def status() -> str:
-        return page.locator(".drive-status").inner_text()
+        def status() -> str:
+            return page.locator(".drive-status").inner_text()
 
-    def sim_t() -> float:
-        m = re.search(r"t\s+([\d.]+) s", status())
-        return float(m.group(1)) if m else -1.0
+        def number(label: str) -> float:
+            m = re.search(label + r"\s+([-+\d.]+)", status())
+            return float(m.group(1)) if m else float("nan")
 
-    _wait(lambda: sim_t() > 0.3, 20, "the simulation to run")
-    page.locator("body").click(position={"x": 5, "y": 5})  # the page has the focus
-    page.keyboard.down("w")
-    _wait(lambda: "command +0.45" in status() or "FELL" in status(), 10,
-          lambda: f"the forward command ({status()})")
-    page.keyboard.up("w")
-    a = sim_t()
-    page.wait_for_timeout(1000)
-    assert "FELL" in status() or 0.6 < sim_t() - a < 1.4  # real time while standing
-    page.keyboard.press("r")
-    _wait(lambda: 0 <= sim_t() < 0.6 and "FELL" not in status(), 10, "the restart")
-
+        _wait(lambda: number("t") > 0.3, 20, "the simulation to run")
+        page.locator("body").click(position={"x": 5, "y": 5})  # the page has the focus
+        page.keyboard.down("w")
+        _wait(lambda: "command +0.45" in status(), 10, lambda: f"the command ({status()})")
+        _wait(lambda: number("x") > 0.2, 20, lambda: f"walking forward ({status()})")
+        page.keyboard.up("w")
+        assert "FELL" not in status()
+        a = number("t")
+        page.wait_for_timeout(1000)
+        assert 0.6 < number("t") - a < 1.4  # real time
+        page.keyboard.press("r")
+        _wait(lambda: 0 <= number("t") < 0.6 and abs(number("x")) < 0.05, 10, "the restart")
+        # the on-screen joystick pushed fully up: the forward command at its largest
+        pad = page.locator(".drive-joystick")
+        pad.scroll_into_view_if_needed()
+        box = pad.bounding_box()
+        cx, cy = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+        page.mouse.move(cx, cy)
+        page.mouse.down()
+        page.mouse.move(cx, cy - 60, steps=5)
+        _wait(lambda: "command +0.45" in status(), 10,
+              lambda: f"the joystick's forward command ({status()})")
+        page.mouse.up()
+        _wait(lambda: "command +0.00 +0.00 +0.00" in status(), 10,
+              lambda: f"the stop on release ({status()})")
+        assert "FELL" not in status()
+    finally:
+        shutil.rmtree(run, ignore_errors=True)

@@ -6,7 +6,8 @@ its body poses drawn in 3D about 20 times a second.
 Keys (while the page has focus): W / arrow up, S / arrow down: forward / backward at the
 controller's largest command; A / arrow left, D / arrow right: turn left / right; Q / E: step
 left / right; P or space: push; R: start again. A key held sets that component; released, it
-returns to the slider's value.
+returns to the slider's value. An on-screen joystick does the same with proportional commands
+(up: forward, left/right: turn, or step sideways with its switch).
 """
 
 from __future__ import annotations
@@ -52,6 +53,23 @@ def drive_panel(ui, run_dir: Path) -> None:
         ui.button("push", icon="back_hand", on_click=lambda: push()).classes("drive-push")
         ui.button("restart", icon="restart_alt", on_click=lambda: restart()) \
             .classes("drive-restart")
+    def stick(e) -> None:
+        """The on-screen joystick: up/down forward/back, left/right turn (or step sideways
+        with the 'sideways' switch), scaled to the controller's ranges; released: stop."""
+        if e.action == "end" or e.x is None or e.y is None:
+            for n in ("vx", "vy", "yaw_rate"):
+                held.pop(n, None)
+            return
+        turn = "vy" if sideways.value else "yaw_rate"
+        for n, v in (("vx", float(e.y)), (turn, -float(e.x))):
+            if n in walk.command_ranges:
+                lo, hi = walk.command_ranges[n]
+                held[n] = v * (hi if v > 0 else -lo)
+
+    with ui.row().classes("items-center gap-6"):
+        ui.joystick(on_move=stick, on_end=stick, color="#5470c6", size=90) \
+            .classes("w-40 h-40 bg-slate-100 rounded drive-joystick")
+        sideways = ui.switch("joystick left/right steps sideways").classes("drive-sideways")
     status = ui.label().classes("font-mono text-sm drive-status")
     geoms = geom_table(walk.model)
     bodies = sorted({g["body"] for g in geoms})
