@@ -20,7 +20,7 @@ from evomotion.run.config import resolve_config
 from evomotion.run.history import read_history
 from evomotion.run.runner import run_study
 from evomotion.studies import get_study
-from evomotion.studio import actions, data
+from evomotion.studio import actions, data, form_schema
 
 FN = ["problem.dim=4", "algorithm.pop_size=10"]
 
@@ -147,7 +147,7 @@ def test_form_fields_and_one_line_errors():
         ["run.seed=3", 'problem.name="rastrigin"']
     with pytest.raises(InputError) as e:
         actions.check_new_run("functions", None, ["algorithm.pop_size=-4"])
-    assert actions.field_of_error(str(e.value), keys) == "algorithm.pop_size"
+    assert form_schema.field_of_error(str(e.value), keys) == "algorithm.pop_size"
     assert actions.run_command("functions", "paper", ["run.seed=1"], tmp := "out")[-3:] == \
         ["--out", tmp, "--quiet"]
     for name in ("arm-ik", "grid-path", "quadruped-plan", "humanoid-step"):

@@ -126,9 +126,7 @@ def start_run(root: Path, study: str, preset: str | None, sets: list[str],
     """Check the settings (one-line error), then start the run in ``ROOT/name`` (or a
     stamped folder); ``(run folder, process)``."""
     check_new_run(study, preset, sets)
-    if name:
-        check_run_name(root, name)
-    out = make_run_folder(root, study, name)
+    out = make_run_folder(root, study, name)  # checks the name before making anything
     proc = _spawn(run_command(study, preset, sets, out), out)
     _await_start(proc, out)
     return out, proc
@@ -266,9 +264,3 @@ def form_errors(study: str, preset: str | None, sets: list[str],
     from evomotion.studio.form_schema import all_errors
 
     return all_errors(lambda s: check_new_run(study, preset, s), sets, keys)
-
-
-def field_of_error(message: str, keys: list[str]) -> str | None:
-    """The form key a one-line error names (longest match), if any."""
-    hits = [k for k in keys if k in message]
-    return max(hits, key=len) if hits else None

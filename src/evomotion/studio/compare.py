@@ -12,6 +12,8 @@ from urllib.parse import quote
 #: group-by choices offered whatever the runs: the study alone, or with these keys
 ALWAYS = ("study", "preset", "algorithm.name", "run.seed")
 MISSING = "-"
+#: the diff's rows: the study, the preset, then the sections' keys
+ORDER = {"study": 0, "preset": 1, "run": 2, "algorithm": 3, "problem": 4}
 
 
 def flat_config(raw: dict[str, Any]) -> dict[str, str]:
@@ -43,10 +45,7 @@ def differing_keys(flat: list[dict[str, str]]) -> list[str]:
     """The keys whose values are not the same in every run (a key some runs lack counts),
     ``study`` and ``preset`` first, then in section order."""
     keys = sorted({k for c in flat for k in c},
-                  key=lambda k: (k not in ("study", "preset"),
-                                 ["study", "preset", "run", "algorithm", "problem"].index(
-                                     k.split(".")[0]) if k.split(".")[0] in
-                                 ("study", "preset", "run", "algorithm", "problem") else 9, k))
+                  key=lambda k: (ORDER.get(k.split(".")[0], len(ORDER)), k))
     return [k for k in keys if len({c.get(k, MISSING) for c in flat}) > 1]
 
 

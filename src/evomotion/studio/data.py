@@ -340,6 +340,13 @@ class StatsTail:
         return [None if not np.isfinite(r[j]) else r[j] for r in self.rows[start:]
                 if len(r) > j]
 
+    def last(self, name: str) -> float | None:
+        """The last row's value of column ``name`` (None: missing or not finite)."""
+        if name not in self.columns or not self.rows:
+            return None
+        j, row = self.columns.index(name), self.rows[-1]
+        return row[j] if len(row) > j and np.isfinite(row[j]) else None
+
     def array(self, name: str) -> np.ndarray:
         return np.array([v if v is not None else np.nan for v in self.column(name)], float)
 

@@ -116,6 +116,12 @@ def common_keys(study: Any) -> set[str]:
     return keys
 
 
+def field_of_error(message: str, keys: list[str]) -> str | None:
+    """The form key a one-line error names (longest match), if any."""
+    hits = [k for k in keys if k in message]
+    return max(hits, key=len) if hits else None
+
+
 def all_errors(check: Any, sets: list[str], keys: list[str]) -> dict[str | None, str]:
     """Every error of a form at once: ``check(sets)`` raises the resolver's first one-line
     :class:`InputError`; each ``--set`` is then checked on its own (with the algorithm's),
@@ -135,6 +141,5 @@ def all_errors(check: Any, sets: list[str], keys: list[str]) -> dict[str | None,
         except InputError as e:
             errors[item.split("=", 1)[0]] = str(e)
     if not errors:
-        hits = [k for k in keys if k in first]
-        errors[max(hits, key=len) if hits else None] = first
+        errors[field_of_error(first, keys)] = first
     return errors

@@ -3,10 +3,10 @@ motion analysis): every hinge joint's angle, the torso's tilt and height, the ce
 which feet touch the floor, and the ZMP (the centre of pressure of the robot's floor contacts,
 ``sim/zmp.py``; on flat ground they are the same point).
 
-Computed from the same recorded frames the player shows (``qpos`` of the physics replay):
-``mj_fwdPosition`` per frame gives the centre of mass (``subtree_com`` of the robot's root
-body) and the contacts (a foot touches when a contact of one of its geoms is within
-:data:`TOUCH_M` of closing).
+Computed from the same recorded frames the player shows (the full states of the physics
+replay and the servo targets of the step after each): one ``mj_forward`` per frame gives the
+centre of mass (``subtree_com`` of the robot's root body), the contacts (a foot touches when a
+contact of one of its geoms is within :data:`TOUCH_M` of closing) and their forces.
 """
 
 from __future__ import annotations
@@ -24,24 +24,35 @@ def _root_body(model: mujoco.MjModel) -> int:
     return int(model.jnt_bodyid[free[0]]) if free.size else 1
 
 
-def traces(model: mujoco.MjModel, qpos: np.ndarray, feet: dict[str, str]) -> dict[str, Any]:
-    """Per frame of ``qpos[F, nq]``: ``joints`` {name: deg}, ``tilt_deg``, ``torso_z_m``,
-    ``com_m`` [F, 3] and ``contact`` {foot: 0/1}; ``feet`` maps a foot's name to its body."""
+def traces(model: mujoco.MjModel, states: np.ndarray, ctrl: np.ndarray,
+           feet: dict[str, str]) -> dict[str, Any]:
+    """Per frame of the full states ``states[F, ns]`` under the servo targets ``ctrl[F, nu]``,
+    one ``mj_forward`` each: ``joints`` {name: deg}, ``tilt_deg``, ``torso_z_m``, ``com_m``
+    [F, 3], ``contact`` {foot: 0/1} (``feet`` maps a foot's name to its body) and ``zmp_m``
+    [F, 2] (x, y; NaN while no foot carries load; only the robot's contacts with the floor
+    plane count, not a ball's)."""
+    from evomotion.sim.state import STATE_SPEC
+    from evomotion.sim.zmp import centre_of_pressure, floor_contacts
+
     data = mujoco.MjData(model)
     root = _root_body(model)
+    robot = set(np.flatnonzero(model.body_rootid == model.body_rootid[root]).tolist())
+    planes = np.flatnonzero(model.geom_type == mujoco.mjtGeom.mjGEOM_PLANE)
     hinge = [j for j in range(model.njnt) if model.jnt_type[j] == mujoco.mjtJoint.mjJNT_HINGE
              and model.jnt_bodyid[j] != 0 and mujoco.mj_id2name(
                  model, mujoco.mjtObj.mjOBJ_JOINT, j)]
     foot_body = {f: mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, b)
                  for f, b in feet.items()}
     foot_body = {f: b for f, b in foot_body.items() if b >= 0}
-    n = len(qpos)
-    com, tilt, z = np.empty((n, 3)), np.empty(n), np.empty(n)
+    n = len(states)
+    qpos, com, tilt, z = np.empty((n, model.nq)), np.empty((n, 3)), np.empty(n), np.empty(n)
+    zmp = np.full((n, 2), np.nan)
     contact = {f: np.zeros(n) for f in foot_body}
-    for k, q in enumerate(qpos):
-        data.qpos[:] = q
-        mujoco.mj_fwdPosition(model, data)
-        com[k] = data.subtree_com[root]
+    for k, (state, u) in enumerate(zip(states, ctrl, strict=True)):
+        mujoco.mj_setState(model, data, state, STATE_SPEC)
+        data.ctrl[:] = u
+        mujoco.mj_forward(model, data)
+        qpos[k], com[k] = data.qpos, data.subtree_com[root]
         up = data.xmat[root].reshape(3, 3)[2, 2]
         tilt[k], z[k] = np.degrees(np.arccos(np.clip(up, -1.0, 1.0))), data.xpos[root][2]
         for c in data.contact[:data.ncon]:
@@ -51,45 +62,18 @@ def traces(model: mujoco.MjModel, qpos: np.ndarray, feet: dict[str, str]) -> dic
             for f, b in foot_body.items():
                 if b in bodies:
                     contact[f][k] = 1.0
+        if planes.size:
+            pos, force = floor_contacts(model, data, int(planes[0]), robot)
+            zmp[k] = centre_of_pressure(pos, force)[0]
     joints = {mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j):
               np.degrees(qpos[:, model.jnt_qposadr[j]]) for j in hinge}
     return {"joints": joints, "tilt_deg": tilt, "torso_z_m": z, "com_m": com,
-            "contact": contact}
+            "contact": contact, "zmp_m": zmp}
 
 
-def zmp_trace(model: mujoco.MjModel, states: np.ndarray, ctrl: np.ndarray) -> np.ndarray:
-    """``[F, 2]`` ZMP (x, y; m) of each frame's full state under its servo targets (NaN while
-    no foot carries load); only the robot's contacts with the floor plane count."""
-    from evomotion.sim.state import STATE_SPEC
-    from evomotion.sim.zmp import centre_of_pressure, floor_contacts
-
-    planes = np.flatnonzero(model.geom_type == mujoco.mjtGeom.mjGEOM_PLANE)
-    out = np.full((len(states), 2), np.nan)
-    if not planes.size:
-        return out
-    root = _root_body(model)
-    robot = {b for b in range(model.nbody) if b == root or _descends(model, b, root)}
-    data = mujoco.MjData(model)
-    for k, (state, u) in enumerate(zip(states, ctrl, strict=True)):
-        mujoco.mj_setState(model, data, state, STATE_SPEC)
-        data.ctrl[:] = u
-        mujoco.mj_forward(model, data)
-        pos, force = floor_contacts(model, data, int(planes[0]), robot)
-        out[k] = centre_of_pressure(pos, force)[0]
-    return out
-
-
-def _descends(model: mujoco.MjModel, body: int, root: int) -> bool:
-    while body > 0:
-        if body == root:
-            return True
-        body = int(model.body_parentid[body])
-    return False
-
-
-def balance_series(tr: dict[str, Any], zmp: np.ndarray, t: np.ndarray) -> list[dict]:
+def balance_series(tr: dict[str, Any], t: np.ndarray) -> list[dict]:
     """ZMP and CoM, x and y (m), against time."""
-    out = []
+    out, zmp = [], tr["zmp_m"]
     for name, v in (("ZMP x", zmp[:, 0]), ("CoM x", tr["com_m"][:, 0]), ("ZMP y", zmp[:, 1]),
                     ("CoM y", tr["com_m"][:, 1])):
         pts = [[float(a), None if not np.isfinite(b) else round(float(b), 4)]

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import base64
 import contextlib
+import functools
 import struct
 from pathlib import Path
 from typing import Any
@@ -183,11 +184,10 @@ def _record(path: Any, scene: str, fps: float, hold_s: float) -> dict[str, Any]:
     fall = int(fall_step(torso_track(states[None]), *limits)[0])
     every = max(1, int(round(1.0 / (fps * dt))))
     steps = np.arange(0, nstep + 1, every)  # physics steps done before each frame
-    qpos = np.concatenate([nao.state_qpos_all(model, state0)[None],
-                           nao.state_qpos_all(model, states[steps[1:] - 1])])
     # each frame's full state and the targets of the step after it (the analysis's forces)
     frame_states = np.concatenate([np.asarray(state0, float)[None], states[steps[1:] - 1]])
     frame_ctrl = np.asarray(ctrl, float)[np.minimum(steps, len(ctrl) - 1)]
+    qpos = nao.state_qpos_all(model, frame_states)
     table = geom_table(model)
     geoms = np.array([g["id"] for g in table], dtype=int)
     bodies = np.array(sorted({g["body"] for g in table}), dtype=int)
@@ -201,8 +201,8 @@ def _record(path: Any, scene: str, fps: float, hold_s: float) -> dict[str, Any]:
         pos[k], mat[k] = data.geom_xpos[geoms], data.geom_xmat[geoms].reshape(-1, 3, 3)
         bpos[k], bmat[k] = data.xpos[bodies], data.xmat[bodies].reshape(-1, 3, 3)
     rec = {"t_s": steps * dt, "geoms": geoms, "pos": pos, "mat": mat, "bodies": bodies,
-           "body_pos": bpos, "body_mat": bmat, "qpos": np.asarray(qpos, float),
-           "frame_states": frame_states, "frame_ctrl": frame_ctrl}
+           "body_pos": bpos, "body_mat": bmat, "frame_states": frame_states,
+           "frame_ctrl": frame_ctrl}
     for a in rec.values():
         a.setflags(write=False)  # shared through the cache
     rec.update(scene=scene, frame_dt_s=every * dt, duration_s=nstep * dt,
@@ -216,7 +216,9 @@ def record_poses(motion_path: Any, scene: str = "nao", fps: float = 25.0,
     """Replay the motion (and hold its last pose ``hold_s``) and record, at ``fps``:
     ``t_s[T]`` (from 0), ``geoms[G]`` (the ids of :func:`geom_table`), their world poses
     ``pos[T, G, 3]`` and ``mat[T, G, 3, 3]``, the bodies holding them ``bodies[B]`` with
-    ``body_pos[T, B, 3]``/``body_mat[T, B, 3, 3]``; ``fell``, ``fall_time_s``, ``duration_s``
+    ``body_pos[T, B, 3]``/``body_mat[T, B, 3, 3]``; each frame's full physics state
+    ``frame_states[T, ns]`` and the servo targets of the step after it ``frame_ctrl[T, nu]``;
+    ``fell``, ``fall_time_s``, ``duration_s``
     (motion + hold), ``motion_s``, ``frame_dt_s``. Cached (read only) by file, mtime and
     arguments (the last few). ``motion_path`` may also be a
     :class:`~evomotion.sim.motion.Motion` (cached by its content)."""
@@ -288,6 +290,7 @@ def pose_stream(rec: dict[str, Any]) -> str:
     return base64.b64encode(out.tobytes()).decode()
 
 
+@functools.cache
 def _player_js() -> str:
     from importlib.resources import files
 
@@ -360,7 +363,8 @@ class NaoPlayer:
         from evomotion.studio import motion_traces as mt
 
         robot = _robot(scene) if scene.startswith("robot:") else load_robot("nao")
-        tr = mt.traces(load_scene_model(scene), self.rec["qpos"], dict(robot.spec.feet))
+        tr = mt.traces(load_scene_model(scene), self.rec["frame_states"],
+                       self.rec["frame_ctrl"], dict(robot.spec.feet))
         t = np.asarray(self.rec["t_s"], float)
         angles = mt.angle_series(tr, t)
         legs = [n for n in angles if any(k in n for k in ("KneePitch", "knee", "Knee"))][:2]
@@ -389,10 +393,8 @@ class NaoPlayer:
             {"type": "value", "name": "feet", "min": 0, "max": max(1, len(tr["contact"])),
              "interval": 1}, {"type": "value", "name": "m", "scale": True}],
             "series": mt.support_series(tr, t)}).classes("w-full h-56 motion-support")
-        zmp = mt.zmp_trace(load_scene_model(scene), self.rec["frame_states"],
-                           self.rec["frame_ctrl"])
         balance = ui.echart({**base, "yAxis": {"type": "value", "name": "m", "scale": True},
-                             "series": mt.balance_series(tr, zmp, t)}) \
+                             "series": mt.balance_series(tr, t)}) \
             .classes("w-full h-56 motion-balance")
         return [angle_chart, support, balance]
 

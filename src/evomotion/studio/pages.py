@@ -10,6 +10,7 @@ from urllib.parse import quote
 
 from evomotion.errors import InputError
 from evomotion.studio import actions, data, run_files, run_tabs
+from evomotion.studio.run_files import duration_text
 
 STATUS_COLOURS = {"running": "blue", "finished": "green", "interrupted": "orange",
                   "failed": "red", "stale": "deep-orange", "remote": "purple",
@@ -39,9 +40,7 @@ def _fmt_row(r: data.RunSummary) -> dict:
 #: the curves' tooltip: values to 6 significant digits (they printed 16), no trailing zeros;
 #: the axis value (generation, evaluations) as a whole number (it read "84.00"); NiceGUI
 #: evaluates keys starting with ':' as JavaScript
-TOOLTIP = {"trigger": "axis",
-           ":valueFormatter": "v => (v == null || !isFinite(v)) ? '-' : "
-                              "String(Number(Number(v).toPrecision(6)))",
+TOOLTIP = {"trigger": "axis", ":valueFormatter": run_tabs.VALUE_FORMATTER,
            "axisPointer": {"label": {":formatter": "p => String(Math.round(p.value))"}}}
 #: a series with at most this many finite points shows its points as symbols
 FEW_POINTS = 30
@@ -83,19 +82,6 @@ def compare_series(groups: list[dict]) -> tuple[list[dict], list[str]]:
                            "data": [list(p) for p in zip(c["evaluations"], c["best"])]})
             legend.append(c["run"])
     return series, legend
-
-
-def duration_text(seconds: float) -> str:
-    """A run's duration for people: 3 significant digits under a minute (0.039 s, 12.3 s;
-    it read "0.0 s" for a 0.039 s run), then minutes and seconds, then hours and minutes."""
-    s = float(seconds)
-    if not s >= 0 or s == float("inf"):
-        return ""
-    if s < 60:
-        return f"{s:.3g} s"
-    if s < 3600:
-        return f"{int(s // 60)} min {int(s % 60):02d} s"
-    return f"{int(s // 3600)} h {int(s % 3600 // 60):02d} min"
 
 
 def header(ui, title: str) -> None:
@@ -246,17 +232,18 @@ def build(root: Path) -> None:
 
         def tick() -> None:
             refresh_view()
-            if st.update() or seen.get("status") == "running":
+            new = st.update()
+            status()  # first: the summary's time left is only for a running run
+            if new:
                 redraw()
                 metrics_redraw()
-                last = {k: (st.column(k)[-1:] or [None])[0]
-                        for k in ("generation", "evaluations", "wall_s", "evals_per_s")}
-                summary.set_text(run_files.progress(
-                    cfg, last["generation"], last["evaluations"], last["wall_s"],
-                    last["evals_per_s"], seen.get("status") == "running") +
-                    f", {len(st.rows)} rows")
                 show_log()
-            status()
+            if new or seen["status"] != seen.get("summarised"):
+                seen["summarised"] = seen["status"]
+                summary.set_text(run_files.progress(
+                    cfg, st.last("generation"), st.last("evaluations"), st.last("wall_s"),
+                    st.last("evals_per_s"), seen["status"] == "running") +
+                    f", {len(st.rows)} rows")
 
         def act(fn) -> None:
             try:

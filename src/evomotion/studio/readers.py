@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import os
 import queue
+import re
 import stat
 import threading
 from collections.abc import Callable
@@ -100,6 +101,15 @@ def read_range(path: Path, start: int, n: int) -> tuple[bytes, int]:
         return b"", 0
     finally:
         os.close(fd)
+
+
+_NUMBER = re.compile(r"([+-]?\d+(?:\.\d+)?)")
+
+
+def natural_key(name: str) -> tuple:
+    """Sort key reading signed numbers in ``name`` by value (text parts as text)."""
+    parts = _NUMBER.split(name)
+    return tuple((0, float(p), "") if i % 2 else (1, 0.0, p) for i, p in enumerate(parts))
 
 
 def head_tail(path: Path, n: int = 16384, head: int = 4096) -> tuple[str, str]:

@@ -11,10 +11,11 @@ from __future__ import annotations
 
 import math
 import os
-import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+
+from evomotion.studio.readers import natural_key
 
 MAX_FILES = 500
 MAX_DEPTH = 3
@@ -42,10 +43,6 @@ def kind_of(name: str) -> str:
     return "other"
 
 
-def _natural(text: str) -> tuple:
-    return tuple(int(t) if t.isdigit() else t for t in re.split(r"(\d+)", text))
-
-
 def run_files(run_dir: Path, limit: int = MAX_FILES) -> list[RunFile]:
     """The run's regular files (no links, no checkpoints), at most ``limit``, sorted by kind
     (videos first) and name; unreadable entries are left out."""
@@ -54,7 +51,7 @@ def run_files(run_dir: Path, limit: int = MAX_FILES) -> list[RunFile]:
     def walk(folder: Path, prefix: str, depth: int) -> None:
         try:
             with os.scandir(folder) as it:
-                entries = sorted(it, key=lambda e: _natural(e.name))
+                entries = sorted(it, key=lambda e: natural_key(e.name))
         except OSError:
             return
         for e in entries:
@@ -76,7 +73,20 @@ def run_files(run_dir: Path, limit: int = MAX_FILES) -> list[RunFile]:
 
     walk(Path(run_dir), "", 1)
     order = [k for k, _ in KINDS] + ["other"]
-    return sorted(out, key=lambda f: (order.index(f.kind), _natural(f.rel)))
+    return sorted(out, key=lambda f: (order.index(f.kind), natural_key(f.rel)))
+
+
+def duration_text(seconds: float) -> str:
+    """A run's duration for people: 3 significant digits under a minute (0.039 s, 12.3 s;
+    it read "0.0 s" for a 0.039 s run), then minutes and seconds, then hours and minutes."""
+    s = float(seconds)
+    if not s >= 0 or s == float("inf"):
+        return ""
+    if s < 60:
+        return f"{s:.3g} s"
+    if s < 3600:
+        return f"{int(s // 60)} min {int(s % 60):02d} s"
+    return f"{int(s // 3600)} h {int(s % 3600 // 60):02d} min"
 
 
 def size_text(n: int) -> str:
@@ -104,8 +114,6 @@ def progress(config: dict[str, Any], generation: float | None, evaluations: floa
     """``generation 12 of 100, 1,300 evaluations, 540 evaluations/s, about 1 min 20 s left``:
     the time left from the run's limits (generations, evaluations, wall time) at its mean pace
     so far; only while it runs."""
-    from evomotion.studio.pages import duration_text
-
     run = config.get("run", {}) if isinstance(config.get("run"), dict) else {}
     gens, evals, wall = (_pos(run.get(k)) for k in ("generations", "max_evaluations",
                                                     "wall_seconds"))

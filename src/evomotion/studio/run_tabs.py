@@ -15,6 +15,10 @@ MAX_IMAGES = 12
 #: columns of stats.csv that are not metrics to plot against generations
 NOT_METRICS = ("generation",)
 DEFAULT_METRICS = ("best_so_far", "mean")
+#: a tooltip's number: 6 significant digits, no trailing zeros, '-' when missing (NiceGUI
+#: evaluates option keys starting with ':' as JavaScript)
+VALUE_FORMATTER = ("v => (v == null || !isFinite(v)) ? '-' : "
+                   "String(Number(Number(v).toPrecision(6)))")
 
 
 def file_url(root: Path, run_dir: Path, rel: str, download: bool = False) -> str:
@@ -121,9 +125,7 @@ def metrics_panel(ui, st, csv_url: str):
         ui.link("stats.csv", csv_url).classes("metric-csv").props("download")
     chart = ui.echart({
         "animation": False, "legend": {"top": 0},
-        "tooltip": {"trigger": "axis",
-                    ":valueFormatter": "v => (v == null || !isFinite(v)) ? '-' : "
-                                       "String(Number(Number(v).toPrecision(6)))"},
+        "tooltip": {"trigger": "axis", ":valueFormatter": VALUE_FORMATTER},
         "toolbox": {"feature": {"saveAsImage": {"title": "PNG"}, "dataZoom": {}}},
         "dataZoom": [{"type": "inside"}, {"type": "slider", "height": 18, "bottom": 0}],
         "grid": {"left": 70, "right": 30, "top": 40, "bottom": 60},

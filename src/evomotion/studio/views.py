@@ -24,7 +24,13 @@ import numpy as np
 
 from evomotion.errors import InputError
 from evomotion.studies.view import NothingYetError
-from evomotion.studio.readers import bounded_files, check_robot, one_line, regular_size
+from evomotion.studio.readers import (
+    bounded_files,
+    check_robot,
+    natural_key,
+    one_line,
+    regular_size,
+)
 
 #: the largest files a view reads (the studio stays well below 1 GB for any run folder)
 MAX_HISTORY_BYTES = 256 << 20
@@ -78,15 +84,6 @@ def motions_of(run_dir: Path) -> list[str]:
     order: signed numbers by value, so the kick's ``aim_-30`` ... ``aim_+30``)."""
     found = [p.relative_to(run_dir).as_posix() for p in bounded_files(run_dir, ".motion")]
     return sorted(found, key=lambda n: (n != "best.motion", natural_key(n)))
-
-
-_NUMBER = re.compile(r"([+-]?\d+(?:\.\d+)?)")
-
-
-def natural_key(name: str) -> tuple:
-    """Sort key reading signed numbers in ``name`` by value (text parts as text)."""
-    parts = _NUMBER.split(name)
-    return tuple((0, float(p), "") if i % 2 else (1, 0.0, p) for i, p in enumerate(parts))
 
 
 def render(study: str, root: Path, run_dir: Path) -> None:
