@@ -24,7 +24,7 @@ VIEW = {"arm-ik": ".view-image", "grid-path": ".view-image", "quadruped-plan": "
         "humanoid-step": ".nao-scene", "humanoid-walk": ".nao-scene",
         "biped-kick": ".kick-table", "humanoid-repertoire": ".repertoire-map",
         "functions": "text=no view of its own", "gym": "text=no view of its own",
-        "humanoid-balance": "text=no view of its own",
+        "humanoid-balance": ".played-caption:has-text('unseen world 0')",
         "humanoid-omniwalk": ".drive-scene"}
 
 
@@ -351,18 +351,35 @@ def test_clone_a_run_name_it_and_extend_it_from_the_page(page, studio):
     page.wait_for_selector(".name-error:has-text('exists already')")
     assert page.locator(".start-button").is_disabled()
     page.locator(".new-name input").fill("my-clone")
+    page.locator(".new-tags input").fill("cloned, bad/tag")
+    page.wait_for_selector(".name-error:has-text('bad/tag')")
+    assert page.locator(".start-button").is_disabled()
+    page.locator(".new-tags input").fill("cloned, e2e")
     _wait(lambda: page.locator(".name-error").inner_text() == "", 10, "the name accepted")
     page.locator(".start-button").click()
     page.wait_for_url("**/run?name=my-clone")
     run = root / "my-clone"
     try:
+        assert (run / "tags.txt").read_text() == "cloned\ne2e\n"
         _wait(lambda: "finished" in page.locator(".run-status").inner_text(), 60, "the run")
+        # tags edited on the run page, then shown beside the name and filtered by in the list
+        page.locator(".run-tags input").fill("cloned extended")
+        page.locator(".tags-button").click()
+        page.wait_for_selector(".run-tags-message:has-text('saved')")
+        assert (run / "tags.txt").read_text() == "cloned\nextended\n"
         last = int(read_stats(run / "stats.csv")["generation"][-1])
         page.locator(".extend-to input").fill(str(last + 2))
         page.locator(".extend-button").click()
         _wait(lambda: int(read_stats(run / "stats.csv")["generation"][-1]) == last + 2, 60,
               lambda: f"the extended run ({page.locator('.action-message').inner_text()})")
         assert "resumed at generation" in (run / "log.txt").read_text()
+        page.goto(f"{base}/?tag=extended")
+        page.wait_for_selector(".runs-table .run-tag")
+        _wait(lambda: page.locator(".runs-count").inner_text() == "1 runs tagged extended",
+              20, lambda: page.locator(".runs-count").inner_text())
+        row = page.locator(".runs-table tbody tr").first.inner_text()
+        assert "my-clone" in row and "cloned" in row and "extended" in row
+        page.screenshot(path=str(root / "runs-tags.png"))
     finally:
         shutil.rmtree(run, ignore_errors=True)
 
@@ -407,7 +424,49 @@ def test_the_3d_player_plays_in_the_browser_pauses_steps_and_slows(page, studio)
     assert 0.1 < rate < 0.5  # a quarter of real time
 
 
-@pytest.mark.parametrize("name", ["humanoid-step", "humanoid-walk", "biped-kick"])
+def test_the_balance_policy_plays_in_a_chosen_world_and_push(page, studio):
+    """A policy study's view: the exported policy in an unseen world, shown as the closed loop
+    played it (no open-loop replay), with its analysis; another world and push on request."""
+    base, root = studio
+    page.goto(f"{base}/run?name=humanoid-balance")
+    page.wait_for_selector(".played-caption:has-text('unseen world 0')")
+    page.wait_for_selector(".nao-scene")
+    page.wait_for_selector(".motion-support canvas")
+    page.locator(".played-world input").fill("7")
+    page.locator(".played-push").click()
+    page.locator(".q-menu .q-item", has_text="5 N s").click()
+    page.locator(".played-button").click()
+    _wait(lambda: "unseen world 7: a 5.00 N s push" in
+          page.locator(".played-caption").inner_text(), 30,
+          lambda: page.locator(".played-caption").inner_text())
+    _wait(lambda: len(page.evaluate("Object.keys(window.evoPlayers || {})")) >= 1, 30,
+          "the player")
+
+
+def test_two_motions_ghosted_in_one_scene(page, studio):
+    """Issue 35: a second motion of the run played in the same scene, translucent, on the same
+    clock (the kick's aimed motions: the +30 kick ghosted over the straight one)."""
+    base, root = studio
+    page.goto(f"{base}/run?name=biped-kick")
+    page.wait_for_selector(".motion-ghost")
+    players = "() => Object.values(window.evoPlayers || {}).map(p => p.tracks)"
+    _wait(lambda: len(page.evaluate(players)) >= 1, 30, "the player")
+    page.locator(".motion-ghost").first.click()
+    options = page.locator(".q-menu .q-item")
+    _wait(lambda: options.count() > 1, 10, "the ghost choices")
+    assert options.first.inner_text() == "(none)"
+    options.nth(options.count() - 1).click()  # the last motion in natural order
+    _wait(lambda: 2 in page.evaluate(players), 30, "a player with two motions")
+    assert "ghost" in page.locator(".nao-fell").first.inner_text()
+    probe = "() => Object.values(window.evoPlayers).find(p => p.tracks == 2).applied"
+    n0 = page.evaluate(probe)
+    page.wait_for_timeout(600)
+    assert page.evaluate(probe) > n0  # both move on the same clock
+    page.screenshot(path=str(root / "ghost.png"), full_page=True)
+
+
+@pytest.mark.parametrize("name", ["humanoid-step", "humanoid-walk", "biped-kick",
+                                  "humanoid-repertoire"])
 def test_the_best_of_any_generation_is_replayed(page, studio, name):
     """Issue 35: a slider over the recorded generations (run.history_every) replays the best of
     generation g in 3D (the study declares how a genome becomes a motion)."""
@@ -424,6 +483,11 @@ def test_the_best_of_any_generation_is_replayed(page, studio, name):
           30, "generation 0")
     _wait(lambda: page.evaluate("Object.keys(window.evoPlayers || {}).length") >= 2, 30,
           "a second player (best.motion and the generation's best)")
+    page.locator(".generation-ghost").click()  # the last generation's best beside it
+    _wait(lambda: "ghost: generation 5's best" in
+          page.locator(".generation-caption").inner_text(), 30, "the ghost's caption")
+    _wait(lambda: 2 in page.evaluate("Object.values(window.evoPlayers).map(p => p.tracks)"),
+          30, "the generation player with a ghost")
 
 
 def test_drive_the_walk_controller_live_from_the_keyboard(page, studio):

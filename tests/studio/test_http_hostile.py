@@ -116,6 +116,22 @@ def test_bad_names_in_actions_are_400(hostile_studio, action):
         assert get(f"{base}/api/{action}?name={name}", API, "POST")[0] == 400, name
 
 
+@pytest.mark.parametrize("query", ["/api/extend?name=fine&generations=ten",
+                                   "/api/extend?name=fine&generations=1.5",
+                                   "/api/extend?name=fine", "/api/stop", "/api/resume?x=1"])
+def test_mistyped_or_missing_parameters_are_one_line_400(hostile_studio, query):
+    """FastAPI answers a bad query parameter with a 422 document; the studio's API says it in
+    one line, as every other refusal (issue 35)."""
+    base, *_ = hostile_studio
+    status, body = get(f"{base}{query}", API, "POST")
+    assert status == 400
+    error = json.loads(body)["error"]
+    assert "\n" not in error and len(error) < 300
+    assert ("generations" if "extend" in query else "name") in error, error
+    if "=ten" in query:
+        assert "'ten'" in error and "integer" in error
+
+
 def test_a_dev_zero_robot_page_answers_without_bloating(hostile_studio):
     base, root, proc, _ = hostile_studio
     get(f"{base}/run?name=fine&token={TOKEN}")  # warm: the page's modules are loaded
@@ -151,14 +167,18 @@ def test_api_start_starts_a_run_and_refuses_bad_bodies(hostile_studio):
     base, root, *_ = hostile_studio
     for body, msg in (([1, 2], "expected a JSON object"), ({"study": 3}, "study:"),
                       ({"study": "no-such-study"}, "no-such-study"),
-                      ({"study": "functions", "sets": "run.generations=1"}, "sets:")):
+                      ({"study": "functions", "sets": "run.generations=1"}, "sets:"),
+                      ({"study": "functions", "tags": "a"}, "tags:"),
+                      ({"study": "functions", "tags": ["ok", "a b"]}, "tag 'a b'")):
         code, res = _post_json(f"{base}/api/start", body)
         assert code == 400 and msg in res["error"] and "\n" not in res["error"], (body, res)
     code, res = _post_json(f"{base}/api/start", {"study": "functions",
-                                                 "sets": ["run.generations=2"]})
+                                                 "sets": ["run.generations=2"],
+                                                 "tags": ["api", "smoke"]})
     assert code == 200, res
     run = root / res["name"]
     assert (run / "config.toml").is_file() and res["pid"] > 0
+    assert (run / "tags.txt").read_text() == "api\nsmoke\n"
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline and not (run / "best.json").exists():
         time.sleep(0.2)

@@ -31,8 +31,9 @@ def test_every_declared_view_is_well_formed(name):
         return
     assert isinstance(view, StudyView)
     assert view.motions or view.frames is not None or view.table or view.archive_map or \
-        view.drive
+        view.drive or view.played is not None
     assert view.frames is None or callable(view.frames)
+    assert view.played is None or callable(view.played)
     assert view.genome_motion is None or (callable(view.genome_motion) and view.motions)
     if view.scene is not None:
         assert isinstance(view.scene, Scene) and view.scene.name != "nao"

@@ -76,6 +76,20 @@ class Scene:
 
 
 @dataclass(frozen=True)
+class Played:
+    """A closed-loop episode as the studio's 3D player shows it (no replay: a policy's motion
+    is only what it did in that world): the full physics state ``states[T, ns]`` every
+    ``frame_dt_s`` from the start, the servo targets in force after each ``ctrl[T, nu]``, when
+    it fell (``None``: it stayed up) and a caption (the world, its push)."""
+
+    states: np.ndarray
+    ctrl: np.ndarray
+    frame_dt_s: float
+    fall_time_s: float | None
+    caption: str = ""
+
+
+@dataclass(frozen=True)
 class StudyView:
     """The studio's views of a study's runs (all optional)."""
 
@@ -92,6 +106,9 @@ class StudyView:
     genome_motion: Callable[[Problem, np.ndarray], Any] | None = None
     #: the run's walk controller (policy.json with vx, vy, yaw_rate commands) driven live
     drive: bool = False
+    #: ``played(run_dir, world, push_ns)``: the run's exported policy played in unseen world
+    #: ``world`` (a push of ``push_ns`` N s, or ``None``: the world's own), a :class:`Played`
+    played: Callable[[Path, int, float | None], Played] | None = None
 
 
 def lazy(module: str, name: str) -> Callable[..., Any]:

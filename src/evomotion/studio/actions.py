@@ -122,11 +122,16 @@ def make_run_folder(root: Path, study: str, name: str = "") -> Path:
 
 
 def start_run(root: Path, study: str, preset: str | None, sets: list[str],
-              name: str = "") -> tuple[Path, Any]:
+              name: str = "", tags: tuple[str, ...] = ()) -> tuple[Path, Any]:
     """Check the settings (one-line error), then start the run in ``ROOT/name`` (or a
-    stamped folder); ``(run folder, process)``."""
+    stamped folder) with ``tags`` (:mod:`.tags`); ``(run folder, process)``."""
+    from evomotion.studio.tags import check_tags, write_tags
+
     check_new_run(study, preset, sets)
+    tags = check_tags(tags)
     out = make_run_folder(root, study, name)  # checks the name before making anything
+    if tags:
+        write_tags(out, tags)
     proc = _spawn(run_command(study, preset, sets, out), out)
     _await_start(proc, out)
     return out, proc

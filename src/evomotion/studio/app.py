@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from evomotion.errors import InputError
+from evomotion.studio.readers import one_line
 
 COOKIE = "evomotion_token"
 HEADER = "X-Evomotion-Token"
@@ -65,6 +66,17 @@ def add_api(app: Any, root: Path) -> None:
     def fail(e: Exception) -> Any:
         return JSONResponse({"error": str(e)}, 400)
 
+    from fastapi.exception_handlers import request_validation_exception_handler
+    from fastapi.exceptions import RequestValidationError
+
+    @app.exception_handler(RequestValidationError)
+    async def bad_parameters(request, exc):
+        # a missing or mistyped query parameter of an /api route (``generations=ten``): one
+        # line and 400, as every other refusal, not FastAPI's 422 document
+        if not request.url.path.startswith("/api/"):
+            return await request_validation_exception_handler(request, exc)
+        return JSONResponse({"error": validation_line(exc.errors())}, 400)
+
     @app.get("/files")
     def files(path: str, download: int = 0):
         try:
@@ -106,19 +118,34 @@ def add_api(app: Any, root: Path) -> None:
         # the globals, and a local ``Request`` made ``request`` a query parameter (every POST
         # answered 422; issue 35)
         try:
-            study, preset, sets, name = _start_body(body)
-            out, proc = actions.start_run(root, study, preset, sets, name)
+            study, preset, sets, name, tags = _start_body(body)
+            out, proc = actions.start_run(root, study, preset, sets, name, tags)
         except InputError as e:
             return fail(e)
         return {"name": out.relative_to(root).as_posix(), "pid": proc.pid}
 
 
-def _start_body(body: Any) -> tuple[str, str | None, list[str], str]:
-    """(study, preset, sets, name) of a ``/api/start`` JSON body, or one-line
+def validation_line(errors: Any) -> str:
+    """FastAPI's validation errors as one line: ``generations: expected a valid integer,
+    got 'ten'`` (each parameter once)."""
+    parts = []
+    for e in list(errors)[:4]:
+        loc = e.get("loc") or ("?",)
+        what = str(e.get("msg", "invalid")).replace("Input should be", "expected")
+        got = "" if e.get("type") == "missing" else f", got {one_line(repr(e.get('input')), 60)}"
+        parts.append(f"{loc[-1]}: {one_line(what, 120)}{got}")
+    return "; ".join(parts) or "invalid parameters"
+
+
+def _start_body(body: Any) -> tuple[str, str | None, list[str], str, tuple[str, ...]]:
+    """(study, preset, sets, name, tags) of a ``/api/start`` JSON body, or one-line
     :class:`InputError`."""
+    from evomotion.studio.tags import check_tags
+
     if not isinstance(body, dict):
         raise InputError("expected a JSON object {\"study\": ..., \"preset\": ..., "
-                         "\"sets\": [...], \"name\": ...}")
+                         "\"sets\": [...], \"name\": ..., \"tags\": [...]}")
+    tags = check_tags(body.get("tags") or [])
     study, preset, sets = body.get("study"), body.get("preset"), body.get("sets", [])
     name = body.get("name") or ""
     if not isinstance(name, str):
@@ -129,7 +156,7 @@ def _start_body(body: Any) -> tuple[str, str | None, list[str], str]:
         raise InputError("preset: expected a name or null")
     if not isinstance(sets, list) or not all(isinstance(x, str) for x in sets):
         raise InputError("sets: expected a list of 'key=value' strings")
-    return study, preset, sets, name
+    return study, preset, sets, name, tags
 
 
 def serve(root: Path, host: str = "127.0.0.1", port: int = 8765,

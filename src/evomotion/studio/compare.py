@@ -36,9 +36,17 @@ def flat_config(raw: dict[str, Any]) -> dict[str, str]:
 
 
 def configs(run_dirs: list[Path]) -> list[dict[str, str]]:
+    """Each run's :func:`flat_config` and its tags (key ``tags``: a group-by choice and a diff
+    row where they differ)."""
     from evomotion.studio.data import read_config
+    from evomotion.studio.tags import read_tags
 
-    return [flat_config(read_config(d)[1]) for d in run_dirs]
+    out = []
+    for d in run_dirs:
+        flat = flat_config(read_config(d)[1])
+        flat["tags"] = " ".join(read_tags(d)) or MISSING
+        out.append(flat)
+    return out
 
 
 def differing_keys(flat: list[dict[str, str]]) -> list[str]:

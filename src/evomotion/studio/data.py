@@ -34,6 +34,7 @@ from evomotion.run.lock import lock_owner as read_lock_owner
 from evomotion.run.stats import step_values
 from evomotion.studio import readers
 from evomotion.studio.readers import head_tail, one_line
+from evomotion.studio.tags import read_tags
 
 TAIL_BYTES = 16384
 #: how deep below RUNS_DIR run folders are looked for (experiments nest their runs)
@@ -61,6 +62,7 @@ class RunSummary:
     duration_s: float
     resumable: bool
     pid: int | None
+    tags: tuple[str, ...] = ()  # tags.txt (studio/tags.py)
 
     def row(self) -> dict[str, Any]:
         """The summary as JSON-safe values (non-finite numbers are ``None``)."""
@@ -193,7 +195,7 @@ def summarize(root: Path, run_dir: Path) -> RunSummary:
         stop_reason=reason, generation=_int(row.get("generation"), -1),
         evaluations=_int(row.get("evaluations"), 0), best=_num(row.get("best_so_far")),
         started=_started(run_dir), duration_s=_num(row.get("wall_s"), 0.0),
-        resumable=is_resumable(run_dir, status), pid=pid)
+        resumable=is_resumable(run_dir, status), pid=pid, tags=read_tags(run_dir))
 
 
 def unreadable(name: str, why: str) -> RunSummary:

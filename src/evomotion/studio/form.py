@@ -13,6 +13,7 @@ from urllib.parse import quote
 
 from evomotion.errors import InputError
 from evomotion.studio import actions, form_schema
+from evomotion.studio.tags import parse_tags
 
 
 def build(root: Path) -> None:
@@ -44,11 +45,14 @@ def build(root: Path) -> None:
                             label="algorithm.name").classes("w-56 new-algorithm")
             run_name = ui.input("run name (optional)", placeholder=f"{study}-YYYYmmdd-HHMMSS") \
                 .classes("w-72 new-name")
+            run_tags = ui.input("tags (optional)", placeholder="baseline, lr-sweep") \
+                .classes("w-72 new-tags")
         if note:
             ui.label(note).classes("text-slate-700 clone-note")
         pick.on_value_change(lambda e: ui.navigate.to(f"/new?study={quote(e.value)}"))
         name_error = ui.label().classes("text-red-700 text-xs name-error")
         run_name.on_value_change(lambda _: check())
+        run_tags.on_value_change(lambda _: check())
         fields_box = ui.column().classes("w-full")
         error_top = ui.label().classes("text-red-700 form-error")
         command = ui.code("", language="bash").classes("w-full new-command")
@@ -71,6 +75,7 @@ def build(root: Path) -> None:
             try:
                 if name:
                     actions.check_run_name(root, name)
+                parse_tags(run_tags.value or "")
                 name_error.set_text("")
             except InputError as e:
                 name_error.set_text(f"error: {e}")
@@ -123,7 +128,8 @@ def build(root: Path) -> None:
             try:  # waits until the run wrote its config.toml: off the event loop
                 out, _proc = await run.io_bound(actions.start_run, root, study,
                                                 preset.value or None, current_sets(),
-                                                (run_name.value or "").strip())
+                                                (run_name.value or "").strip(),
+                                                parse_tags(run_tags.value or ""))
             except InputError as e:
                 start.enable()
                 error_top.set_text(f"error: {e}")

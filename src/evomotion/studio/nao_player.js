@@ -5,7 +5,9 @@
 // every animation frame, interpolating between recorded frames (linear positions, slerped
 // rotations): no websocket message per frame, so playback is as fast as the browser renders.
 // Controls: play/pause, frame stepping, a scrub slider, speed (slow motion), the time.
-// window.evoPlayers[sceneId] holds each player's state ("applied" counts the poses set).
+// cfg.ghost: a second motion's poses (its own translucent groups) on the same clock.
+// window.evoPlayers[sceneId] holds each player's state ("applied" counts the poses set,
+// "tracks" the motions shown).
 (function () {
   if (window.evoStartPlayer) return;
   window.evoPlayers = window.evoPlayers || {};
@@ -17,22 +19,44 @@
     return new Float32Array(bytes.buffer);
   }
 
+  // one recorded motion's body groups: their meshes, poses and scratch quaternions
+  function track(comp, spec) {
+    const meshes = spec.groups.map((g) => comp.objects.get(g)?.mesh);
+    if (meshes.some((m) => !m)) return null;
+    return { meshes, f: decode(spec.data), n: spec.nframe, nb: spec.groups.length,
+             qa: meshes.map((m) => m.quaternion.clone()),
+             qb: meshes.map((m) => m.quaternion.clone()) };
+  }
+
+  // the track's bodies at time t (s): frames interpolated; after its end, its last frame
+  function place(tr, t, dt) {
+    const { meshes, f, n, nb, qa, qb } = tr;
+    const x = Math.min(Math.max(t / dt, 0), n - 1);
+    const k = Math.floor(x), k1 = Math.min(k + 1, n - 1), a = x - k;
+    for (let b = 0; b < nb; b++) {
+      const i = (k * nb + b) * 7, j = (k1 * nb + b) * 7;
+      meshes[b].position.set(f[i] + a * (f[j] - f[i]), f[i + 1] + a * (f[j + 1] - f[i + 1]),
+                             f[i + 2] + a * (f[j + 2] - f[i + 2]));
+      qa[b].set(f[i + 3], f[i + 4], f[i + 5], f[i + 6]);
+      qb[b].set(f[j + 3], f[j + 4], f[j + 5], f[j + 6]);
+      meshes[b].quaternion.slerpQuaternions(qa[b], qb[b], a);
+    }
+  }
+
   window.evoStartPlayer = function (cfg, tries) {
     tries = tries || 0;
     const comp = getElement(cfg.scene);
-    const meshes = comp && comp.objects ? cfg.groups.map((g) => comp.objects.get(g)?.mesh) : [];
-    if (!comp || meshes.length !== cfg.groups.length || meshes.some((m) => !m)) {
+    const specs = cfg.ghost ? [cfg, cfg.ghost] : [cfg];
+    const tracks = comp && comp.objects ? specs.map((s) => track(comp, s)) : [null];
+    if (!comp || tracks.some((t) => !t)) {
       if (tries < 200) setTimeout(() => window.evoStartPlayer(cfg, tries + 1), 50);
       return;
     }
     const root = document.getElementById(cfg.controls);
     const q = (sel) => root.querySelector(sel);
-    const f = decode(cfg.data);
-    const n = cfg.nframe, nb = cfg.groups.length;
-    const qa = meshes.map((m) => m.quaternion.clone());
-    const qb = meshes.map((m) => m.quaternion.clone());
+    const n = Math.max(...tracks.map((t) => t.n));
     const st = { playing: true, speed: 1, t: 0, last: performance.now(), applied: 0, comp,
-                 duration: cfg.duration };
+                 duration: cfg.duration, tracks: tracks.length };
     window.evoPlayers[cfg.scene] = st;
 
     // a cursor on each analysis chart at the playing time
@@ -58,15 +82,7 @@
 
     function apply(t) {
       const x = Math.min(Math.max(t / cfg.dt, 0), n - 1);
-      const k = Math.floor(x), k1 = Math.min(k + 1, n - 1), a = x - k;
-      for (let b = 0; b < nb; b++) {
-        const i = (k * nb + b) * 7, j = (k1 * nb + b) * 7;
-        meshes[b].position.set(f[i] + a * (f[j] - f[i]), f[i + 1] + a * (f[j + 1] - f[i + 1]),
-                               f[i + 2] + a * (f[j + 2] - f[i + 2]));
-        qa[b].set(f[i + 3], f[i + 4], f[i + 5], f[i + 6]);
-        qb[b].set(f[j + 3], f[j + 4], f[j + 5], f[j + 6]);
-        meshes[b].quaternion.slerpQuaternions(qa[b], qb[b], a);
-      }
+      for (const tr of tracks) place(tr, t, cfg.dt);
       st.applied++;
       q(".nao-time").textContent =
         `t = ${t.toFixed(2).padStart(5)} s / ${cfg.duration.toFixed(2)} s`;

@@ -9,7 +9,7 @@ from pathlib import Path
 from urllib.parse import quote
 
 from evomotion.errors import InputError
-from evomotion.studio import actions, data, run_files, run_tabs
+from evomotion.studio import actions, data, run_files, run_tabs, tags
 from evomotion.studio.run_files import duration_text
 
 STATUS_COLOURS = {"running": "blue", "finished": "green", "interrupted": "orange",
@@ -101,7 +101,7 @@ def build(root: Path) -> None:
     from evomotion.studio import form, views
 
     @ui.page("/")
-    def runs_page(study: str = "") -> None:
+    def runs_page(study: str = "", tag: str = "") -> None:
         header(ui, "runs")
         if study not in STUDIES:
             study = ""
@@ -116,6 +116,8 @@ def build(root: Path) -> None:
         with ui.row().classes("items-center w-full"):
             pick = ui.select({"": "all studies", **{s: s for s in STUDIES}}, value=study,
                              label="study").classes("w-56 study-filter")
+            tag_pick = ui.select({"": "all tags"}, value="", label="tag") \
+                .classes("w-56 tag-filter")
             count = ui.label().classes("text-slate-500 runs-count")
         table = ui.table(columns=cols, rows=[], row_key="name",
                          pagination={"rowsPerPage": 50, "sortBy": "started",
@@ -124,18 +126,34 @@ def build(root: Path) -> None:
             <q-td :props="props"><q-badge :color="COLOURS[props.row.status]">
             {{ props.value }}</q-badge></q-td>""".replace("COLOURS", json.dumps(STATUS_COLOURS)
                                                           .replace('"', "'")))
+        table.add_slot("body-cell-name", """
+            <q-td :props="props">{{ props.value }}
+            <q-badge v-for="t in props.row.tags" :key="t" color="blue-grey-2"
+             text-color="blue-grey-10" class="q-ml-xs run-tag">{{ t }}</q-badge></q-td>""")
         table.on("rowClick", lambda e: ui.navigate.to(_run_url(e.args[1]["name"])))
         last: list = []
+        every: list = []  # all rows of the study filter, before the tag filter
 
         def show(rows: list) -> None:
-            if rows != last:
-                last[:] = rows
-                table.rows = rows
+            every[:] = rows
+            tags = sorted({t for r in rows for t in r["tags"]})
+            wanted = tag_pick.value if tag_pick.value in tags else ""
+            options = {"": "all tags", **{t: t for t in tags}}
+            if options != tag_pick.options:
+                tag_pick.set_options(options, value=wanted)
+            shown = [r for r in rows if not wanted or wanted in r["tags"]]
+            if shown != last:
+                last[:] = shown
+                table.rows = shown
                 table.update()
-                count.set_text(f"{len(rows)} runs")
+                count.set_text(f"{len(shown)} runs" + (f" tagged {wanted}" if wanted else ""))
 
         def rows_now() -> list:
             return [_fmt_row(r) for r in data.list_runs(root, pick.value or None)]
+
+        if tag:
+            tag_pick.set_options({"": "all tags", tag: tag}, value=tag)
+        tag_pick.on_value_change(lambda _: show(list(every)))
 
         busy = {"on": False}
 
@@ -177,6 +195,7 @@ def build(root: Path) -> None:
             ui.link("clone", f"/new?study={quote(study)}&clone={quote(name)}") \
                 .classes("clone-link")
             msg = ui.label().classes("text-red-700 action-message")
+        tags.editor(ui, run_dir)
         with ui.row().classes("items-center"):
             xaxis = ui.toggle({"generation": "generation", "evaluations": "evaluations"},
                               value="generation").classes("x-axis")

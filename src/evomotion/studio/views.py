@@ -5,6 +5,10 @@
   the study's ``scene`` (the kick's: with the ball);
 - ``table``: a JSON list of rows in the run folder (the kick's aimed kicks);
 - ``archive_map``: the repertoire's heat map, where a click plays that cell's motion;
+- ``genome_motion``: the best of any recorded generation replayed (a second motion ghosted
+  over it on request);
+- ``played``: a policy's closed-loop episode in a chosen unseen world and push, shown as it
+  happened;
 - ``frames``: the study's own matplotlib figures stepped through (a generation's population,
   a plan's states), rendered on the server; the study reads the run's files through
   :class:`StudioRunFiles`, which keeps the studio's size limits.
@@ -38,6 +42,7 @@ MAX_ARCHIVE_BYTES = 128 << 20
 MAX_JSON_BYTES = 32 << 20  # a study's JSON document (a plan)
 MAX_TABLE_BYTES = 4 << 20
 MAX_MAP_BINS = 4096  # bins per measure drawn in the repertoire's heat map
+NO_GHOST = "(none)"  # the ghost picker's "no second motion"
 
 
 def _png(fig) -> str:
@@ -106,7 +111,13 @@ def render(study: str, root: Path, run_dir: Path) -> None:
         if view.frames is not None:
             _frames(ui, view.frames, StudioRunFiles(study, run_dir))
         if view.genome_motion is not None:
-            _generations(ui, StudioRunFiles(study, run_dir), view)
+            from evomotion.studio.replays import generations
+
+            generations(ui, StudioRunFiles(study, run_dir), view, scene or scene_of(run_dir))
+        if view.played is not None:
+            from evomotion.studio.replays import played
+
+            played(ui, run_dir, view.played, scene_of(run_dir))
         if view.drive:
             from evomotion.studio.drive import drive_panel
 
@@ -179,17 +190,23 @@ def _nao(ui, run_dir: Path, motions: list[str], scene: str | None = None,
     if not motions:
         ui.label("no .motion in this run yet (written at checkpoints and at the end)")
         return None
-    pick = ui.select(motions, value=chosen or motions[0], label="motion") \
-        .classes("w-96 motion-pick")
+    with ui.row().classes("items-center"):
+        pick = ui.select(motions, value=chosen or motions[0], label="motion") \
+            .classes("w-96 motion-pick")
+        ghost = ui.select([NO_GHOST, *motions], value=NO_GHOST,
+                          label="ghost: a second motion in the same scene") \
+            .classes("w-96 motion-ghost")
     box = ui.column().classes("w-full")
 
-    def show(name: str) -> None:
+    def show() -> None:
         box.clear()
         with box:
-            NaoPlayer(run_dir / name, scene=scene)
+            NaoPlayer(run_dir / pick.value, scene=scene,
+                      ghost=None if ghost.value == NO_GHOST else run_dir / ghost.value)
 
-    pick.on_value_change(lambda e: show(e.value))
-    show(pick.value)
+    pick.on_value_change(lambda _: show())
+    ghost.on_value_change(lambda _: show())
+    show()
     return pick
 
 
@@ -287,40 +304,6 @@ def _repertoire(ui, run_dir: Path, scene: str | None = None,
         on_point_click=clicked).classes("w-full h-96 repertoire-map")
     message = ui.label("").classes("text-slate-700 repertoire-message")
     shown["pick"] = _nao(ui, run_dir, motions, scene=scene)
-
-
-def _generations(ui, files: StudioRunFiles, view: Any) -> None:
-    """The best individual of any recorded generation replayed in 3D (a slider over the
-    generations of ``population.bin``)."""
-    from evomotion.studio.nao3d import NaoPlayer
-
-    ui.label("the best of each recorded generation").classes("font-bold mt-4")
-    try:
-        hist = files.history()
-    except NothingYetError as e:
-        ui.label(one_line(e)).classes("text-slate-600 generations-empty")
-        return
-    problem = files.problem()
-    sense = getattr(problem, "sense", "max")
-    scene = view.scene.name if view.scene is not None else scene_of(files.run_dir)
-    box = ui.column().classes("w-full")
-    caption = ui.label().classes("text-slate-600 generation-caption")
-
-    def show(k: int) -> None:
-        gen, pop, fit = hist[int(k)]
-        f = np.where(np.isfinite(fit), fit, -np.inf if sense == "max" else np.inf)
-        i = int(np.argmax(f) if sense == "max" else np.argmin(f))
-        caption.set_text(f"generation {gen}: its best, fitness {fit[i]:.6g} "
-                         f"(individual {i} of {len(fit)})")
-        box.clear()
-        with box:
-            NaoPlayer(view.genome_motion(problem, pop[i]), scene=scene, analysis=False)
-
-    with ui.row().classes("items-center"):
-        slider = ui.slider(min=0, max=len(hist) - 1, value=len(hist) - 1,
-                           on_change=lambda e: show(e.value)).classes("w-96 generation-step")
-        ui.label(f"{len(hist)} generations recorded")
-    show(slider.value)
 
 
 def _stepper(ui, n: int, draw, label: str = "generation") -> None:

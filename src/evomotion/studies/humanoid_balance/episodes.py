@@ -69,7 +69,8 @@ def run_episodes(sim: ClosedLoopSimulator, spec: PolicySpec, params: np.ndarray,
         acts[rows] += 1
         return a
 
-    res = sim.run(policy, worlds, nstep, record_states=record_states)
+    res = sim.run(policy, worlds, nstep, record_states=record_states,
+                  record_targets=record_states)
     up = res.fall_step / nstep
     q = res.torso[:, :, 3:7]
     up_z = 1.0 - 2.0 * (q[..., 1] ** 2 + q[..., 2] ** 2)

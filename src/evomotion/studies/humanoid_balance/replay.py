@@ -69,6 +69,44 @@ def replay_policy(path: str | Path, stress: int | None = None, seed: int = 0,
     return summary, skipped
 
 
+def played(run_dir: str | Path, world: int = 0, push_ns: float | None = None) -> Any:
+    """The run's exported policy in unseen world ``world`` (the ``world``-th of ``compare
+    --seed 0``; ``push_ns``: every push that many N s, ``None``: the world's own) as the
+    studio's 3D player shows it (:class:`~evomotion.studies.view.Played`): the states every
+    control period up to the fall, the targets sent (in force ``latency`` later)."""
+    from evomotion.core.checks import check_number
+    from evomotion.studies.humanoid_balance.episodes import push_range
+    from evomotion.studies.view import Played
+
+    check_options(1, push_ns, 0)
+    check_number("world", world, lo=0, hi=MAX_WORLDS - 1, integer=True)
+    problem, policy, _ = load_run(run_dir, "run")
+    try:
+        scaled = None if push_ns is None else push_range(problem.robot, push_ns, push_ns)[0]
+        seeds = eval_seeds(int(world) + 1, 0)[-1:]
+        ep = play_policy(problem, policy, seeds, scaled, record_states=True)
+        w = problem.worlds(seeds, scaled)[0]
+        res, sim = ep.result, problem.sim
+    finally:
+        problem.sim.close()
+    assert res.states is not None and res.targets is not None
+    n = int(np.ceil(res.steps[0] / sim.k)) + 1  # up to the fall (then the state repeats)
+    full = np.broadcast_to(sim.nominal, (n, sim.model.nu)).copy()
+    full[:n - 1, sim.columns] = res.targets[0, :n - 1]
+    full[n - 1] = full[max(n - 2, 0)]
+    if sim.followers.size:
+        full[:, sim.followers[:, 0]] = full[:, sim.followers[:, 1]]
+    push = np.asarray(w.push_ns, float)
+    fell = bool(res.fell[0])
+    caption = (f"unseen world {int(world)}: a {np.linalg.norm(push):.2f} N s push toward "
+               f"{np.degrees(np.arctan2(push[1], push[0])):.0f}° (0° = the way it faces) at "
+               f"{w.push_time_s:.2f} s; " +
+               (f"fell at {float(res.fall_time_s[0]):.2f} s" if fell else
+                f"stayed up for {problem.cfg.duration_s:g} s"))
+    return Played(res.states[0, :n], full, res.control_dt_s,
+                  float(res.fall_time_s[0]) if fell else None, caption)
+
+
 def replay_policy_command(path: Path, json_out: bool = False, video: Path | None = None,
                           stress: int | None = None, seed: int = 0,
                           push_ns: float | None = None) -> None:

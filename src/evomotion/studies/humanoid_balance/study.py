@@ -21,7 +21,7 @@ from evomotion.studies.humanoid_balance.problem import (
     HumanoidBalanceProblem,
 )
 from evomotion.studies.policy_search import policy_algorithms
-from evomotion.studies.view import lazy
+from evomotion.studies.view import StudyView, lazy
 
 ARTIFACTS = "evomotion.studies.humanoid_balance.artifacts"
 
@@ -65,6 +65,8 @@ STUDY = Study(
     replay_run=lazy("evomotion.studies.humanoid_balance.replay", "replay_policy_command"),
     run_record=None,
     cli=cli,
+    # the studio plays the exported policy in any unseen world, with any push
+    view=StudyView(played=lazy("evomotion.studies.humanoid_balance.replay", "played")),
     smoke=("problem.duration_s=0.2", "problem.eval_episodes=1", "problem.episodes=1",
            "problem.threads=1", "algorithm.pop_size=4", "algorithm.top_directions=0"),
 )

@@ -40,6 +40,12 @@ def ready_motion() -> Motion:
     return Motion(nao.JOINTS, t, q)
 
 
+def genome_motion(problem: Any, genome: np.ndarray) -> Motion:
+    """One genome's step as the motion the archive's cells export (ready pose to ready pose;
+    another robot's channels): the studio replays a generation's best with it."""
+    return problem.motion(np.asarray(genome, dtype=float))
+
+
 def best_record(ctx: RunContext) -> dict[str, Any]:
     if ctx.best_genome is None or not np.all(np.isfinite(ctx.best_genome)):
         return {}

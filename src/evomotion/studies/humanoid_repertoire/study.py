@@ -14,7 +14,7 @@ from evomotion.studies.humanoid_repertoire.problem import (
     HumanoidRepertoireConfig,
     make_problem,
 )
-from evomotion.studies.view import StudyView
+from evomotion.studies.view import StudyView, lazy
 
 cli = typer.Typer(help="A repertoire of steps (dx, dy, dtheta) of a NAO or another biped "
                        "(--robot) by CMA-ME.",
@@ -144,7 +144,9 @@ STUDY = Study(
     best_record=lazy_hook(ARTIFACTS, "best_record"),
     cli=cli,
     # the rule write_repertoire exports by: a fallen elite scores below FALLEN_OBJECTIVE + 1
-    view=StudyView(motions=True, archive_map=True, archive_fallen_at=FALLEN_OBJECTIVE + 1.0),
+    # (and the best step of any recorded generation, replayed from the ready pose)
+    view=StudyView(motions=True, archive_map=True, archive_fallen_at=FALLEN_OBJECTIVE + 1.0,
+                   genome_motion=lazy(ARTIFACTS, "genome_motion")),
     smoke=("algorithm.emitters=2", "algorithm.pop_size=4", "problem.hold_s=0.2",
            ),
 )
