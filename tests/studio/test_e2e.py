@@ -375,7 +375,7 @@ def test_clone_a_run_name_it_and_extend_it_from_the_page(page, studio):
         assert "resumed at generation" in (run / "log.txt").read_text()
         page.goto(f"{base}/?tag=extended")
         page.wait_for_selector(".runs-table .run-tag")
-        _wait(lambda: page.locator(".runs-count").inner_text() == "1 runs tagged extended",
+        _wait(lambda: page.locator(".runs-count").inner_text() == "1 run tagged extended",
               20, lambda: page.locator(".runs-count").inner_text())
         row = page.locator(".runs-table tbody tr").first.inner_text()
         assert "my-clone" in row and "cloned" in row and "extended" in row

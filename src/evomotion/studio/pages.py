@@ -146,7 +146,8 @@ def build(root: Path) -> None:
                 last[:] = shown
                 table.rows = shown
                 table.update()
-                count.set_text(f"{len(shown)} runs" + (f" tagged {wanted}" if wanted else ""))
+                n = len(shown)
+                count.set_text(f"{n} run{'s' * (n != 1)}" + (f" tagged {wanted}" if wanted else ""))
 
         def rows_now() -> list:
             return [_fmt_row(r) for r in data.list_runs(root, pick.value or None)]
