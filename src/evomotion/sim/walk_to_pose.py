@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 
+from evomotion.core.angles import wrap_angle as wrap
 from evomotion.errors import InputError
 from evomotion.sim.policy_player import PolicyPlayer
 from evomotion.sim.rollout import fall_step, torso_track
@@ -45,10 +46,6 @@ SPEED_SCALE = 0.8  # of each command range: a margin below the controller's top 
 #: 2 deg while it crouched, against 0.3 cm after one more period)
 SETTLED_STEPS = 1
 WIDEN_S = 2.0  # near the goal, the tolerances grow by themselves every this many seconds
-
-
-def wrap(a: float) -> float:
-    return float((a + math.pi) % (2 * math.pi) - math.pi)
 
 
 def command_to(pose: np.ndarray, goal: np.ndarray, vmax: np.ndarray,

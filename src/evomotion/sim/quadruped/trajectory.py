@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from evomotion.core.angles import wrap_angle as wrap
 from evomotion.sim.quadruped.ik import legs_ik
 from evomotion.sim.quadruped.model import QuadrupedSpec
 
@@ -52,11 +53,6 @@ class Timeline:
 def smoothstep(u: np.ndarray) -> np.ndarray:
     u = np.clip(u, 0.0, 1.0)
     return u * u * (3.0 - 2.0 * u)
-
-
-def wrap(angle: np.ndarray | float) -> np.ndarray | float:
-    """Angle in [-pi, pi)."""
-    return (np.asarray(angle) + math.pi) % (2 * math.pi) - math.pi
 
 
 def plan_arrays(states: list[dict]) -> tuple[np.ndarray, np.ndarray]:

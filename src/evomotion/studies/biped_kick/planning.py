@@ -31,6 +31,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from evomotion.core.angles import wrap_angle_upper as wrap
+
 
 @dataclass(frozen=True)
 class WalkModel:
@@ -46,11 +48,6 @@ class KickPlan:
     kick_point: np.ndarray  # [2]
     kick_heading: float  # rad
     control_points: np.ndarray  # [4, 2] Bézier P0..P3
-
-
-def wrap(a: np.ndarray | float) -> np.ndarray:
-    """Angles wrapped into (-pi, pi]."""
-    return -((-np.asarray(a, dtype=float) + np.pi) % (2 * np.pi) - np.pi)
 
 
 def kick_costs(robot: np.ndarray, ball: np.ndarray, goal: np.ndarray, radius_m: float = 0.2,

@@ -125,10 +125,6 @@ def field_state(problem: Any, pose: np.ndarray, ball: np.ndarray) -> np.ndarray:
     return nao.get_state(m, data)
 
 
-def _wrap(a: float) -> float:
-    return float(wrap(a))
-
-
 def play(problem: Any, genome: np.ndarray, robot: np.ndarray, ball: np.ndarray,
          target: np.ndarray, video: Path | None = None,
          repertoire: Path | None = None) -> dict[str, Any]:
@@ -186,7 +182,7 @@ def play(problem: Any, genome: np.ndarray, robot: np.ndarray, ball: np.ndarray,
     pose = run.pose()
     ball_now = nao.state_qpos(problem.model, run.state, scene.BALL_JOINT, 2)
     psi_t = float(np.arctan2(*(target - ball_now)[::-1]))  # the walk may have nudged the ball
-    aim = float(np.clip(_wrap(psi_t - pose[2]), -max_aim, max_aim))
+    aim = float(np.clip(wrap(psi_t - pose[2]), -max_aim, max_aim))
     c, s = np.cos(pose[2]), np.sin(pose[2])
     d = ball_now - pose[:2]
     local = np.array([c * d[0] + s * d[1], -s * d[0] + c * d[1]])
@@ -206,7 +202,7 @@ def play(problem: Any, genome: np.ndarray, robot: np.ndarray, ball: np.ndarray,
         "fell": bool(run.fell),
         "aim_deg": float(np.degrees(aim)),
         "planned_stand_pose": [float(plan.pose[0]), float(plan.pose[1]),
-                               _wrap(float(plan.pose[2]))],
+                               wrap(float(plan.pose[2]))],
         "stand_pose": [float(x) for x in pose],
         "ball_placement_error_m": placement,
         "kick_time_s": float(nstep * problem.dt), "roll_time_s": roll_s,

@@ -73,10 +73,6 @@ class SceneRun:
         return np.array([t.xyz[0, 0, 0], t.xyz[0, 0, 1], t.yaw_rad[0, 0]])
 
 
-def _wrap(a: float) -> float:
-    return float(wrap(a))
-
-
 def waypoints(ctrl: np.ndarray, goal: np.ndarray, spacing_m: float = 0.15) -> np.ndarray:
     """Poses ``[k, 3]`` every ``spacing_m`` along the Bézier ``ctrl`` (heading = tangent),
     ending with ``goal`` (x, y, heading)."""
@@ -133,7 +129,7 @@ def walk(run: SceneRun, repertoire: Path, ctrl: np.ndarray, goal: np.ndarray,
 
         now = float(cost(pose))
         close = (math.hypot(*(goals[k][:2] - pose[:2])) < (tol_m if last else 0.08)
-                 and abs(math.degrees(_wrap(goals[k][2] - pose[2]))) < (tol_deg if last
+                 and abs(math.degrees(wrap(goals[k][2] - pose[2]))) < (tol_deg if last
                                                                            else 20.0))
         if close and not last:
             k += 1
@@ -159,7 +155,7 @@ def walk(run: SceneRun, repertoire: Path, ctrl: np.ndarray, goal: np.ndarray,
     pose = run.pose()
     return {"steps": len(taken), "cells": taken,
             "position_error_m": float(math.hypot(*(goal[:2] - pose[:2]))),
-            "heading_error_deg": float(math.degrees(abs(_wrap(goal[2] - pose[2])))),
+            "heading_error_deg": float(math.degrees(abs(wrap(goal[2] - pose[2])))),
             "pose": [float(v) for v in pose]}
 
 

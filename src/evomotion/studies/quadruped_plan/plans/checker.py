@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 from scipy.spatial import ConvexHull
 
+from evomotion.core.angles import wrap_angle as _wrap
 from evomotion.studies.quadruped_plan.worlds.check import WorldGeometry
 
 TOL = 1e-6  # [units] / [rad]
@@ -24,10 +25,6 @@ RULE_COUNT = {"A": 11, "B": 27}
 
 class PlanViolationError(Exception):
     """A plan state or transition that breaks the model; ``str()`` is one line."""
-
-
-def _wrap(a: float) -> float:
-    return (a + math.pi) % (2 * math.pi) - math.pi
 
 
 class _Geometry:
