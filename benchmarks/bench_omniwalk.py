@@ -3,7 +3,7 @@ settings (timed), then ``humanoid-omniwalk compare`` on unseen perturbed worlds 
 commands and the top-speed tests; a table per seed and the means over seeds.
 
     python benchmarks/bench_omniwalk.py --seeds 0 1 2 --out /tmp/omniwalk \
-        [--worlds 100] [--duration 60] [--reuse]
+        [--worlds 100] [--duration 60] [--reuse] [--set problem.command_feedback=true]
 
 ``--reuse`` measures runs already in ``OUT/seed-N`` instead of evolving them again. One run at
 a time, all cores (2 here); write the printed table into benchmarks/README.md and
@@ -22,10 +22,11 @@ from pathlib import Path
 import numpy as np
 
 
-def evolve(out: Path, seed: int) -> float:
+def evolve(out: Path, seed: int, sets: tuple[str, ...] = ()) -> float:
     t0 = time.perf_counter()
+    extra = [a for s in sets for a in ("--set", s)]
     subprocess.run([sys.executable, "-m", "evomotion.cli", "run", "humanoid-omniwalk", "--out",
-                    str(out), "--set", f"run.seed={seed}", "--quiet"], check=True)
+                    str(out), "--set", f"run.seed={seed}", *extra, "--quiet"], check=True)
     return time.perf_counter() - t0
 
 
@@ -36,6 +37,8 @@ def main() -> int:
     ap.add_argument("--worlds", type=int, default=100)
     ap.add_argument("--duration", type=float, default=60.0)
     ap.add_argument("--reuse", action="store_true")
+    ap.add_argument("--set", action="append", default=[], dest="sets",
+                    help="another KEY=VALUE for every run (problem.command_feedback=true)")
     args = ap.parse_args()
     from evomotion.studies.humanoid_omniwalk.compare import compare, table
 
@@ -44,7 +47,7 @@ def main() -> int:
         run = args.out / f"seed-{seed}"
         wall = None
         if not (args.reuse and (run / "policy.npz").is_file()):
-            wall = evolve(run, seed)
+            wall = evolve(run, seed, tuple(args.sets))
         t0 = time.perf_counter()
         res = compare(run, args.worlds, args.duration, seed=0)
         res["evolve_wall_s"] = wall

@@ -37,6 +37,9 @@ SPECS = {
     "structured-tape-only": StructuredSpec(2, 2, phase_columns=(1, 0), harmonics=0),
     "structured-commanded": StructuredSpec(7, 3, phase_columns=(5, 2), harmonics=2,
                                            command_columns=(6, 0, 3), clip_obs=4.0),
+    "structured-command-feedback": StructuredSpec(7, 3, phase_columns=(5, 2), harmonics=2,
+                                                  command_columns=(6, 3),
+                                                  command_feedback=True, clip_obs=4.0),
 }
 
 
@@ -181,6 +184,7 @@ def test_not_a_zip_and_bad_targets_are_one_line(tmp_path) -> None:
     (lambda a: a["tape_coef"].__setitem__((0, 0), np.inf), "'tape_coef' holds a non-finite"),
     (lambda a: a["feedback_gain"].__setitem__((0, 0), np.nan), "'feedback_gain' holds NaN"),
     (lambda a: a.update(n_layers=np.array(1)), "'n_layers' is not a key"),
+    (lambda a: a.update(command_gain=np.zeros((2, 5))), "'command_gain' must be a matrix"),
     (lambda a: a.update(output_tanh=np.array(True)), "'output_tanh' must be 0"),
 ])
 def test_bad_structured_files_are_one_line_errors(tmp_path, change, message) -> None:
@@ -194,7 +198,7 @@ def test_structured_policy_py_is_exactly_the_numpy_policy(tmp_path) -> None:
     """On observations whose phase columns lie on the unit circle (as the simulator's do), the
     numpy-only policy.py returns exactly spec.act's numbers, one row or a batch."""
 
-    for name in ("structured", "structured-commanded"):
+    for name in ("structured", "structured-commanded", "structured-command-feedback"):
         _exactly_the_numpy_policy(tmp_path / name, SPECS[name])
 
 

@@ -182,3 +182,33 @@ def test_bad_command_columns_are_one_line(cols) -> None:
     with pytest.raises(ValueError, match="command_columns") as e:
         StructuredSpec(4, 1, phase_columns=(0, 1), command_columns=cols)
     assert "\n" not in str(e.value)
+
+
+def test_command_feedback_shifts_the_command_the_tape_reads() -> None:
+    """With command feedback the tape reads c + G x (x: the normalised observation without the
+    phase columns, clipped); G = 0 is the plain command-modulated tape, bit for bit."""
+    rng = np.random.default_rng(8)
+    plain = StructuredSpec(6, 2, phase_columns=(0, 1), harmonics=2, command_columns=(4, 2),
+                           clip_obs=3.0)
+    fed = StructuredSpec(6, 2, phase_columns=(0, 1), harmonics=2, command_columns=(4, 2),
+                         clip_obs=3.0, command_feedback=True)
+    assert fed.n_params == plain.n_params + 2 * 4
+    p = rng.normal(size=plain.n_params)
+    G = rng.normal(size=(2, 4))
+    mean, std = rng.normal(size=6), rng.uniform(0.5, 2.0, 6)
+    obs = rng.normal(size=(5, 6)) * 2
+    phi = rng.uniform(0, 2 * np.pi, 5)
+    obs[:, 0], obs[:, 1] = np.sin(phi), np.cos(phi)
+    zero = np.concatenate([p, np.zeros(8)])
+    rows = np.ones((5, 1))
+    assert np.array_equal(fed.act(zero * rows, obs, mean, std), plain.act(p * rows, obs, mean, std))
+    x = np.clip((obs - mean) / std, -3, 3)[:, [2, 3, 4, 5]]
+    shifted = obs.copy()
+    shifted[:, [4, 2]] += x @ G.T  # what the tape reads; K x still sees the raw command
+    got = fed.act(np.concatenate([p, G.ravel()]) * rows, obs, mean, std)
+    (C, _), (K, _) = plain.unflatten(p)
+    want = np.clip(plain.offset + plain.scale * (plain.features(shifted) @ C.T + x @ K.T),
+                   plain.low, plain.high)
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)
+    with pytest.raises(ValueError, match="command_feedback"):
+        StructuredSpec(6, 2, phase_columns=(0, 1), command_feedback=True)

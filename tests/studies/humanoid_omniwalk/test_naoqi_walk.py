@@ -33,24 +33,27 @@ KEY = "evomotion/walk_command"
 A, B = [0.2, 0.05, 0.3], [-0.1, 0.0, -0.6]
 
 
-def _walk(tmp_path, change_step: int | None):
+def _walk(tmp_path, change_step: int | None, command_feedback: bool = False):
     """(naoqi folder, frames, simulator targets, commands seen) of a 1.6 s walk."""
-    p = OmniWalkProblem(OmniWalkConfig(duration_s=1.6, threads=1))
+    p = OmniWalkProblem(OmniWalkConfig(duration_s=1.6, threads=1,
+                                       command_feedback=command_feedback))
     m = p.robot.model
     rng = np.random.default_rng(4)
-    params = p.ctl.initial_params() + np.concatenate(
-        [np.zeros(p.policy.layer_shapes()[0][0] * p.policy.layer_shapes()[0][1]),
-         rng.normal(0, 0.001, p.policy.act_dim * (p.obs_dim - 2))])
+    (tape, _), (gain, _), *fed = p.policy.unflatten(p.ctl.initial_params())
+    gain = gain + rng.normal(0, 0.001, gain.shape)
     mean, std = rng.normal(0, 0.1, p.obs_dim), rng.uniform(0.5, 2.0, p.obs_dim)
     # the NAO has no joint velocity sensor: the runner differences positions, so the gains on
     # joint_vel are 0 here (what is compared is everything else)
-    (tape, _), (gain, _) = p.policy.unflatten(params)
     vel = [i for i, n in enumerate(n for k, n in enumerate(p.obs_names)
                                    if k in set(p.policy.feedback_columns))
            if n.startswith("joint_vel")]
-    gain = gain.copy()
-    gain[:, vel] = 0.0
-    params = p.policy.flatten([(tape, None), (gain, None)])
+    layers = [(tape, None), (gain, None)]
+    if fed:  # command feedback: the tape reads c + G x
+        G = rng.normal(0, 0.01, fed[0][0].shape)
+        layers.append((G, None))
+    for W, _ in layers[1:]:
+        W[:, vel] = 0.0
+    params = p.policy.flatten(layers)
     C = math.ceil(p.nstep / p.control_steps)
     t = np.arange(C) * PERIOD_S
     ramp = p.cfg.ramp_s
@@ -83,15 +86,18 @@ def _walk(tmp_path, change_step: int | None):
     return tmp_path / "naoqi", frames, res.targets[0], np.array(seen)[:, -3:]
 
 
-@pytest.mark.parametrize("change_step", [None, 40])
-def test_runner_walks_the_simulators_targets(change_step, tmp_path, monkeypatch):
-    folder, frames, targets, commands = _walk(tmp_path, change_step)
+@pytest.mark.parametrize(("change_step", "command_feedback"),
+                         [(None, False), (40, False), (40, True)])
+def test_runner_walks_the_simulators_targets(change_step, command_feedback, tmp_path,
+                                             monkeypatch):
+    folder, frames, targets, commands = _walk(tmp_path, change_step, command_feedback)
     clock = fake_naoqi.FakeClock(50.0)
     naoqi = fake_naoqi.install(clock=clock)
     monkeypatch.setitem(sys.modules, "naoqi", naoqi)
     mod = _load_runner(folder)
     record = json.loads((folder / "policy.json").read_text())
     assert record["command_ramp_s"] == 0.5 and len(record["command_columns"]) == 3
+    assert ("command_gain" in record) == command_feedback
     assert "joint_vel" in record["approximated"]
     kw = ({"command": A} if change_step is None else {"command_key": KEY})
     runner = mod.Runner(record, naoqi.memory, naoqi.dcm, naoqi.motion, clock=clock,

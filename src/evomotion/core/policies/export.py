@@ -10,7 +10,8 @@ Gymnasium or robot loop runs it with nothing of evomotion installed.
 ``layer{k}_weight[out, in]`` and ``layer{k}_bias[out]`` (absent for a layer without one), and
 structured ones (:mod:`.structured`) ``harmonics`` (H), ``phase_columns[2]`` (the raw sin and
 cos columns), ``command_columns[m]`` (the raw command columns that modulate the tape; may be
-absent: none), ``tape_coef[a, (1 + 2H)(1 + m)]`` and ``feedback_gain[a, o − 2]``. ``policy.py`` is
+absent: none), ``tape_coef[a, (1 + 2H)(1 + m)]``, ``feedback_gain[a, o − 2]`` and, with
+command feedback, ``command_gain[m, o − 2]`` (absent: none). ``policy.py`` is
 :mod:`.standalone` as text; ``policy.onnx`` is built by :mod:`.onnx_graph`.
 :func:`read_policy_npz` reads a file back with one-line errors for whatever is wrong with it.
 """
@@ -40,7 +41,8 @@ _KINDS: dict[str, type[PolicySpec]] = POLICIES
 _FIXED = ("format_version", "kind", "obs_mean", "obs_std", "clip_obs", "output_tanh",
           "action_scale", "action_offset", "action_low", "action_high")
 _STRUCTURED = ("harmonics", "phase_columns", "tape_coef", "feedback_gain")
-_OPTIONAL = ("command_columns",)  # absent: no command (files written before it existed)
+#: absent: no command, no command feedback (files written before they existed)
+_OPTIONAL = ("command_columns", "command_gain")
 
 
 @dataclass(frozen=True, eq=False)
@@ -78,6 +80,8 @@ def policy_arrays(spec: PolicySpec, params: np.ndarray, obs_mean: np.ndarray,
                       command_columns=np.array(spec.command_columns, dtype=np.int64),
                       tape_coef=np.ascontiguousarray(layers[0][0]),
                       feedback_gain=np.ascontiguousarray(layers[1][0]))
+        if spec.command_feedback:
+            arrays["command_gain"] = np.ascontiguousarray(layers[2][0])
         return arrays
     arrays["n_layers"] = np.array(len(layers), dtype=np.int64)
     for k, (W, b) in enumerate(layers):
@@ -162,8 +166,8 @@ def read_policy_npz(path: str | Path) -> ExportedPolicy:
     extra = sorted(set(arrays) - set(_FIXED) - known)
     if extra:
         raise bad(extra[0][:60], "is not a key of a policy file")
-    a = layers[-1][0].shape[0]
-    o = layers[-1][0].shape[1] + 2 if cls is StructuredSpec else layers[0][0].shape[1]
+    a = (layers[1] if cls is StructuredSpec else layers[-1])[0].shape[0]
+    o = layers[1][0].shape[1] + 2 if cls is StructuredSpec else layers[0][0].shape[1]
     vec = {k: _floats(arrays, k, (o if k.startswith("obs") else a,), bad)
            for k in _FIXED if k.startswith(("obs_", "action_"))}
     for key in ("obs_mean", "obs_std", "action_scale", "action_offset"):
@@ -208,14 +212,18 @@ def _structured(arrays: dict[str, np.ndarray], bad
     if gain.ndim != 2 or gain.shape[0] != tape.shape[0]:
         raise bad("feedback_gain", f"must be a matrix [{tape.shape[0]}, o - 2], got shape "
                   f"{gain.shape}")
+    feedback = "command_gain" in arrays
+    if feedback and (arrays["command_gain"].shape != (cmd.size, gain.shape[1]) or not cmd.size):
+        raise bad("command_gain", f"must be a matrix [{cmd.size}, {gain.shape[1]}] (commands x "
+                  f"o - 2), got shape {arrays['command_gain'].shape}")
     layers: list[tuple[np.ndarray, np.ndarray | None]] = []
-    for key in ("tape_coef", "feedback_gain"):
+    for key in ("tape_coef", "feedback_gain", "command_gain")[:3 if feedback else 2]:
         W = _floats(arrays, key, arrays[key].shape, bad)
         if not np.isfinite(W).all():
             raise bad(key, "holds a non-finite number")
         layers.append((W, None))
     options = {"harmonics": h, "phase_columns": tuple(int(c) for c in cols),
-               "command_columns": tuple(int(c) for c in cmd)}
+               "command_columns": tuple(int(c) for c in cmd), "command_feedback": feedback}
     return layers, set(_STRUCTURED) | set(_OPTIONAL), options
 
 

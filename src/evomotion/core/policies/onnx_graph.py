@@ -13,7 +13,8 @@ A structured policy (:mod:`.structured`) replaces the layers by its tape and gai
     Gather(observation, sin/cos column) -> s_1, c_1 [batch, 1]         (raw, not normalised)
     s_{k+1} = Add(Mul(s_k, c_1), Mul(c_k, s_1)), c_{k+1} = Sub(Mul(c_k, c_1), Mul(s_k, s_1))
     g = Concat(1, s_1, c_1, ..., s_H, c_H)                             ([batch, 1 + 2H])
-    g = Concat(g, Mul(g, command_1), ..., Mul(g, command_m))           (with command_columns)
+    g = Concat(g, Mul(g, command_1), ..., Mul(g, command_m))           (with command_columns;
+        command_i = Gather(observation) + Gather(MatMul(x, G^T), i)      with command feedback)
     tape = MatMul(g, Cᵀ)                                                ([batch, act])
     Gather(normalised, other columns) -> MatMul(Kᵀ) -> Add(tape)        (the feedback)
 Built with ``onnx.helper``; needs the ``onnx`` extra (``pip install evomotion[onnx]``).
@@ -91,8 +92,16 @@ def policy_model(spec: PolicySpec, params: np.ndarray, obs_mean: np.ndarray,
 
 def _structured(spec: StructuredSpec, layers: list[Layer], normalised: str, const, node) -> str:
     """The nodes of ``tape(φ, c) + K x`` (see the module doc); returns the output's name."""
-    (C, _), (K, _) = layers
+    (C, _), (K, _) = layers[:2]
     i, j = spec.phase_columns  # type: ignore[misc]
+    x = None
+    if K.shape[1]:
+        x = node("Gather", [normalised, const("feedback_columns",
+                                              spec.feedback_columns.astype(np.int64))],
+                 "feedback_input", axis=1)
+    shift = None
+    if spec.command_feedback and x is not None:  # c' = c + G x
+        shift = node("MatMul", [x, const("command_gain_t", layers[2][0].T)], "command_shift")
     s1 = node("Gather", ["observation", const("phase_sin_column", np.array([i], np.int64))],
               "phase_sin_1", axis=1)
     c1 = node("Gather", ["observation", const("phase_cos_column", np.array([j], np.int64))],
@@ -113,14 +122,15 @@ def _structured(spec: StructuredSpec, layers: list[Layer], normalised: str, cons
         cm = node("Gather", ["observation", const(f"command_column_{m}",
                                                   np.array([col], np.int64))],
                   f"command_{m}", axis=1)
+        if shift is not None:
+            dm = node("Gather", [shift, const(f"command_index_{m}", np.array([m], np.int64))],
+                      f"command_shift_{m}", axis=1)
+            cm = node("Add", [cm, dm], f"command_fed_back_{m}")
         parts.append(node("Mul", [g, cm], f"command_features_{m}"))
     if len(parts) > 1:
         g = node("Concat", parts, "tape_features", axis=1)
     y = node("MatMul", [g, const("tape_coef_t", C.T)], "tape")
-    if K.shape[1] == 0:
+    if x is None:
         return y
-    x = node("Gather", [normalised, const("feedback_columns",
-                                          spec.feedback_columns.astype(np.int64))],
-             "feedback_input", axis=1)
     fb = node("MatMul", [x, const("feedback_gain_t", K.T)], "feedback")
     return node("Add", [y, fb], "structured_output")

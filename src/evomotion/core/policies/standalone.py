@@ -13,7 +13,8 @@ mapped to ``offset + scale * y`` and clipped to ``[low, high]``. A "structured" 
 is instead ``tape(phi) + K x``: a Fourier series of the phase read from the RAW sin/cos
 columns ``phase_columns`` (``tape_coef[a, 1 + 2H]`` on ``1, sin phi, cos phi, ...,
 sin H phi, cos H phi``, the multiples by angle addition; with ``command_columns`` the
-features are those and each raw command value times them) plus the gains ``feedback_gain`` on
+features are those and each raw command value times them; with ``command_gain`` ``G`` the
+command plus ``G`` times the normalised observation) plus the gains ``feedback_gain`` on
 the normalised observation without the two phase columns. Only numpy and the standard library are
 imported.
 """
@@ -44,6 +45,8 @@ class Policy:
             self.command_columns = [int(c) for c in arrays.get("command_columns", [])]
             self.tape = np.asarray(arrays["tape_coef"], dtype=np.float64)
             self.gain = np.asarray(arrays["feedback_gain"], dtype=np.float64)
+            cg = arrays.get("command_gain")  # command feedback: c' = c + G x
+            self.command_gain = None if cg is None else np.asarray(cg, dtype=np.float64)
         for k in range(0 if self.kind == "structured" else int(arrays["n_layers"])):
             W = np.asarray(arrays[f"layer{k}_weight"], dtype=np.float64)
             b = arrays.get(f"layer{k}_bias")
@@ -86,10 +89,13 @@ class Policy:
             if k < self.harmonics:
                 s, c = s * c1 + c * s1, c * c1 - s * s1
         f = np.stack(features, axis=-1)
-        f = np.concatenate([f] + [x[:, m, None] * f for m in self.command_columns], axis=-1)
+        keep = [k for k in range(self.obs_dim) if k not in (i, j)]
+        c = x[:, self.command_columns]
+        if self.command_gain is not None and self.gain.shape[1]:
+            c = c + _row_dot(self.command_gain, h[:, keep])
+        f = np.concatenate([f] + [c[:, m, None] * f for m in range(c.shape[1])], axis=-1)
         y = _row_dot(self.tape, f)
         if self.gain.shape[1]:
-            keep = [k for k in range(self.obs_dim) if k not in (i, j)]
             y = y + _row_dot(self.gain, h[:, keep])
         return y
 

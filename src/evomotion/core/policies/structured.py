@@ -26,12 +26,20 @@ A command (``command_columns``: the observation's raw command values ``c_1..c_m`
 of the command (the step length, width and turn of a walk engine scale its foot trajectories by
 the command; :func:`fit_tape` fits such a tape to an engine's trajectories at many commands).
 
-Parameters (``n_params = a (1 + 2H)(1 + m) + a (o − 2)``): the tape coefficients first,
+Parameters (``n_params = a (1 + 2H)(1 + m) + a (o − 2)`` [``+ m (o − 2)``]): the tape first,
 ``C[a, (1 + 2H)(1 + m)]`` row-major with row ``j = (a_j0, a_j1, b_j1, ..., a_jH, b_jH)`` (the
 weights of the features ``f(φ) = (1, sin φ, cos φ, ..., sin Hφ, cos Hφ)``; with a command, then
 the same for ``c_1 f``, ..., ``c_m f``), then ``K`` row-major. Zero parameters give
 the nominal pose ``offset``. :func:`fit_tape` fits ``C`` to an open-loop gait's keyframe
 trajectory by least squares, :meth:`StructuredSpec.params_from_tape` makes it a start (K = 0).
+
+**Command feedback** (``command_feedback``, with a command): the tape reads the command plus
+a linear function of the same normalised observation, ``c' = c + G x`` (``G[m, o − 2]``, after
+``K`` in the parameters), so a walk steps longer or wider the way its torso leans: a correction
+of the step itself, which the phase-independent ``K x`` cannot express (capture-point step
+adjustment, Pratt et al. 2006, as walk engines place the swing foot;
+``benchmarks/command_feedback_probe.py`` measured a hand-set ``G`` on the IMU's gravity
+direction). ``G = 0`` is the plain command-modulated tape.
 """
 
 from __future__ import annotations
@@ -77,6 +85,7 @@ class StructuredSpec(PolicySpec):
     phase_columns: tuple[int, int] | None = None  # the (sin, cos) columns of the observation
     harmonics: int = 2  # H: sin/cos pairs of the tape per action
     command_columns: tuple[int, ...] = ()  # raw observation columns that modulate the tape
+    command_feedback: bool = False  # the tape reads c + G x (module doc); needs a command
 
     kind: ClassVar[str] = "structured"
     squash_output: ClassVar[bool] = False
@@ -113,20 +122,26 @@ class StructuredSpec(PolicySpec):
                              f"0..{self.obs_dim - 1}, not the phase columns, got "
                              f"{self.command_columns!r}")
         object.__setattr__(self, "command_columns", tuple(int(c) for c in cmd))
+        if not isinstance(self.command_feedback, bool | np.bool_) or \
+                (self.command_feedback and not cmd):
+            raise ValueError("command_feedback must be true or false, and true only with "
+                             f"command_columns, got {self.command_feedback!r}")
+        object.__setattr__(self, "command_feedback", bool(self.command_feedback))
 
     @property
     def n_features(self) -> int:
         """``(1 + 2H)(1 + m)``: the tape's features per action."""
         return (1 + 2 * self.harmonics) * (1 + len(self.command_columns))
 
-    def features(self, obs: np.ndarray) -> np.ndarray:
-        """``g[n, (1 + 2H)(1 + m)] = (f, c_1 f, ..., c_m f)`` of raw observations."""
+    def features(self, obs: np.ndarray, command: np.ndarray | None = None) -> np.ndarray:
+        """``g[n, (1 + 2H)(1 + m)] = (f, c_1 f, ..., c_m f)`` of raw observations (``command
+        [n, m]``: the command values to use instead of the observation's)."""
         i, j = self.phase_columns  # type: ignore[misc]
         f = phase_features(obs[:, i], obs[:, j], self.harmonics)
         if not self.command_columns:
             return f
-        return np.concatenate([f] + [obs[:, c, None] * f for c in self.command_columns],
-                              axis=-1)
+        c = obs[:, list(self.command_columns)] if command is None else command
+        return np.concatenate([f] + [c[:, k, None] * f for k in range(c.shape[1])], axis=-1)
 
     @property
     def feedback_columns(self) -> np.ndarray:
@@ -134,8 +149,12 @@ class StructuredSpec(PolicySpec):
         return np.setdiff1d(np.arange(self.obs_dim), np.asarray(self.phase_columns))
 
     def layer_shapes(self) -> list[tuple[int, int]]:
-        """The tape ``C[a, 1 + 2H]`` then the gains ``K[a, o − 2]`` (no biases)."""
-        return [(self.act_dim, self.n_features), (self.act_dim, self.obs_dim - 2)]
+        """The tape ``C[a, 1 + 2H]``, the gains ``K[a, o − 2]`` and, with command feedback,
+        ``G[m, o − 2]`` (no biases)."""
+        shapes = [(self.act_dim, self.n_features), (self.act_dim, self.obs_dim - 2)]
+        if self.command_feedback:
+            shapes.append((len(self.command_columns), self.obs_dim - 2))
+        return shapes
 
     def layer_has_bias(self, i: int) -> bool:
         return False
@@ -145,10 +164,14 @@ class StructuredSpec(PolicySpec):
         """``actions[n, a]``: each row's tape at its raw phase plus its gains on its normalised
         observation (``mean``/``std``: ``(o,)`` or one per row ``(n, o)``)."""
         obs = self._check_act(params, obs, mean, std)
-        (C, _), (K, _) = self.unflatten(params)
-        y = _row_dot(C, self.features(obs))
-        if K.shape[-1]:
-            x = self.normalise(obs, mean, std)[:, self.feedback_columns]
+        layers = self.unflatten(params)
+        (C, _), (K, _) = layers[:2]
+        x = self.normalise(obs, mean, std)[:, self.feedback_columns] if K.shape[-1] else None
+        command = None
+        if self.command_feedback and x is not None:  # c' = c + G x
+            command = obs[:, list(self.command_columns)] + _row_dot(layers[2][0], x)
+        y = _row_dot(C, self.features(obs, command))
+        if x is not None:
             y = y + _row_dot(K, x)
         return np.clip(self.offset + self.scale * y, self.low, self.high)
 
@@ -159,6 +182,8 @@ class StructuredSpec(PolicySpec):
             raise ValueError(f"tape coefficients must be finite, of shape "
                              f"({self.act_dim}, {self.n_features}), got {C.shape}")
         layers: list[Layer] = [(C, None), (np.zeros((self.act_dim, self.obs_dim - 2)), None)]
+        if self.command_feedback:
+            layers.append((np.zeros((len(self.command_columns), self.obs_dim - 2)), None))
         return self.flatten(layers)
 
 

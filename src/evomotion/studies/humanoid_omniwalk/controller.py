@@ -39,7 +39,8 @@ class Controller:
     """The controller's simulator, policy spec and start (see the module doc)."""
 
     def __init__(self, gait: OmniGait, control_period_s: float = 0.02, harmonics: int = 3,
-                 clip_obs: float = 5.0, threads: int = 1) -> None:
+                 clip_obs: float = 5.0, threads: int = 1,
+                 command_feedback: bool = False) -> None:
         from evomotion.errors import InputError
 
         self.gait = gait
@@ -64,6 +65,7 @@ class Controller:
             phase_columns=(names.index("phase:sin"), names.index("phase:cos")),
             harmonics=harmonics, clip_obs=clip_obs,
             command_columns=tuple(names.index(f"command:{i}") for i in range(3)),
+            command_feedback=command_feedback,
             low=self.sim.lower - self.nominal[self.columns],
             high=self.sim.upper - self.nominal[self.columns])
         self.window = max(1, int(round(gait.period_s / self.control_dt)))  # one gait cycle

@@ -57,6 +57,9 @@ class OmniWalkConfig:
     control_period_s: float = 0.02  # the controller's period (s)
     harmonics: int = 3  # sin/cos pairs of the phase tape
     clip_obs: float = inf_ok(5.0, "no clipping")  # bound on every normalised observation
+    #: the tape reads the command plus gains on the observation (longer/wider steps the way
+    #: the torso leans: capture-style step adjustment; core/policies/structured.py)
+    command_feedback: bool = False
     normalize: bool = True  # ARS V2 observation normalisation
     episodes: int = 1  # training episodes per individual and generation
     eval_episodes: int = 8  # episodes of the centre per generation (the reported return)
@@ -118,7 +121,7 @@ class OmniWalkConfig:
         check_number("problem.width_m", self.width_m, lo=-0.01, hi=0.06)
         check_number("problem.sway_m", self.sway_m, lo=0.0, hi=0.06)
         check_number("problem.lean_rad", self.lean_rad, lo=-0.2, hi=0.4)
-        for key in ("normalize", "perturb"):
+        for key in ("normalize", "perturb", "command_feedback"):
             if not isinstance(getattr(self, key), bool):
                 raise InputError(f"problem.{key}: expected true or false, got "
                                  f"{getattr(self, key)!r}")
@@ -150,7 +153,7 @@ class OmniWalkProblem:
         cfg.validate()
         threads = cfg.threads or max(1, min(os.cpu_count() or 1, 8))
         self.ctl = ctl = Controller(cfg.gait(), cfg.control_period_s, cfg.harmonics,
-                                    cfg.clip_obs, threads)
+                                    cfg.clip_obs, threads, cfg.command_feedback)
         self.robot, self.sim, self.policy = ctl.robot, ctl.sim, ctl.policy
         self.obs_spec, self.obs_names = ctl.obs_spec, ctl.sim.observe.names
         self.obs_dim, self.act_dim = self.sim.observation_size, self.sim.action_size

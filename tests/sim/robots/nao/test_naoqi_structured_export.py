@@ -39,16 +39,25 @@ def _runner():
     return module
 
 
-def _policy(seed: int = 0, harmonics: int = 2, cols=(SIN, COS), clip_obs: float = 2.0
-            ) -> ExportedPolicy:
+def _policy(seed: int = 0, harmonics: int = 2, cols=(SIN, COS), clip_obs: float = 2.0,
+            command_feedback: bool = False) -> ExportedPolicy:
     rng = np.random.default_rng(seed)
     o, a = len(NAMES), len(JOINTS)
+    # with command feedback: two columns stand in for a command (the runner reads them raw)
+    extra = {"command_columns": (0, 5), "command_feedback": True} if command_feedback else {}
     spec = make_policy("structured", o, a, scale=rng.uniform(0.1, 0.5, a),
                        offset=rng.normal(0, 0.1, a), low=np.array([-0.3, -np.inf, -0.4]),
                        high=np.array([0.3, 0.5, np.inf]), clip_obs=clip_obs,
-                       harmonics=harmonics, phase_columns=cols)
+                       harmonics=harmonics, phase_columns=cols, **extra)
     return ExportedPolicy(spec, rng.normal(0, 0.5, spec.n_params), rng.normal(0, 0.1, o),
                           rng.uniform(0.1, 1.0, o))
+
+
+def _command_names() -> list[str]:
+    """NAMES with columns 0 and 5 as the command (the NAOqi export checks the names)."""
+    names = list(NAMES)
+    names[0], names[5] = "command:0", "command:1"
+    return names
 
 
 def _record(p: ExportedPolicy, names=NAMES, phase_period_s: float = 0.5) -> dict:
@@ -66,10 +75,11 @@ def _observations(rng: np.random.Generator, n: int) -> np.ndarray:
 
 
 @settings(max_examples=25, deadline=None)
-@given(st.integers(0, 2**31), st.integers(0, 5), st.sampled_from([2.0, float("inf")]))
-def test_the_runners_structured_forward_is_policy_py(seed, harmonics, clip_obs):
-    p = _policy(seed, harmonics, clip_obs=clip_obs)
-    runner_policy = _runner().Policy(_record(p))
+@given(st.integers(0, 2**31), st.integers(0, 5), st.sampled_from([2.0, float("inf")]),
+       st.booleans())
+def test_the_runners_structured_forward_is_policy_py(seed, harmonics, clip_obs, fed_back):
+    p = _policy(seed, harmonics, clip_obs=clip_obs, command_feedback=fed_back)
+    runner_policy = _runner().Policy(_record(p, _command_names() if fed_back else NAMES))
     policy_py = standalone.Policy(policy_arrays(p.spec, p.params, p.obs_mean, p.obs_std))
     obs = _observations(np.random.default_rng(seed), 16)
     got = np.array([runner_policy(list(x)) for x in obs])

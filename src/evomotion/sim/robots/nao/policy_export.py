@@ -139,8 +139,8 @@ def structured_record(arrays: dict[str, np.ndarray], observation_names: Sequence
     from ``policy.npz``'s arrays: normaliser, action map, ``harmonics`` H, ``phase_columns``
     (which must be the observation's ``phase:sin``, ``phase:cos``: the runner's clock),
     ``command_columns`` (the raw command columns that modulate the tape),
-    ``tape_coef[a][(1 + 2H)(1 + m)]``, ``feedback_gain[a][o - 2]``; a bad shape is one InputError
-    line."""
+    ``tape_coef[a][(1 + 2H)(1 + m)]``, ``feedback_gain[a][o - 2]`` and, with command feedback,
+    ``command_gain[m][o - 2]``; a bad shape is one InputError line."""
     names = list(observation_names)
     o, act = len(names), int(np.shape(arrays["action_scale"])[0])
     h = int(arrays["harmonics"])
@@ -154,8 +154,13 @@ def structured_record(arrays: dict[str, np.ndarray], observation_names: Sequence
             ["phase:sin", "phase:cos"]:
         raise InputError(f"NAOqi export: the structured policy's phase columns {cols} must be "
                          "the observation's phase:sin and phase:cos (the runner's clock)")
-    for key, arr, shape in (("tape_coef", tape, (act, (1 + 2 * h) * (1 + len(cmd)))),
-                            ("feedback_gain", gain, (act, o - 2))):
+    checks = [("tape_coef", tape, (act, (1 + 2 * h) * (1 + len(cmd)))),
+              ("feedback_gain", gain, (act, o - 2))]
+    extra = {}
+    if "command_gain" in arrays:
+        extra["command_gain"] = np.asarray(arrays["command_gain"])
+        checks.append(("command_gain", extra["command_gain"], (len(cmd), o - 2)))
+    for key, arr, shape in checks:
         if arr.shape != shape or not np.isfinite(arr).all():
             raise InputError(f"NAOqi export: the structured policy's {key} must be finite "
                              f"numbers of shape {shape}, got shape {arr.shape}")
@@ -163,7 +168,7 @@ def structured_record(arrays: dict[str, np.ndarray], observation_names: Sequence
         raise InputError(f"NAOqi export: {o} observation names for a normaliser of "
                          f"{np.shape(arrays['obs_mean'])[0]} columns")
     return {**_head(arrays), "harmonics": h, "phase_columns": cols, "command_columns": cmd,
-            "tape_coef": tape, "feedback_gain": gain}
+            "tape_coef": tape, "feedback_gain": gain, **extra}
 
 
 def policy_model(policy: ExportedPolicy, observation_names: Sequence[str]) -> dict[str, Any]:

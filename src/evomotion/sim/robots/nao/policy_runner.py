@@ -120,6 +120,9 @@ class Policy(object):
         self.tape = _matrix(record, "tape_coef", a, (1 + 2 * self.harmonics)
                             * (1 + len(self.command_columns)))
         self.gain = _matrix(record, "feedback_gain", a, o - 2)
+        # command feedback: the tape reads c + G x (absent: the plain command)
+        self.command_gain = _matrix(record, "command_gain", len(self.command_columns), o - 2) \
+            if "command_gain" in record else None
 
     def structured(self, obs, h):
         """``tape(phi) + K x`` of the raw ``obs`` and normalised ``h``: ``1, sin phi, cos phi,
@@ -135,9 +138,12 @@ class Policy(object):
             if k < self.harmonics:
                 s, c = s * c1 + c * s1, c * c1 - s * s1
         base = list(features)
-        for m in self.command_columns:  # a command-modulated tape: (f, c_1 f, ..., c_m f)
-            features += [obs[m] * f for f in base]
         x = [h[m] for m in self.keep]
+        for k, m in enumerate(self.command_columns):  # a command-modulated tape: (f, c_1 f, ...)
+            cm = obs[m]
+            if self.command_gain is not None and x:
+                cm = cm + _sum_products(self.command_gain[k], x)
+            features += [cm * f for f in base]
         y = []
         for tape, gain in zip(self.tape, self.gain):
             t = _sum_products(tape, features)
