@@ -76,17 +76,25 @@ def played(ui, run_dir: Path, play: Any, scene: str) -> None:
     caption = ui.label().classes("text-slate-600 played-caption")
     box = ui.column().classes("w-full")
 
-    def show() -> None:
-        box.clear()
+    async def show() -> None:
+        from nicegui import run
+
         w = world.value if isinstance(world.value, int | float) else 0
-        try:
-            episode = play(run_dir, int(w), float(push.value) if push.value else None)
+        caption.set_text(f"playing world {int(w)} ...")
+        go.disable()
+        try:  # the episode is simulated off the event loop (other pages stay live)
+            episode = await run.io_bound(play, run_dir, int(w),
+                                         float(push.value) if push.value else None)
         except InputError as e:  # no policy yet, a world out of range: one line
+            box.clear()
             caption.set_text(one_line(e))
             return
+        finally:
+            go.enable()
         caption.set_text(episode.caption)
+        box.clear()
         with box:
             NaoPlayer(episode, scene=scene)
 
     go.on_click(show)
-    show()
+    ui.timer(0.0, show, once=True)
