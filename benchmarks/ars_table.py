@@ -84,6 +84,7 @@ def one_run(task: str, method: str, seed: int, budget_s: float, workers: int,
             "reached": reached is not None, "best_return": best,
             "episodes": int(reached["train_episodes"]) if reached else None,
             "episodes_run": int(rows[-1]["train_episodes"]) if rows else 0,
+            "env_steps_run": int(float(rows[-1].get("env_steps") or 0)) if rows else 0,
             "wall_s": wall, "cpu_s": cpu, "stderr": stderr[-500:] if proc.returncode
             not in (0, 3) else ""}
 

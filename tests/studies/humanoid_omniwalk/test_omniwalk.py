@@ -227,3 +227,22 @@ def test_the_policy_player_sends_the_training_loops_targets(run_dir, problem, tm
             mujoco.mj_step(model, d)
     assert np.abs(np.array(sent) - res.targets[0]).max() < 1e-6
     assert np.array_equal(player.columns, sim.columns)
+
+
+def test_command_feedback_starts_where_it_is_set():
+    """With command feedback the search starts with G = 0 but for vx's gain on the normalised
+    gravity:x (``problem.command_feedback_start``); the tape and K are the plain start's; a
+    start out of range or without command feedback's layer is refused in one line."""
+    plain = OmniWalkProblem(OmniWalkConfig(duration_s=1.0, threads=1))
+    fed = OmniWalkProblem(OmniWalkConfig(duration_s=1.0, threads=1, command_feedback=True,
+                                         command_feedback_start=0.1))
+    (C, _), (K, _), (G, _) = fed.policy.unflatten(fed.ctl.initial_params())
+    (C0, _), (K0, _) = plain.policy.unflatten(plain.ctl.initial_params())
+    assert np.array_equal(C, C0) and np.array_equal(K, K0)
+    names = [fed.obs_names[k] for k in fed.policy.feedback_columns]
+    assert G.shape == (3, len(names)) and np.count_nonzero(G) == 1
+    assert G[0, names.index("gravity:x")] == 0.1
+    with pytest.raises(InputError, match="command_feedback_start"):
+        OmniWalkConfig(command_feedback_start=5.0).validate()
+    with pytest.raises(InputError, match="command_feedback"):
+        OmniWalkConfig(command_feedback=1).validate()

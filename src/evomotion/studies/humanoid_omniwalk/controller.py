@@ -40,10 +40,10 @@ class Controller:
 
     def __init__(self, gait: OmniGait, control_period_s: float = 0.02, harmonics: int = 3,
                  clip_obs: float = 5.0, threads: int = 1,
-                 command_feedback: bool = False) -> None:
+                 command_feedback: bool = False, feedback_start: float = 0.0) -> None:
         from evomotion.errors import InputError
 
-        self.gait = gait
+        self.gait, self.feedback_start = gait, float(feedback_start)
         self.robot = r = load_robot("nao")
         self.dt = float(r.model.opt.timestep)
         k = control_period_s / self.dt
@@ -84,7 +84,15 @@ class Controller:
         q = targets(self.gait, tt / self.gait.period_s, cc)[:, self.columns]
         coeffs = fit_tape(tt, q - self.nominal[self.columns], self.gait.period_s,
                           self.policy.harmonics, commands=cc)
-        return self.policy.params_from_tape(coeffs)
+        params = self.policy.params_from_tape(coeffs)
+        if self.policy.command_feedback and self.feedback_start:
+            # the step adjustment's start: vx follows the forward lean (gravity:x)
+            layers = self.policy.unflatten(params)
+            fed = [self.sim.observe.names[k] for k in self.policy.feedback_columns]
+            G = layers[2][0].copy()
+            G[0, fed.index("gravity:x")] = self.feedback_start
+            params = self.policy.flatten([layers[0], layers[1], (G, None)])
+        return params
 
     def run(self, params: np.ndarray, mean: np.ndarray, std: np.ndarray, worlds: list,
             nstep: int, commands: np.ndarray) -> ClosedLoopResult:

@@ -60,6 +60,10 @@ class OmniWalkConfig:
     #: the tape reads the command plus gains on the observation (longer/wider steps the way
     #: the torso leans: capture-style step adjustment; core/policies/structured.py)
     command_feedback: bool = False
+    #: with command_feedback, the search's start for G's gain of vx on the normalised IMU
+    #: gravity:x (forward lean); 0.1 ~ 1 m/s per unit of gravity direction on this walk, whose
+    #: gravity-x std is about 0.1 (benchmarks/command_feedback_probe.py's k_x = 1)
+    command_feedback_start: float = 0.0
     normalize: bool = True  # ARS V2 observation normalisation
     episodes: int = 1  # training episodes per individual and generation
     eval_episodes: int = 8  # episodes of the centre per generation (the reported return)
@@ -95,6 +99,8 @@ class OmniWalkConfig:
         check_number("problem.control_period_s", self.control_period_s, lo=0.0, hi=1.0,
                      lo_open=True)
         check_number("problem.harmonics", self.harmonics, lo=1, hi=16, integer=True)
+        check_number("problem.command_feedback_start", self.command_feedback_start, lo=-1.0,
+                     hi=1.0)
         check_number("problem.clip_obs", self.clip_obs, lo=0.0, lo_open=True, allow_inf=True)
         for key in ("episodes", "eval_episodes"):
             check_number(f"problem.{key}", getattr(self, key), lo=1, hi=MAX_EPISODES,
@@ -153,7 +159,8 @@ class OmniWalkProblem:
         cfg.validate()
         threads = cfg.threads or max(1, min(os.cpu_count() or 1, 8))
         self.ctl = ctl = Controller(cfg.gait(), cfg.control_period_s, cfg.harmonics,
-                                    cfg.clip_obs, threads, cfg.command_feedback)
+                                    cfg.clip_obs, threads, cfg.command_feedback,
+                                    cfg.command_feedback_start)
         self.robot, self.sim, self.policy = ctl.robot, ctl.sim, ctl.policy
         self.obs_spec, self.obs_names = ctl.obs_spec, ctl.sim.observe.names
         self.obs_dim, self.act_dim = self.sim.observation_size, self.sim.action_size
