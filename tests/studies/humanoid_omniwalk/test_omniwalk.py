@@ -233,9 +233,12 @@ def test_command_feedback_starts_where_it_is_set():
     """With command feedback the search starts with G = 0 but for vx's gain on the normalised
     gravity:x (``problem.command_feedback_start``); the tape and K are the plain start's; a
     start out of range or without command feedback's layer is refused in one line."""
-    plain = OmniWalkProblem(OmniWalkConfig(duration_s=1.0, threads=1))
+    plain = OmniWalkProblem(OmniWalkConfig(duration_s=1.0, threads=1, command_feedback=False))
     fed = OmniWalkProblem(OmniWalkConfig(duration_s=1.0, threads=1, command_feedback=True,
                                          command_feedback_start=0.1))
+    new = resolve_config(get_study("humanoid-omniwalk"), None, []).problem  # a new run's
+    assert new.command_feedback and new.command_feedback_start == 0.1
+    assert not OmniWalkConfig().command_feedback  # what a run folder without the key meant
     (C, _), (K, _), (G, _) = fed.policy.unflatten(fed.ctl.initial_params())
     (C0, _), (K0, _) = plain.policy.unflatten(plain.ctl.initial_params())
     assert np.array_equal(C, C0) and np.array_equal(K, K0)

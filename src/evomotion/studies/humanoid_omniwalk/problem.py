@@ -59,6 +59,8 @@ class OmniWalkConfig:
     clip_obs: float = inf_ok(5.0, "no clipping")  # bound on every normalised observation
     #: the tape reads the command plus gains on the observation (longer/wider steps the way
     #: the torso leans: capture-style step adjustment; core/policies/structured.py)
+    #: (the study's default turns it on, with command_feedback_start 0.1: study.py; false
+    #: here is what a run folder from before these keys meant)
     command_feedback: bool = False
     #: with command_feedback, the search's start for G's gain of vx on the normalised IMU
     #: gravity:x (forward lean); 0.1 ~ 1 m/s per unit of gravity direction on this walk, whose
