@@ -201,11 +201,7 @@ class ClosedLoopSimulator:
             rows.flags.writeable = False  # the policy reads the rows, cannot edit ours
             targets = self._targets(policy(rows, obs), alive.size)
             rec.sent(alive, c, targets)
-            full = np.broadcast_to(self.nominal, (alive.size, self.model.nu)).copy()
-            full[:, self.columns] = targets
-            if self.followers.size:  # one motor behind two actuators (the NAO's hip yaw)
-                full[:, self.followers[:, 0]] = full[:, self.followers[:, 1]]
-            fifo.push(alive, c, full)
+            fifo.push(alive, c, self.full_targets(targets))
             ctrl = fifo.controls(alive, t0, kk)
             if pushes.any:
                 ctrl = np.concatenate([ctrl, pushes.xfrc(alive, t0, kk)], axis=2)
@@ -226,6 +222,17 @@ class ClosedLoopSimulator:
     @property
     def spec_command_size(self) -> int:
         return int(self.observe.spec.command_size)
+
+    def full_targets(self, targets: np.ndarray) -> np.ndarray:
+        """Every actuator's target ``[..., nu]`` from the driven columns' ``targets[..., a]``:
+        the nominal pose elsewhere, a follower copying its leader (one motor behind two
+        actuators: the NAO's hip yaw-pitch)."""
+        t = np.asarray(targets, dtype=np.float64)
+        full = np.broadcast_to(self.nominal, t.shape[:-1] + (self.model.nu,)).copy()
+        full[..., self.columns] = t
+        if self.followers.size:
+            full[..., self.followers[:, 0]] = full[..., self.followers[:, 1]]
+        return full
 
     def _targets(self, actions: np.ndarray, m: int) -> np.ndarray:
         a = np.asarray(actions, dtype=np.float64)

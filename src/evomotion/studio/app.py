@@ -127,7 +127,7 @@ def add_api(app: Any, root: Path) -> None:
 
 def validation_line(errors: Any) -> str:
     """FastAPI's validation errors as one line: ``generations: expected a valid integer,
-    got 'ten'`` (each parameter once)."""
+    got 'ten'`` (the first four, joined by '; ')."""
     parts = []
     for e in list(errors)[:4]:
         loc = e.get("loc") or ("?",)

@@ -248,32 +248,29 @@ def record_poses(motion_path: Any, scene: str = "nao", fps: float = 25.0,
     ``fell``, ``fall_time_s``, ``duration_s``
     (motion + hold), ``motion_s``, ``frame_dt_s``. Cached (read only) by file, mtime and
     arguments (the last few). ``motion_path`` may also be a
-    :class:`~evomotion.sim.motion.Motion` (cached by its content)."""
+    :class:`~evomotion.sim.motion.Motion` (cached by its content) or a
+    :class:`~evomotion.studies.view.Played` closed-loop episode (not replayed: its states are
+    recorded as they are; cached by its content)."""
     import hashlib
 
     from evomotion.sim.motion import Motion
     from evomotion.studies.view import Played
 
-    if isinstance(motion_path, Played):  # a closed-loop episode: shown as it happened
-        p = motion_path
-        digest = hashlib.sha256(np.ascontiguousarray(p.states, float).tobytes() +
-                                np.ascontiguousarray(p.ctrl, float).tobytes()).hexdigest()
-        key: tuple = ("played", digest, float(p.frame_dt_s), scene, float(fps))
-        rec = _CACHE.pop(key, None) or _played(p, scene, fps)
-        _CACHE[key] = rec
-        while len(_CACHE) > _CACHE_SIZE:
-            _CACHE.pop(next(iter(_CACHE)))
-        return rec
-    if isinstance(motion_path, Motion):
-        m = motion_path
-        digest = hashlib.sha256(repr(m.joints).encode() + np.asarray(m.times_ms).tobytes() +
-                                np.asarray(m.values, float).tobytes()).hexdigest()
+    source = motion_path
+    if isinstance(source, Played):
+        digest = hashlib.sha256(np.ascontiguousarray(source.states, float).tobytes() +
+                                np.ascontiguousarray(source.ctrl, float).tobytes()).hexdigest()
+        key: tuple = ("played", digest, float(source.frame_dt_s), scene, float(fps))
+    elif isinstance(source, Motion):
+        digest = hashlib.sha256(repr(source.joints).encode() +
+                                np.asarray(source.times_ms).tobytes() +
+                                np.asarray(source.values, float).tobytes()).hexdigest()
         key = ("motion", digest, scene, float(fps), float(hold_s))
-        source: Any = m
     else:
         source = path = Path(motion_path)
         key = (str(path.resolve()), path.stat().st_mtime_ns, scene, float(fps), float(hold_s))
-    rec = _CACHE.pop(key, None) or _record(source, scene, fps, hold_s)
+    rec = _CACHE.pop(key, None) or (_played(source, scene, fps) if isinstance(source, Played)
+                                    else _record(source, scene, fps, hold_s))
     _CACHE[key] = rec  # most recently used last
     while len(_CACHE) > _CACHE_SIZE:
         _CACHE.pop(next(iter(_CACHE)))

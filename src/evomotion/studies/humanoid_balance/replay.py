@@ -91,11 +91,9 @@ def played(run_dir: str | Path, world: int = 0, push_ns: float | None = None) ->
         problem.sim.close()
     assert res.states is not None and res.targets is not None
     n = int(np.ceil(res.steps[0] / sim.k)) + 1  # up to the fall (then the state repeats)
-    full = np.broadcast_to(sim.nominal, (n, sim.model.nu)).copy()
-    full[:n - 1, sim.columns] = res.targets[0, :n - 1]
-    full[n - 1] = full[max(n - 2, 0)]
-    if sim.followers.size:
-        full[:, sim.followers[:, 0]] = full[:, sim.followers[:, 1]]
+    # the targets sent after each state; the last state keeps the last ones (n >= 2: at least
+    # one control step is simulated)
+    full = sim.full_targets(res.targets[0, np.minimum(np.arange(n), n - 2)])
     push = np.asarray(w.push_ns, float)
     fell = bool(res.fell[0])
     caption = (f"unseen world {int(world)}: a {np.linalg.norm(push):.2f} N s push toward "

@@ -114,8 +114,7 @@ class Controller:
         done = np.maximum(np.ceil(res.steps / self.sim.k).astype(np.int64), 1)
         n, C, _ = res.targets.shape
         if res.states is not None:
-            ctrl = np.broadcast_to(self.nominal, (n, C, self.nominal.size)).copy()
-            ctrl[..., self.columns] = res.targets
+            ctrl = self.sim.full_targets(res.targets)
             work = self.work(res.states[:, :C], ctrl, done - 1) * self.sim.k
             power = work / (done * self.control_dt)
         else:
