@@ -40,3 +40,27 @@ def test_commands_are_clipped_to_the_ranges_pushes_count_and_reset_starts_again(
     for bad in ((-1.0, 0.0), (25.0, 0.0), (1.0, float("nan"))):
         with pytest.raises(InputError):
             w.push(*bad)
+
+
+def test_another_robots_controller_walks_that_robot(tmp_path):
+    """An OP3 walk run's controller (a one-generation run) is driven on the OP3, framed by its
+    size; a policy.json naming no bundled robot is one line."""
+    import json
+
+    from evomotion.run.config import resolve_config
+    from evomotion.run.runner import run_study
+    from evomotion.studies import get_study
+
+    s = get_study("humanoid-omniwalk")
+    out = tmp_path / "op3"
+    run_study(s, resolve_config(s, None, ["problem.robot='op3'", *s.smoke,
+                                          "run.generations=1", "run.videos=false"]),
+              out, quiet=True)
+    walk = LiveWalk(out)
+    assert walk.robot.name == "op3" and 0.2 < walk.height_m < 0.3
+    assert walk.advance(np.array([0.1, 0.0, 0.0]), 0.5) == 25 and not walk.fell
+    info = json.loads((out / "policy.json").read_text())
+    (out / "policy.json").write_text(json.dumps(dict(info, robot="r2d2")))
+    with pytest.raises(InputError, match="key 'robot'") as e:
+        LiveWalk(out)
+    assert "\n" not in str(e.value)

@@ -20,7 +20,7 @@ import mujoco
 import numpy as np
 
 from evomotion.core.checks import check_number
-from evomotion.sim.policy_player import PolicyPlayer
+from evomotion.sim.policy_player import MAX_JSON_BYTES, PolicyPlayer
 from evomotion.sim.robots import load_robot
 from evomotion.sim.robots.nao.model import initial_state
 from evomotion.sim.state import STATE_SPEC
@@ -31,11 +31,27 @@ MAX_PUSH_NS = 20.0
 MAX_ADVANCE_S = 1.0
 
 
+def _robot_of(folder: Path) -> str:
+    """The bundled robot named by ``folder/policy.json`` (the NAO when it names none)."""
+    from evomotion.errors import InputError
+    from evomotion.sim.robots import bundled_robots
+    from evomotion.textio import read_json
+
+    path = folder / "policy.json"
+    info = read_json(path, "controller description (policy.json)", MAX_JSON_BYTES)
+    name = info.get("robot", "nao") if isinstance(info, dict) else "nao"
+    if not isinstance(name, str) or name not in bundled_robots():
+        raise InputError(f"{path}: key 'robot': a bundled robot ({', '.join(bundled_robots())})"
+                         f", got {name!r}")
+    return name
+
+
 class LiveWalk:
-    """The controller of run folder ``folder`` walking the NAO under a live command."""
+    """The controller of run folder ``folder`` walking its robot (``policy.json``'s
+    ``robot``: a bundled one; the NAO when absent) under a live command."""
 
     def __init__(self, folder: str | Path) -> None:
-        self.robot = load_robot("nao")
+        self.robot = load_robot(_robot_of(Path(folder)))
         self.model = m = self.robot.model
         self.player = PolicyPlayer(folder, m, CONTACTS)
         self.command_ranges = dict(self.player.command_ranges)
@@ -50,11 +66,15 @@ class LiveWalk:
         """The robot standing in its nominal stance, the clock at 0, no command."""
         m, d = self.model, self.data
         mujoco.mj_resetData(m, d)
-        mujoco.mj_setState(m, d, initial_state(m, self.player.nominal), STATE_SPEC)
+        state = (initial_state(m, self.player.nominal) if self.robot.name == "nao"
+                 else self.robot.state_at(self.player.nominal))
+        mujoco.mj_setState(m, d, state, STATE_SPEC)
         mujoco.mj_forward(m, d)
         self.player.start(d)
         self.fell, self._push = False, None
         self.start = torso_pose(d)
+        #: the torso's height at the start (m): how big the robot is (a view frames it by it)
+        self.height_m = float(d.xpos[self.torso][2])
 
     def push(self, impulse_ns: float, direction_deg: float) -> None:
         """An impulse (N s) on the torso in the horizontal direction ``direction_deg`` (world

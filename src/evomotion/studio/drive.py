@@ -19,6 +19,8 @@ from pathlib import Path
 import numpy as np
 
 TICK_S = 0.05
+#: the NAO walk's torso height at the start (m, LiveWalk.height_m): the camera's unit
+NAO_TORSO_HEIGHT_M = 0.281
 KEYS = {"w": ("vx", 1), "arrowup": ("vx", 1), "s": ("vx", -1), "arrowdown": ("vx", -1),
         "a": ("yaw_rate", 1), "arrowleft": ("yaw_rate", 1), "d": ("yaw_rate", -1),
         "arrowright": ("yaw_rate", -1), "q": ("vy", 1), "e": ("vy", -1)}
@@ -122,8 +124,9 @@ def drive_panel(ui, run_dir: Path) -> None:
                 group.move(*d.xpos[b].tolist()).rotate_R(d.xmat[b].reshape(3, 3).tolist())
         s = walk.status()
         x, y = d.xpos[walk.torso][:2]
-        scene.move_camera(x=x + 0.9, y=y - 0.8, z=0.6, look_at_x=x, look_at_y=y,
-                          look_at_z=0.25, duration=0)
+        k = walk.height_m / NAO_TORSO_HEIGHT_M  # framed as the NAO is, at the robot's size
+        scene.move_camera(x=x + 0.9 * k, y=y - 0.8 * k, z=0.6 * k, look_at_x=x, look_at_y=y,
+                          look_at_z=0.25 * k, duration=0)
         status.set_text(
             f"t {s['t_s']:6.2f} s  x {s['x_m']:+.2f} m  y {s['y_m']:+.2f} m  heading "
             f"{s['heading_deg']:+.0f}°  |  v {s['vx_m_s']:+.2f} {s['vy_m_s']:+.2f} m/s, "

@@ -34,7 +34,8 @@ def policy_info(problem: Any) -> dict[str, Any]:
         "action": "offset (rad) from the nominal pose of each joint, in this order; "
                   "target = clip(nominal + action, lower, upper)",
         "joints": joints,
-        "followers": {"RHipYawPitch": "LHipYawPitch"},
+        "followers": ({"RHipYawPitch": "LHipYawPitch"} if problem.robot.name == "nao"
+                      else {}),
         "nominal_rad": [float(v) for v in sim.nominal[sim.columns]],
         "lower_rad": [float(v) for v in sim.lower], "upper_rad": [float(v) for v in sim.upper],
         "other_actuators": "hold the nominal pose",
@@ -61,7 +62,7 @@ def write_naoqi(ctx: Any) -> None:
 
     p = ctx.problem
     npz = ctx.out_dir / "policy.npz" if ctx.out_dir is not None else None
-    if p is None or npz is None or not npz.is_file():
+    if p is None or npz is None or not npz.is_file() or not p.robot.has("naoqi_policy"):
         return
     info = policy_info(p)
     export = p.robot.capability("naoqi_policy", "humanoid-omniwalk's NAOqi export")

@@ -142,7 +142,8 @@ def compare(run: str | Path, worlds: int = 100, duration_s: float = 60.0, seed: 
     o = problem.obs_dim
     rows = {"controller": (policy.params, policy.obs_mean, policy.obs_std),
             "engine": (engine, np.zeros(o), np.ones(o))}
-    out: dict[str, Any] = {"run": str(folder), "worlds": int(worlds), "seed": int(seed),
+    out: dict[str, Any] = {"run": str(folder), "robot": problem.robot.name,
+                           "worlds": int(worlds), "seed": int(seed),
                            "duration_s": float(duration_s),
                            "push_ns": list(problem.draw.push_ns)}
     quiet = quiet_problem(problem)
@@ -156,7 +157,8 @@ def compare(run: str | Path, worlds: int = 100, duration_s: float = 60.0, seed: 
 
 def table(res: dict[str, Any]) -> str:
     lo, hi = res["push_ns"]
-    lines = [f"NAO, {res['worlds']} unseen perturbed worlds, {res['duration_s']:g} s of random "
+    robot = {"nao": "NAO", "op3": "OP3"}.get(res.get("robot", "nao"), res.get("robot"))
+    lines = [f"{robot}, {res['worlds']} unseen perturbed worlds, {res['duration_s']:g} s of random "
              f"commands each, one push U({lo:g}, {hi:g}) N s (seed {res['seed']})", "",
              "| controller | survival | time up (s) | speed error (m/s) | relative | yaw-rate "
              "error (deg/s) | relative | power (W) |", "|---|---|---|---|---|---|---|---|"]

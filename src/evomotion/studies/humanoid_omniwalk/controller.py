@@ -1,4 +1,6 @@
-"""The NAO walk controller: which joints it drives, what it reads, where its search starts.
+"""The walk controller: which joints it drives, what it reads, where its search starts.
+
+The NAO (``robot`` "nao", the default):
 
 - Drives 15 joints every control period: both legs (the hip yaw-pitch motor once, as on the
   real NAO, where ``RHipYawPitch`` follows ``LHipYawPitch``) and both shoulders' pitch and
@@ -10,6 +12,13 @@
   harmonics, each an affine function of the command, plus linear feedback on the normalised
   observation. :meth:`Controller.initial_params` fits the tape by least squares to the walk
   engine (:mod:`.omni_gait`) over a grid of commands, one cycle each (feedback 0).
+
+Any other biped (the OP3, the dm_control humanoid, a spec ``.toml``): the same structure and
+observations on its own legs: it drives the joints of both leg chains (from the pelvis to each
+foot; :class:`evomotion.sim.leg_ik.LegChain`), reads its evolved joints (the spec's
+``[evolve]``), and its tape is fitted to the engine placed around its ready pose by numerical
+leg IK, scaled to its leg (:mod:`.ik_gait`). Its motors' speeds are checked only where the robot
+declares them (the ``speed_limits`` capability); otherwise the speed excess is 0.
 """
 
 from __future__ import annotations
@@ -25,6 +34,7 @@ from evomotion.sim.robots import load_robot, nao
 from evomotion.sim.robots.nao.joint_limits import SPEED_LIMITS
 from evomotion.sim.robots.nao.model import initial_state
 from evomotion.sim.rollout import ServoWork
+from evomotion.studies.humanoid_omniwalk.ik_gait import IKGait
 from evomotion.studies.humanoid_omniwalk.omni_gait import OmniGait, targets
 
 ARMS = ("LShoulderPitch", "RShoulderPitch", "LShoulderRoll", "RShoulderRoll")
@@ -40,25 +50,40 @@ class Controller:
 
     def __init__(self, gait: OmniGait, control_period_s: float = 0.02, harmonics: int = 3,
                  clip_obs: float = 5.0, threads: int = 1,
-                 command_feedback: bool = False, feedback_start: float = 0.0) -> None:
+                 command_feedback: bool = False, feedback_start: float = 0.0,
+                 robot: str = "nao") -> None:
         from evomotion.errors import InputError
 
-        self.gait, self.feedback_start = gait, float(feedback_start)
-        self.robot = r = load_robot("nao")
+        self.feedback_start = float(feedback_start)
+        self.robot = r = load_robot(robot or "nao")
         self.dt = float(r.model.opt.timestep)
         k = control_period_s / self.dt
         if abs(k - round(k)) > 1e-6 or round(k) < 1:
             raise InputError(f"problem.control_period_s: {control_period_s} s is not a whole "
-                             f"number of the NAO's {self.dt} s physics steps")
+                             f"number of {r.name}'s {self.dt} s physics steps")
         self.control_dt = round(k) * self.dt
-        col = {j: i for i, j in enumerate(nao.JOINTS)}
-        self.columns = np.array([col[j] for j in DRIVEN])
+        if r.name == "nao":  # the closed-form engine, the shoulders, one hip yaw-pitch motor
+            self.gait = gait
+            self.engine = lambda phase, command: targets(gait, phase, command)
+            col = {j: i for i, j in enumerate(nao.JOINTS)}
+            self.driven = DRIVEN
+            self.columns = np.array([col[j] for j in DRIVEN])
+            followers = [(col["RHipYawPitch"], col["LHipYawPitch"])]
+            speeds = SPEED_LIMITS
+        else:
+            ik = IKGait(r, gait)
+            self.gait, self.engine, self.columns = ik.gait, ik.targets, ik.columns
+            self.driven = tuple(r.joints[c] for c in self.columns)
+            followers = []
+            speeds = (r.capability("speed_limits", "humanoid-omniwalk").SPEED_LIMITS
+                      if r.has("speed_limits") else {})
         phases = np.linspace(0.0, 1.0, 48, endpoint=False)
-        self.nominal = targets(gait, phases, np.zeros((48, 3))).mean(axis=0)
-        self.obs_spec = ObservationSpec(CHANNELS, phase_period_s=gait.period_s, command_size=3)
+        self.nominal = self.engine(phases, np.zeros((48, 3))).mean(axis=0)
+        self.obs_spec = ObservationSpec(CHANNELS, phase_period_s=self.gait.period_s,
+                                        command_size=3)
         self.sim = ClosedLoopSimulator(r, self.obs_spec, int(round(k)), threads,
                                        columns=self.columns, nominal=self.nominal,
-                                       followers=[(col["RHipYawPitch"], col["LHipYawPitch"])])
+                                       followers=followers)
         names = list(self.sim.observe.names)
         self.policy = StructuredSpec(
             self.sim.observation_size, self.columns.size,
@@ -68,9 +93,10 @@ class Controller:
             command_feedback=command_feedback,
             low=self.sim.lower - self.nominal[self.columns],
             high=self.sim.upper - self.nominal[self.columns])
-        self.window = max(1, int(round(gait.period_s / self.control_dt)))  # one gait cycle
-        self.state0 = initial_state(r.model, self.nominal)
-        self.speed_limits = np.array([SPEED_LIMITS[j] for j in DRIVEN])
+        self.window = max(1, int(round(self.gait.period_s / self.control_dt)))  # one cycle
+        self.state0 = (initial_state(r.model, self.nominal) if r.name == "nao"
+                       else r.state_at(self.nominal))
+        self.speed_limits = np.array([speeds.get(j, np.inf) for j in self.driven])
         self.work = ServoWork(r.model, self.columns)
 
     def initial_params(self) -> np.ndarray:
@@ -81,7 +107,7 @@ class Controller:
         grid = np.stack(np.meshgrid(*FIT_GRID, indexing="ij"), axis=-1).reshape(-1, 3)
         t = np.arange(0.0, self.gait.period_s, FIT_DT_S)
         tt, cc = np.tile(t, len(grid)), np.repeat(grid, t.size, axis=0)
-        q = targets(self.gait, tt / self.gait.period_s, cc)[:, self.columns]
+        q = self.engine(tt / self.gait.period_s, cc)[:, self.columns]
         coeffs = fit_tape(tt, q - self.nominal[self.columns], self.gait.period_s,
                           self.policy.harmonics, commands=cc)
         params = self.policy.params_from_tape(coeffs)

@@ -5,7 +5,9 @@ The controller (:mod:`.controller`) is a structured policy: a phase tape modulat
 command ``(vx, vy, ω)`` (fitted by least squares to the walk engine of :mod:`.omni_gait`, where
 the search starts) plus linear feedback from the NAO's sensors (joint angles and velocities,
 the IMU's gravity direction and gyro, the feet's contacts, the command); it sets 15 joints
-every ``control_period_s`` (the legs, the hip yaw-pitch motor once, the shoulders).
+every ``control_period_s`` (the legs, the hip yaw-pitch motor once, the shoulders). Another
+biped (``robot``: the OP3, the dm humanoid, a spec ``.toml``) gets the same controller on its
+legs, fitted to the engine solved by its numerical leg IK (:mod:`.ik_gait`).
 
 Every episode (``duration_s``) is one perturbed world (:mod:`evomotion.studies.episode_worlds`:
 friction, masses, CoM, motors, latency, one push up to ``push_max_ns``) and one random command
@@ -31,7 +33,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from evomotion.core.checks import check_fields, check_number, inf_ok
+from evomotion.core.checks import check_fields, check_number, check_text, inf_ok
 from evomotion.core.problem import Evaluation, GenomeSpec, Sense
 from evomotion.errors import InputError
 from evomotion.studies.episode_worlds import WorldDraw, episode_world, push_range
@@ -53,6 +55,7 @@ METRICS = ("return", "steps", "survived", "time_up_s", "speed_error_mps",
 class OmniWalkConfig:
     """``[problem]`` of humanoid-omniwalk (SI units)."""
 
+    robot: str = ""  # "" or "nao": the NAO; another bundled biped (op3, dm-humanoid) or a spec
     duration_s: float = 8.0  # episode length (s)
     control_period_s: float = 0.02  # the controller's period (s)
     harmonics: int = 3  # sin/cos pairs of the phase tape
@@ -86,17 +89,20 @@ class OmniWalkConfig:
     speed_weight: float = 0.5  # score lost per unit of speed excess
     param_bound: float = 100.0  # the genome box +- this
     threads: int = 0  # mujoco.rollout threads; 0 = all cores (1 in a worker process)
-    # the walk engine the tape starts from (omni_gait.py)
+    # the walk engine the tape starts from (omni_gait.py), in the NAO's units: another robot
+    # takes them scaled to its leg (ik_gait.py)
     period_s: float = 0.48
     swing_fraction: float = 0.45
     step_height_m: float = 0.02
     leg_height_m: float = 0.155
     width_m: float = 0.03
     sway_m: float = 0.025
+    sway_phase_rad: float = 0.0  # ψ_s (omni_gait.py; the other robots' engine: ik_gait.py)
     lean_rad: float = 0.05
 
     def validate(self) -> None:
         check_fields(self, "problem")
+        check_text("problem.robot", self.robot)
         check_number("problem.duration_s", self.duration_s, lo=0.0, hi=600.0, lo_open=True)
         check_number("problem.control_period_s", self.control_period_s, lo=0.0, hi=1.0,
                      lo_open=True)
@@ -129,6 +135,7 @@ class OmniWalkConfig:
         check_number("problem.width_m", self.width_m, lo=-0.01, hi=0.06)
         check_number("problem.sway_m", self.sway_m, lo=0.0, hi=0.06)
         check_number("problem.lean_rad", self.lean_rad, lo=-0.2, hi=0.4)
+        check_number("problem.sway_phase_rad", self.sway_phase_rad, lo=-math.pi, hi=math.pi)
         for key in ("normalize", "perturb", "command_feedback"):
             if not isinstance(getattr(self, key), bool):
                 raise InputError(f"problem.{key}: expected true or false, got "
@@ -137,7 +144,8 @@ class OmniWalkConfig:
     def gait(self) -> OmniGait:
         return OmniGait(period_s=self.period_s, swing_fraction=self.swing_fraction,
                         step_height_m=self.step_height_m, leg_height_m=self.leg_height_m,
-                        width_m=self.width_m, sway_m=self.sway_m, lean_rad=self.lean_rad)
+                        width_m=self.width_m, sway_m=self.sway_m, lean_rad=self.lean_rad,
+                        sway_phase_rad=self.sway_phase_rad)
 
     def commands(self) -> CommandDraw:
         return CommandDraw(self.vx_min, self.vx_max, self.vy_max, self.yaw_rate_max,
@@ -162,7 +170,7 @@ class OmniWalkProblem:
         threads = cfg.threads or max(1, min(os.cpu_count() or 1, 8))
         self.ctl = ctl = Controller(cfg.gait(), cfg.control_period_s, cfg.harmonics,
                                     cfg.clip_obs, threads, cfg.command_feedback,
-                                    cfg.command_feedback_start)
+                                    cfg.command_feedback_start, cfg.robot)
         self.robot, self.sim, self.policy = ctl.robot, ctl.sim, ctl.policy
         self.obs_spec, self.obs_names = ctl.obs_spec, ctl.sim.observe.names
         self.obs_dim, self.act_dim = self.sim.observation_size, self.sim.action_size

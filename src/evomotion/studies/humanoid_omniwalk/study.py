@@ -1,5 +1,6 @@
-"""Study ``humanoid-omniwalk``: a closed-loop omnidirectional NAO walk controller, evolved by
-ARS (or OpenAI-ES, PGPE, SNES, CMA-ES) from a fitted walk engine through the run loop.
+"""Study ``humanoid-omniwalk``: a closed-loop omnidirectional walk controller for the NAO (or
+another biped, ``--robot``), evolved by ARS (or OpenAI-ES, PGPE, SNES, CMA-ES) from a fitted
+walk engine through the run loop.
 
 ``evomotion run humanoid-omniwalk`` evolves the controller of :mod:`.controller` (a phase
 tape modulated by the command ``(vx, vy, ω)`` plus feedback from the IMU, the joints and the
@@ -22,7 +23,8 @@ from evomotion.studies.view import StudyView, lazy
 
 ARTIFACTS = "evomotion.studies.humanoid_omniwalk.artifacts"
 
-cli = typer.Typer(help="A closed-loop omnidirectional NAO walk.", no_args_is_help=True)
+cli = typer.Typer(help="A closed-loop omnidirectional walk (the NAO, or --robot op3).",
+                  no_args_is_help=True)
 
 
 @cli.command("compare")
@@ -44,8 +46,9 @@ def compare_cmd(run: Path = typer.Argument(..., help="a humanoid-omniwalk run fo
 
 STUDY = Study(
     name="humanoid-omniwalk",
-    description="A closed-loop omnidirectional NAO walk: a command-modulated gait tape plus "
-                "sensor feedback, evolved by ARS over random commands in pushed worlds.",
+    description="A closed-loop omnidirectional NAO walk (or another biped's, --robot): a "
+                "command-modulated gait tape plus sensor feedback, evolved by ARS over random "
+                "commands in pushed worlds.",
     problem_config=OmniWalkConfig,
     make_problem=OmniWalkProblem,
     # ARS V2-t (Mania et al. 2018), 16 directions, the best 8, noise 0.005: noise 0.02 (0.6
