@@ -43,10 +43,9 @@ def test_commands_are_clipped_to_the_ranges_pushes_count_and_reset_starts_again(
 
 
 def test_another_robots_controller_walks_that_robot(tmp_path):
-    """An OP3 walk run's controller (a one-generation run) is driven on the OP3, framed by its
-    size; a policy.json naming no bundled robot is one line."""
-    import json
-
+    """An OP3 walk run's controller (a one-generation run) is driven on the OP3 (the robot the
+    studio reads from the run's config: studio/views.robot_of), framed by its size; an unknown
+    robot is one line."""
     from evomotion.run.config import resolve_config
     from evomotion.run.runner import run_study
     from evomotion.studies import get_study
@@ -56,11 +55,11 @@ def test_another_robots_controller_walks_that_robot(tmp_path):
     run_study(s, resolve_config(s, None, ["problem.robot='op3'", *s.smoke,
                                           "run.generations=1", "run.videos=false"]),
               out, quiet=True)
-    walk = LiveWalk(out)
+    walk = LiveWalk(out, "op3")
     assert walk.robot.name == "op3" and 0.2 < walk.height_m < 0.3
     assert walk.advance(np.array([0.1, 0.0, 0.0]), 0.5) == 25 and not walk.fell
-    info = json.loads((out / "policy.json").read_text())
-    (out / "policy.json").write_text(json.dumps(dict(info, robot="r2d2")))
-    with pytest.raises(InputError, match="key 'robot'") as e:
-        LiveWalk(out)
+    with pytest.raises(InputError, match="r2d2") as e:
+        LiveWalk(out, "r2d2")
     assert "\n" not in str(e.value)
+    with pytest.raises(InputError, match="not in the simulated model"):
+        LiveWalk(out, "nao")  # the OP3's joints are not the NAO's

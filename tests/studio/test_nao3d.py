@@ -106,7 +106,7 @@ def test_another_robots_motion_plays_on_that_robot(tmp_path):
         HumanoidRepertoireConfig,
         make_problem,
     )
-    from evomotion.studio.views import scene_of
+    from evomotion.studio.views import robot_of, scene_of
 
     p = make_problem(HumanoidRepertoireConfig(robot="op3", threads=1))
     g = p.steps.default.copy()  # the in-place step: it stands
@@ -127,4 +127,5 @@ def test_another_robots_motion_plays_on_that_robot(tmp_path):
         cfg = resolve_config(s, None, [f"problem.robot={robot_name!r}"] if robot_name else [])
         (run / "config.toml").write_text(config_to_toml(cfg))
         assert scene_of(run) == scene
-    assert scene_of(tmp_path / "nothing") == "nao"
+        assert robot_of(run) == robot_name  # the drive view's robot ("": the NAO)
+    assert scene_of(tmp_path / "nothing") == "nao" and robot_of(tmp_path / "nothing") is None

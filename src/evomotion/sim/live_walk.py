@@ -20,7 +20,7 @@ import mujoco
 import numpy as np
 
 from evomotion.core.checks import check_number
-from evomotion.sim.policy_player import MAX_JSON_BYTES, PolicyPlayer
+from evomotion.sim.policy_player import PolicyPlayer
 from evomotion.sim.robots import load_robot
 from evomotion.sim.robots.nao.model import initial_state
 from evomotion.sim.state import STATE_SPEC
@@ -31,27 +31,12 @@ MAX_PUSH_NS = 20.0
 MAX_ADVANCE_S = 1.0
 
 
-def _robot_of(folder: Path) -> str:
-    """The bundled robot named by ``folder/policy.json`` (the NAO when it names none)."""
-    from evomotion.errors import InputError
-    from evomotion.sim.robots import bundled_robots
-    from evomotion.textio import read_json
-
-    path = folder / "policy.json"
-    info = read_json(path, "controller description (policy.json)", MAX_JSON_BYTES)
-    name = info.get("robot", "nao") if isinstance(info, dict) else "nao"
-    if not isinstance(name, str) or name not in bundled_robots():
-        raise InputError(f"{path}: key 'robot': a bundled robot ({', '.join(bundled_robots())})"
-                         f", got {name!r}")
-    return name
-
-
 class LiveWalk:
-    """The controller of run folder ``folder`` walking its robot (``policy.json``'s
-    ``robot``: a bundled one; the NAO when absent) under a live command."""
+    """The controller of run folder ``folder`` walking ``robot`` (a bundled name or a spec
+    path: the run's ``problem.robot``; ``""`` the NAO) under a live command."""
 
-    def __init__(self, folder: str | Path) -> None:
-        self.robot = load_robot(_robot_of(Path(folder)))
+    def __init__(self, folder: str | Path, robot: str = "nao") -> None:
+        self.robot = load_robot(robot or "nao")
         self.model = m = self.robot.model
         self.player = PolicyPlayer(folder, m, CONTACTS)
         self.command_ranges = dict(self.player.command_ranges)
@@ -66,7 +51,7 @@ class LiveWalk:
         """The robot standing in its nominal stance, the clock at 0, no command."""
         m, d = self.model, self.data
         mujoco.mj_resetData(m, d)
-        state = (initial_state(m, self.player.nominal) if self.robot.name == "nao"
+        state = (initial_state(m, self.player.nominal) if self.robot.has("leg_ik")
                  else self.robot.state_at(self.player.nominal))
         mujoco.mj_setState(m, d, state, STATE_SPEC)
         mujoco.mj_forward(m, d)

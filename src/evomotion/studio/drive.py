@@ -28,14 +28,16 @@ DIRECTIONS = {"from behind (+x)": 0.0, "from the right (+y)": 90.0, "from the fr
               "from the left (-y)": -90.0}
 
 
-def drive_panel(ui, run_dir: Path) -> None:
+def drive_panel(ui, run_dir: Path, robot: str = "nao") -> None:
+    """The drive view of ``run_dir``'s controller on ``robot`` (its config's ``problem.robot``,
+    checked by the caller)."""
     from evomotion.sim.live_walk import LiveWalk
     from evomotion.studio.nao3d import _add_geom, geom_table
 
     if not (run_dir / "policy.json").exists():
         ui.label("no policy.json in this run yet (written at checkpoints)").classes("drive-empty")
         return
-    walk = LiveWalk(run_dir)
+    walk = LiveWalk(run_dir, robot)
     names = list(walk.command_ranges)
     ui.label("drive the controller: W/S or arrows forward/back, A/D turn, Q/E sideways, "
              "P or space push, R restart").classes("font-bold drive-help")

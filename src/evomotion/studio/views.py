@@ -63,23 +63,31 @@ def _problem(study: str, run_dir: Path) -> Any:
     return s.make_problem(config_from_dict(s, raw).problem)
 
 
+def robot_of(run_dir: Path) -> str | None:
+    """The run config's ``problem.robot`` (``""``: the study's own robot) if the studio may
+    load it (:func:`check_robot`: else one :class:`InputError` line); None without a readable
+    config."""
+    from evomotion.run.config import config_from_run_dir
+
+    try:
+        _, raw = config_from_run_dir(run_dir)
+    except Exception:  # noqa: BLE001 - no readable config
+        return None
+    problem = raw.get("problem")
+    return check_robot(problem.get("robot", "") if isinstance(problem, dict) else "")
+
+
 def scene_of(run_dir: Path, default: str = "nao") -> str:
     """The 3D scene of a run's motions: ``default`` (the NAO's) for a robot whose motions are
     Webots ``.motion`` files (the capability ``webots_names``), else ``"robot:<spec>"`` (its
     config's ``problem.robot``). A robot the studio must not
     load (not a bundled name, nor a regular spec file of bounded size: ``/dev/zero``, a FIFO,
     a huge file) is one :class:`InputError` line, and nothing is loaded."""
-    from evomotion.run.config import config_from_run_dir
-
-    try:
-        _, raw = config_from_run_dir(run_dir)
-    except Exception:  # noqa: BLE001 - no readable config: the NAO's scene
+    robot = robot_of(run_dir)
+    if robot is None:  # no readable config: the NAO's scene
         return default
-    problem = raw.get("problem")
-    robot = problem.get("robot", "") if isinstance(problem, dict) else ""
     from evomotion.sim.robots import capabilities_of
 
-    robot = check_robot(robot)
     # the NAO scene plays Webots motions of the NAO's joints; any other robot its own scene
     return default if "webots_names" in capabilities_of(robot) else f"robot:{robot}"
 
@@ -121,7 +129,7 @@ def render(study: str, root: Path, run_dir: Path) -> None:
         if view.drive:
             from evomotion.studio.drive import drive_panel
 
-            drive_panel(ui, run_dir)
+            drive_panel(ui, run_dir, robot_of(run_dir) or "nao")
     except NothingYetError as e:
         ui.label(one_line(e)).classes("view-empty")
     except InputError as e:  # a file of the run the studio refuses to read or load

@@ -34,8 +34,7 @@ def policy_info(problem: Any) -> dict[str, Any]:
         "action": "offset (rad) from the nominal pose of each joint, in this order; "
                   "target = clip(nominal + action, lower, upper)",
         "joints": joints,
-        "followers": ({"RHipYawPitch": "LHipYawPitch"} if problem.robot.name == "nao"
-                      else {}),
+        "followers": dict(ctl.followers),
         "nominal_rad": [float(v) for v in sim.nominal[sim.columns]],
         "lower_rad": [float(v) for v in sim.lower], "upper_rad": [float(v) for v in sim.upper],
         "other_actuators": "hold the nominal pose",

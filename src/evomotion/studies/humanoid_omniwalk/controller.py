@@ -62,19 +62,23 @@ class Controller:
             raise InputError(f"problem.control_period_s: {control_period_s} s is not a whole "
                              f"number of {r.name}'s {self.dt} s physics steps")
         self.control_dt = round(k) * self.dt
-        if r.name == "nao":  # the closed-form engine, the shoulders, one hip yaw-pitch motor
+        #: the NAO (its closed-form leg IK: the bundled spec's capability; a copy of nao.toml
+        #: elsewhere has none and is walked as any biped): the closed-form engine, the
+        #: shoulders, one hip yaw-pitch motor
+        self.closed_form = r.has("leg_ik")
+        if self.closed_form:
             self.gait = gait
             self.engine = lambda phase, command: targets(gait, phase, command)
             col = {j: i for i, j in enumerate(nao.JOINTS)}
             self.driven = DRIVEN
             self.columns = np.array([col[j] for j in DRIVEN])
-            followers = [(col["RHipYawPitch"], col["LHipYawPitch"])]
+            self.followers = {"RHipYawPitch": "LHipYawPitch"}
             speeds = SPEED_LIMITS
         else:
             ik = IKGait(r, gait)
             self.gait, self.engine, self.columns = ik.gait, ik.targets, ik.columns
             self.driven = tuple(r.joints[c] for c in self.columns)
-            followers = []
+            self.followers = {}
             speeds = (r.capability("speed_limits", "humanoid-omniwalk").SPEED_LIMITS
                       if r.has("speed_limits") else {})
         phases = np.linspace(0.0, 1.0, 48, endpoint=False)
@@ -83,7 +87,8 @@ class Controller:
                                         command_size=3)
         self.sim = ClosedLoopSimulator(r, self.obs_spec, int(round(k)), threads,
                                        columns=self.columns, nominal=self.nominal,
-                                       followers=followers)
+                                       followers=[(r.joints.index(f), r.joints.index(lead))
+                                                  for f, lead in self.followers.items()])
         names = list(self.sim.observe.names)
         self.policy = StructuredSpec(
             self.sim.observation_size, self.columns.size,
@@ -94,7 +99,7 @@ class Controller:
             low=self.sim.lower - self.nominal[self.columns],
             high=self.sim.upper - self.nominal[self.columns])
         self.window = max(1, int(round(self.gait.period_s / self.control_dt)))  # one cycle
-        self.state0 = (initial_state(r.model, self.nominal) if r.name == "nao"
+        self.state0 = (initial_state(r.model, self.nominal) if self.closed_form
                        else r.state_at(self.nominal))
         self.speed_limits = np.array([speeds.get(j, np.inf) for j in self.driven])
         self.work = ServoWork(r.model, self.columns)

@@ -44,6 +44,8 @@ NAO_HIP_TO_SOLE_M = 0.2209
 NAO_FOOT_HEIGHT_M = 0.04519
 #: most an IK pose of the fitted gait may miss its foot target by (m, per unit of ``s``)
 MAX_IK_ERROR_M = 0.005
+#: ... and its foot orientation by (rad)
+MAX_IK_ERROR_RAD = 0.05
 
 
 def scaled(gait: OmniGait, scale: float) -> OmniGait:
@@ -82,7 +84,7 @@ class IKGait:
         self.gait = scaled(gait, self.scale)
         #: the walk's crouch: the sole this much higher (torso frame) than in the ready pose
         self.crouch_m = self.scale * (NAO_HIP_TO_SOLE_M - gait.leg_height_m - NAO_FOOT_HEIGHT_M)
-        self.pose = pose
+        self.pose, self.name = pose, robot.name
         self.columns = np.concatenate([f.leg.columns for f in self.feet])
 
     def targets(self, phase: np.ndarray, command: np.ndarray) -> np.ndarray:
@@ -110,10 +112,16 @@ class IKGait:
                             f.p0[2] + self.crouch_m + lift * g.step_height_m], axis=-1)
             target = (lean @ pos[..., None])[..., 0].reshape(-1, 3)
             rot = (lean @ rot_z(yaw) @ f.r0).reshape(-1, 3, 3)
-            q, err, _ = f.leg.solve(target, rot)
-            if err.size and err.max() > MAX_IK_ERROR_M * self.scale:
-                raise InputError(f"humanoid-omniwalk: the {('right', 'left')[f.side > 0]} "
-                                 f"foot misses its gait target by {err.max() * 1000:.1f} mm "
-                                 "(the leg cannot reach it: a smaller step, crouch or width)")
+            q, err, err_rad = f.leg.solve(target, rot)
+            if err.size and (err.max() > MAX_IK_ERROR_M * self.scale
+                             or err_rad.max() > MAX_IK_ERROR_RAD):
+                raise InputError(
+                    f"problem: {self.name}'s {('right', 'left')[f.side > 0]} foot misses its "
+                    f"gait target by {err.max() * 1000:.1f} mm, "
+                    f"{np.degrees(err_rad.max()):.1f} deg (beyond its leg's reach or joint "
+                    "ranges): expected a gait it can reach; try a smaller problem.period_s, "
+                    "step_height_m, width_m, sway_m, lean_rad or leg_height_m (a deeper "
+                    "crouch), or "
+                    "smaller command ranges (vx_min, vx_max, vy_max, yaw_rate_max)")
             out[..., f.leg.columns] = q.reshape(phi.shape + (-1,))
         return out

@@ -4,7 +4,7 @@ This is the reference the walk controller's phase tape is fitted to (:func:`fit_
 then evolved closed loop, :mod:`.controller`); its structure is that of the walk engines NAO
 teams run (B-Human's, ``/work/shared/reference/walking.md`` sections 1-2; Graf et al. 2009):
 feet placed in Cartesian space relative to the torso, a fixed step period, the step size set by
-the commanded velocity, the torso swayed over the stance foot, closed-form leg IK
+the commanded velocity, the torso swayed from side to side, closed-form leg IK
 (:mod:`evomotion.sim.robots.nao.leg_ik`).
 
 Walk frame: the torso's, upright (metres, seconds, radians). Phase ``φ = t / T`` (cycles); the
@@ -20,7 +20,11 @@ at the command when ``d = (vx, vy, ω) (1 - w) T``. Foot ``s`` (+1 left, -1 righ
 The NAO's two hip yaw-pitch joints are one motor, so the feet can only yaw in mirror image:
 each foot gets half the relative yaw ``(u_left − u_right) dψ`` with its own sign, and its
 ``(x, y)`` is rotated about the torso by it. ``sway = -A cos(2π(φ − w/2) + ψ_s)`` shifts
-both feet (so the torso over the stance foot), ``lift = (1 − cos 2π p/w) / 2`` in swing.
+both feet sideways: at ``ψ_s = 0``, at mid-swing towards the stance foot's side (the torso
+towards the swing foot's): on the NAO's quick 0.48 s cycle the engine walks with it
+(0.2 m/s commanded: 0.15 walked, nominal world), while the quasi-static phase ``ψ_s = π``,
+the torso over the stance foot (what :mod:`.ik_gait` uses for other robots), stays up but
+barely moves (0.2 m/s: 0.0 walked). ``lift = (1 − cos 2π p/w) / 2`` in swing.
 Shoulder pitches swing against the legs, ``± arm vx cos(2π(φ − w/2))``.
 """
 
