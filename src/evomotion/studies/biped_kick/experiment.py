@@ -88,13 +88,21 @@ def kick_worlds(problem: KickProblem, n: int, rng: np.random.Generator) -> list:
 
 
 def perturbed_kicks(problem: KickProblem, genome: np.ndarray, offsets: np.ndarray,
-                    aim_deg: float = 0.0, worlds: list | None = None) -> dict[str, np.ndarray]:
+                    aim_deg: float = 0.0, worlds: list | None = None,
+                    adapt: bool = False, left_foot: bool = False) -> dict[str, np.ndarray]:
     """One kick per ball offset ``[n, 2]`` at ``aim_deg`` (a single batch); ``worlds``: one
-    perturbed world per kick (:func:`kick_worlds`), else the nominal scene."""
+    perturbed world per kick (:func:`kick_worlds`), else the nominal scene; ``adapt``: the
+    swing follows the ball's offset; ``left_foot``: the mirrored kick, the offsets mirrored
+    with it (:meth:`.problem.KickProblem.kicks`)."""
     n = len(offsets)
     g = np.repeat(np.atleast_2d(genome), n, axis=0)
     aims = np.full(n, np.radians(aim_deg))
-    k = problem.kicks(g, aims, problem.ball_xy(g, aims) + offsets, worlds=worlds)
+    if left_foot:  # where the left-foot kick wants the ball: the right one's, mirrored
+        flip = np.array([1.0, -1.0])
+        ball = (problem.ball_xy(g, -aims) + np.asarray(offsets) * flip) * flip
+    else:
+        ball = problem.ball_xy(g, aims) + offsets
+    k = problem.kicks(g, aims, ball, worlds=worlds, adapt=adapt, left_foot=left_foot)
     return {"distance_m": k["along_m"], "lateral_m": k["lateral_m"],
             "angle_error_deg": np.degrees(k["angle_error_rad"]), "fell": k["fell"].astype(float),
             "min_margin_m": k["min_margin_m"], "exec_time_s": k["exec_time_s"]}

@@ -22,6 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from evomotion.sim.motion import Motion
+from evomotion.sim.robots.nao.mirror import mirror_targets
 from evomotion.studies.biped_kick import scene
 from evomotion.studies.biped_kick.motion import (
     BALL_GAP_M,
@@ -43,6 +44,8 @@ class ClosedFormKick:
     limits = None  # limit_excess' default: the NAO's ranges and motor speeds
     gap_m = BALL_GAP_M
     sole_half = scene.SOLE_HALF_M
+    #: targets in mirror image: the left-foot kick (the NAO is symmetric)
+    mirror = staticmethod(mirror_targets)
 
     def __init__(self, robot, cfg) -> None:
         for cap in CLOSED_FORM_CAPABILITIES:
@@ -66,8 +69,9 @@ class ClosedFormKick:
         return foot_trajectories(genomes, times_s, aims_rad)
 
     def joint_targets(self, genomes: np.ndarray, times_s: np.ndarray,
-                      aims_rad: np.ndarray | float = 0.0) -> tuple[np.ndarray, None]:
-        return joint_targets(genomes, times_s, aims_rad), None
+                      aims_rad: np.ndarray | float = 0.0,
+                      ball_shift: np.ndarray | None = None) -> tuple[np.ndarray, None]:
+        return joint_targets(genomes, times_s, aims_rad, ball_shift), None
 
     def kick_motion(self, genome: np.ndarray, aim_rad: float = 0.0) -> Motion:
         return kick_motion(genome, aim_rad)

@@ -138,10 +138,16 @@ def _bezier_phase(p0: np.ndarray, p3: np.ndarray, bulge: np.ndarray,
 def foot_trajectories(genomes: np.ndarray, times_s: np.ndarray,
                       aims_rad: np.ndarray | float = 0.0,
                       rest: tuple[np.ndarray, np.ndarray] | None = None,
-                      retract_bulge_m: float = 0.0) -> dict[str, np.ndarray]:
+                      retract_bulge_m: float = 0.0,
+                      ball_shift: np.ndarray | None = None) -> dict[str, np.ndarray]:
     """Ankle targets ``left``, ``right`` ``[B, T, 3]``, right-foot ``pitch`` and ``yaw``
     ``[B, T]``, from the feet at ``rest`` (left, right; torso frame; default: the NAO's ankles
-    in its crouch, :func:`rest_pose`; another robot's soles for :mod:`.robot_motion`)."""
+    in its crouch, :func:`rest_pose`; another robot's soles for :mod:`.robot_motion`).
+
+    ``ball_shift`` ``[B, 2]`` (m, forward and left): where the ball is seen relative to where
+    the kick wants it; the kicking foot's lift and kick points move by it, so the foot meets
+    the ball as planned (a ball-adaptive kick, as the kick engines of RoboCup teams adjust the
+    swing to the perceived ball; default: the ball where the kick wants it)."""
     g = np.atleast_2d(genomes)
     aims = np.broadcast_to(np.asarray(aims_rad, dtype=float), (len(g),))
     l0, r0 = rest_pose()[1:] if rest is None else rest
@@ -158,9 +164,13 @@ def foot_trajectories(genomes: np.ndarray, times_s: np.ndarray,
     phi = gene(g, "aim_swing") * aims
     u = np.stack([np.cos(phi), np.sin(phi), np.zeros(len(g))], axis=1)
 
+    seen = np.zeros((len(g), 3))
+    if ball_shift is not None:
+        seen[:, :2] = np.asarray(ball_shift, dtype=float).reshape(len(g), 2)
+
     def point(x: str, z: str) -> np.ndarray:
         up = np.stack([np.zeros(len(g)), gene(g, "kick_y_m"), gene(g, z)], axis=1)
-        return rest + up + gene(g, x)[:, None] * u
+        return rest + up + gene(g, x)[:, None] * u + seen
 
     L, K = point("lift_x_m", "lift_z_m"), point("kick_x_m", "kick_z_m")
     lift = _bezier_phase(rest, L, gene(g, "lift_bulge_m"), _smooth((t - ts) / tl))
@@ -212,11 +222,13 @@ def leg_joints(feet: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
 
 
 def joint_targets(genomes: np.ndarray, times_s: np.ndarray,
-                  aims_rad: np.ndarray | float = 0.0) -> np.ndarray:
-    """Actuator targets ``[B, T, 22]`` (order :data:`evomotion.sim.robots.nao.JOINTS`)."""
+                  aims_rad: np.ndarray | float = 0.0,
+                  ball_shift: np.ndarray | None = None) -> np.ndarray:
+    """Actuator targets ``[B, T, 22]`` (order :data:`evomotion.sim.robots.nao.JOINTS`);
+    ``ball_shift`` as :func:`foot_trajectories`'."""
     g = np.atleast_2d(genomes)
     q_rest, _, _ = rest_pose()
-    feet = foot_trajectories(g, times_s, aims_rad)
+    feet = foot_trajectories(g, times_s, aims_rad, ball_shift=ball_shift)
     ql, qr = leg_joints(feet)
     ctrl = np.broadcast_to(q_rest, (len(g), len(times_s), len(q_rest))).copy()
     ctrl[..., nao.joint_columns(LEFT)] = ql

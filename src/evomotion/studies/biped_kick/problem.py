@@ -229,7 +229,8 @@ class KickProblem:
         x = np.full_like(y, self._toe[0] + scene.BALL_RADIUS_M + self.kicker.gap_m)
         return np.stack([x + self.cfg.ball_dx_m, self._toe[1] + y + self.cfg.ball_dy_m], axis=1)
 
-    def controls(self, genomes: np.ndarray, aims_rad: np.ndarray
+    def controls(self, genomes: np.ndarray, aims_rad: np.ndarray,
+                 ball_shift: np.ndarray | None = None
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
         """(20 ms key poses ``[n, K, nu]``, physics-step targets ``[n, nstep, nu]``, each
         kick's end step ``[n]``: the motion plus ``roll_after_s``, each kick's IK error ``[n]``
@@ -239,7 +240,7 @@ class KickProblem:
         end = np.ceil((SETTLE_S + execution_time_s(genomes) + self.cfg.roll_after_s)
                       / self.dt).astype(int)
         kt = key_times(genomes)
-        keys, ik_error = self.kicker.joint_targets(genomes, kt, aims_rad)
+        keys, ik_error = self.kicker.joint_targets(genomes, kt, aims_rad, ball_shift)
         return keys, interpolate_controls(kt, keys, self.dt, int(end.max())), end, ik_error
 
     def ball_rest(self, states: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -252,16 +253,34 @@ class KickProblem:
         return q + v * speed[..., None] / (2 * self.decel), speed / self.decel
 
     def kicks(self, genomes: np.ndarray, aims_rad: np.ndarray, ball_xy: np.ndarray,
-              keep: bool = False, worlds: list | None = None) -> dict[str, np.ndarray]:
+              keep: bool = False, worlds: list | None = None,
+              adapt: bool = False, left_foot: np.ndarray | bool = False
+              ) -> dict[str, np.ndarray]:
         """One rollout per row: genome ``[n, d]``, aim ``[n]`` (rad), ball ``[n, 2]`` (world).
         Per-kick results; with ``keep`` also ``states``, ``sensors``, ``margin``, ``end``.
         ``worlds``: one perturbed :class:`~evomotion.sim.worlds.World` of this problem's
-        model per row (:func:`.experiment.kick_worlds`), else the nominal model."""
+        model per row (:func:`.experiment.kick_worlds`), else the nominal model. ``adapt``:
+        the kicking foot's swing follows the ball's offset from where the kick wants it
+        (:func:`.motion.foot_trajectories`' ``ball_shift``; the robot stands at the origin
+        facing +x, so world and robot frames agree). ``left_foot`` (per kick): kick with the
+        left foot, the right-foot kick in mirror image (the NAO's kicker only): its aim and
+        ball mirrored for the motion, the rollout in the real scene."""
         g = np.atleast_2d(np.asarray(genomes, dtype=float))
         aims = np.broadcast_to(np.asarray(aims_rad, dtype=float), (len(g),))
         ball0 = np.asarray(ball_xy, dtype=float).reshape(len(g), 2)
         exec_t = execution_time_s(g)
-        keys, ctrl, end, ik_error = self.controls(g, aims)
+        left = np.broadcast_to(np.asarray(left_foot, dtype=bool), (len(g),))
+        if left.any() and self.kicker.mirror is None:
+            raise InputError(f"left-foot kick: {self.robot.name}'s kicker has no mirror image "
+                             "(the NAO's closed-form kick only)")
+        flip = np.where(left, -1.0, 1.0)
+        aims_k = aims * flip  # the right-foot kick's aim and ball, mirrored where left
+        ball_k = ball0 * np.stack([np.ones(len(g)), flip], axis=1)
+        shift = ball_k - self.ball_xy(g, aims_k) if adapt else None
+        keys, ctrl, end, ik_error = self.controls(g, aims_k, shift)
+        if left.any():
+            keys[left], ctrl[left] = self.kicker.mirror(keys[left]), self.kicker.mirror(
+                ctrl[left])
         nstep = ctrl.shape[1]
         state0 = np.stack([self.kicker.initial_state(b) for b in ball0])
         if worlds is None:

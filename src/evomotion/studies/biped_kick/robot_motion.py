@@ -71,6 +71,8 @@ class NumericalKick:
 
     name = "numerical"
 
+    mirror = None  # no left-foot kick: the robot's symmetry is not known
+
     def __init__(self, robot, rolling_m: float) -> None:
         self.robot = robot
         self.legs = {f: LegChain(robot, f, robot.pose) for f in ("left", "right")}
@@ -125,18 +127,21 @@ class NumericalKick:
         return robot_scene.initial_state(self.model, self.robot, ball_xy)
 
     def foot_trajectories(self, genomes: np.ndarray, times_s: np.ndarray,
-                          aims_rad: np.ndarray | float = 0.0) -> dict[str, np.ndarray]:
+                          aims_rad: np.ndarray | float = 0.0,
+                          ball_shift: np.ndarray | None = None) -> dict[str, np.ndarray]:
         """The soles' paths (:func:`.motion.foot_trajectories`) from this robot's rest."""
         return foot_trajectories(genomes, times_s, aims_rad, rest=self.rest,
-                                 retract_bulge_m=self.retract_bulge_m)
+                                 retract_bulge_m=self.retract_bulge_m, ball_shift=ball_shift)
 
     def joint_targets(self, genomes: np.ndarray, times_s: np.ndarray,
-                      aims_rad: np.ndarray | float = 0.0
+                      aims_rad: np.ndarray | float = 0.0,
+                      ball_shift: np.ndarray | None = None
                       ) -> tuple[np.ndarray, np.ndarray]:
         """Actuator targets ``[B, T, nu]`` (order ``robot.joints``) and each kick's largest
-        sole distance from its planned place ``[B]`` (m; 0 when the IK reached every pose)."""
+        sole distance from its planned place ``[B]`` (m; 0 when the IK reached every pose);
+        ``ball_shift`` as :func:`.motion.foot_trajectories`'."""
         g = np.atleast_2d(genomes)
-        feet = self.foot_trajectories(g, times_s, aims_rad)
+        feet = self.foot_trajectories(g, times_s, aims_rad, ball_shift)
         b, t = feet["right"].shape[:2]
         ctrl = np.broadcast_to(self.robot.pose, (b, t, self.robot.pose.size)).copy()
         worst = np.zeros(b)
