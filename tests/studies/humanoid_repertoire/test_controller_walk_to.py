@@ -31,6 +31,25 @@ def test_walk_to_with_a_controller_reports_the_closed_loop_walk(omniwalk_run, tm
     assert list(tmp_path.iterdir()) == []  # nothing written
 
 
+def test_walk_to_walks_the_runs_robot(tmp_path):
+    """An OP3 controller (a one-generation `--robot op3` run) walks the OP3, not the NAO."""
+    from evomotion.run.config import resolve_config
+    from evomotion.run.runner import run_study
+    from evomotion.studies import get_study
+    from evomotion.studies.humanoid_repertoire.controller_walk_to import (
+        controller_walk_to,
+        run_robot,
+    )
+
+    s = get_study("humanoid-omniwalk")
+    out = tmp_path / "op3"
+    run_study(s, resolve_config(s, None, [*s.smoke, "run.generations=1", "run.videos=false",
+                                          "problem.robot='op3'"]), out, quiet=True)
+    assert run_robot(out) == "op3"
+    res = controller_walk_to(out, 0.1, 0.0, 0.0, hold_s=0.2, max_s=1.0)
+    assert isinstance(res["fell"], bool) and 0 < res["duration_s"] < 3.0
+
+
 @pytest.mark.parametrize("args,msg", [
     (["--x", "0.5", "--out", "w.motion"], "--out: a walk controller's walk is closed loop"),
     (["--x", "nan"], "--x"),

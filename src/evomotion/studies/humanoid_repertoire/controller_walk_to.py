@@ -1,7 +1,8 @@
 """``walk-to`` with a closed-loop walk controller (issue 34): ``evomotion humanoid-repertoire
 walk-to RUN`` where RUN is a ``humanoid-omniwalk`` run walks the NAO to the target pose with the
 run's exported controller instead of a chain of repertoire steps (which remains the command for
-a humanoid-repertoire run).
+a humanoid-repertoire run). The robot is the run's (``problem.robot``: the NAO, or the OP3 of
+``--robot op3``).
 
 The robot starts standing at rest in the controller's nominal stance (the start of its training
 episodes) at the origin facing +x; :class:`evomotion.sim.walk_to_pose.Walker` walks it (go-to-
@@ -39,25 +40,39 @@ from evomotion.sim.walk_to_pose import (
 
 CONTACTS = {"left": "left_floor", "right": "right_floor"}
 STOP_S = 0.5  # from the last walking targets to the standing stance (s)
-SOLES = ("l_sole_site", "r_sole_site")
+
+
+def run_robot(run: Path) -> str:
+    """The robot of a humanoid-omniwalk run folder (its config's ``problem.robot``; "" when
+    it names none: the NAO)."""
+    from evomotion.run.config import config_from_run_dir
+
+    _, raw = config_from_run_dir(run)
+    problem = raw.get("problem")
+    robot = problem.get("robot", "") if isinstance(problem, dict) else ""
+    return robot if isinstance(robot, str) else ""
 
 
 def controller_walk_to(run: Path, x: float, y: float, theta_deg: float,
                        video: Path | None = None, hold_s: float = 2.0, tol_m: float = 0.02,
                        tol_deg: float = 3.0, max_s: float = 60.0) -> dict[str, Any]:
-    """Walk to (x, y, theta_deg) with the controller of the humanoid-omniwalk run ``run``."""
-    robot = load_robot("nao")
+    """Walk to (x, y, theta_deg) with the controller of the humanoid-omniwalk run ``run``, on
+    the run's robot."""
+    robot = load_robot(run_robot(Path(run)) or "nao")
     m = robot.model
     player = PolicyPlayer(run, m, CONTACTS)
     vmax = command_limits(player, str(Path(run) / "policy.json"))
     d = mujoco.MjData(m)
-    mujoco.mj_setState(m, d, initial_state(m, player.nominal), STATE_SPEC)
+    sites = (robot.sole_site("left"), robot.sole_site("right"))
+    state = (initial_state(m, player.nominal) if robot.has("leg_ik")
+             else robot.state_at(player.nominal))
+    mujoco.mj_setState(m, d, state, STATE_SPEC)
     mujoco.mj_forward(m, d)
     start = torso_pose(d)
-    under = soles(d, SOLES)[:2] - start[:2]  # feet under the torso (start heading is 0)
+    under = soles(d, sites)[:2] - start[:2]  # feet under the torso (start heading is 0)
     goal = np.array([start[0] + x, start[1] + y, math.radians(theta_deg)])
     feet_goal = moved(goal[None], under)[0]
-    w = Walker(m, d, player, torso_pose, lambda data: soles(data, SOLES),
+    w = Walker(m, d, player, torso_pose, lambda data: soles(data, sites),
                [int(m.sensor(s).adr[0]) for s in CONTACTS.values()],
                fallen_test(robot.fall_height_m, robot.fall_tilt_rad))
     walked, reached = w.walk(goal[None], feet_goal, vmax, tol_m, tol_deg, max_s)
