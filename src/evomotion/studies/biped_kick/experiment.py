@@ -90,22 +90,32 @@ def kick_worlds(problem: KickProblem, n: int, rng: np.random.Generator) -> list:
 def perturbed_kicks(problem: KickProblem, genome: np.ndarray, offsets: np.ndarray,
                     aim_deg: float = 0.0, worlds: list | None = None,
                     adapt: bool = False, left_foot: bool = False) -> dict[str, np.ndarray]:
-    """One kick per ball offset ``[n, 2]`` at ``aim_deg`` (a single batch); ``worlds``: one
-    perturbed world per kick (:func:`kick_worlds`), else the nominal scene; ``adapt``: the
-    swing follows the ball's offset; ``left_foot``: the mirrored kick, the offsets mirrored
-    with it (:meth:`.problem.KickProblem.kicks`)."""
+    """One kick per ball offset ``[n, 2]`` (world frame, from where the kick wants the ball
+    plus the configured ``ball_dx_m``/``ball_dy_m``) at ``aim_deg`` (a single batch);
+    ``worlds``: one perturbed world per kick (:func:`kick_worlds`), else the nominal scene;
+    ``adapt``: the swing follows the ball's offset within the limits; ``left_foot``: the
+    mirrored kick, the ball where it wants it (:meth:`.problem.KickProblem.kicks`). With the
+    joint-range and motor-speed excess of the key poses as played and the share of the offset
+    the swing followed."""
+    if not isinstance(left_foot, bool | np.bool_):
+        raise InputError(f"perturbed kicks: left_foot is one true/false, got {left_foot!r}")
+    offsets = np.asarray(offsets, dtype=float)
+    if offsets.ndim != 2 or offsets.shape[1] != 2:
+        raise InputError(f"perturbed kicks: offsets must be [n, 2] (m), got {offsets.shape}")
     n = len(offsets)
     g = np.repeat(np.atleast_2d(genome), n, axis=0)
     aims = np.full(n, np.radians(aim_deg))
     if left_foot:  # where the left-foot kick wants the ball: the right one's, mirrored
-        flip = np.array([1.0, -1.0])
-        ball = (problem.ball_xy(g, -aims) + np.asarray(offsets) * flip) * flip
+        ball = problem.wanted_ball_xy(g, -aims) * [1.0, -1.0] + [problem.cfg.ball_dx_m,
+                                                                 problem.cfg.ball_dy_m]
     else:
-        ball = problem.ball_xy(g, aims) + offsets
-    k = problem.kicks(g, aims, ball, worlds=worlds, adapt=adapt, left_foot=left_foot)
+        ball = problem.ball_xy(g, aims)
+    k = problem.kicks(g, aims, ball + offsets, worlds=worlds, adapt=adapt, left_foot=left_foot)
     return {"distance_m": k["along_m"], "lateral_m": k["lateral_m"],
             "angle_error_deg": np.degrees(k["angle_error_rad"]), "fell": k["fell"].astype(float),
-            "min_margin_m": k["min_margin_m"], "exec_time_s": k["exec_time_s"]}
+            "min_margin_m": k["min_margin_m"], "exec_time_s": k["exec_time_s"],
+            "range_excess_rad": k["range_excess_rad"], "speed_excess_s": k["speed_excess_s"],
+            "adapt_fraction": k["adapt_fraction"]}
 
 
 def tolerant_offset(problem: KickProblem, genome: np.ndarray, aim_deg: float = 0.0,
@@ -141,11 +151,21 @@ def summary(m: dict[str, np.ndarray]) -> dict[str, float]:
             "worst_min_margin_m": float(np.min(margin)), "n": int(len(m["fell"]))}
 
 
+#: a kick whose ball travels less than this along its aim (m) is not "within ±10°"
+MIN_TRAVEL_M = 0.1
+
+
 def accuracy(m: dict[str, np.ndarray]) -> dict[str, float]:
     err = np.abs(m["angle_error_deg"])
-    return {"median_abs_angle_error_deg": float(np.median(err)),
-            "within_10deg": float(np.mean(err <= 10.0)), "fall_rate": float(np.mean(m["fell"])),
-            "mean_distance_m": float(np.mean(m["distance_m"])), "n": int(len(err))}
+    out = {"median_abs_angle_error_deg": float(np.median(err)),
+           "within_10deg": float(np.mean((err <= 10.0) & (m["distance_m"] >= MIN_TRAVEL_M))),
+           "fall_rate": float(np.mean(m["fell"])),
+           "mean_distance_m": float(np.mean(m["distance_m"])), "n": int(len(err))}
+    if "range_excess_rad" in m:  # the key poses as played, against the robot's limits
+        out.update(over_limits=float(np.mean((m["range_excess_rad"] > 0)
+                                             | (m["speed_excess_s"] > 0))),
+                   mean_adapt_fraction=float(np.mean(m["adapt_fraction"])))
+    return out
 
 
 #: what :func:`run_experiment` writes in its folder

@@ -44,6 +44,7 @@ from evomotion.sim.robots import nao
 from evomotion.sim.rollout import BatchSimulator, fall_step, interpolate_controls, torso_track
 from evomotion.sim.worlds import simulate_worlds
 from evomotion.studies.biped_kick import scene
+from evomotion.studies.biped_kick.adaptive import followed_shift, left_flags
 from evomotion.studies.biped_kick.kickers import kicker_for
 from evomotion.studies.biped_kick.motion import (
     GENES,
@@ -223,11 +224,16 @@ class KickProblem:
         x[0] = start
         return np.clip(x, self.genome.lower, self.genome.upper)
 
-    def ball_xy(self, genomes: np.ndarray, aims_rad: np.ndarray) -> np.ndarray:
-        """Where each kick wants the ball (world, m) plus the configured offset ``[B, 2]``."""
+    def wanted_ball_xy(self, genomes: np.ndarray, aims_rad: np.ndarray) -> np.ndarray:
+        """Where each (right-foot) kick wants the ball (world, m) ``[B, 2]``."""
         y = ball_offset(genomes, aims_rad)
         x = np.full_like(y, self._toe[0] + scene.BALL_RADIUS_M + self.kicker.gap_m)
-        return np.stack([x + self.cfg.ball_dx_m, self._toe[1] + y + self.cfg.ball_dy_m], axis=1)
+        return np.stack([x, self._toe[1] + y], axis=1)
+
+    def ball_xy(self, genomes: np.ndarray, aims_rad: np.ndarray) -> np.ndarray:
+        """Where each kick wants the ball (world, m) plus the configured offset ``[B, 2]``."""
+        return self.wanted_ball_xy(genomes, aims_rad) + [self.cfg.ball_dx_m,
+                                                         self.cfg.ball_dy_m]
 
     def controls(self, genomes: np.ndarray, aims_rad: np.ndarray,
                  ball_shift: np.ndarray | None = None
@@ -262,21 +268,23 @@ class KickProblem:
         model per row (:func:`.experiment.kick_worlds`), else the nominal model. ``adapt``:
         the kicking foot's swing follows the ball's offset from where the kick wants it
         (:func:`.motion.foot_trajectories`' ``ball_shift``; the robot stands at the origin
-        facing +x, so world and robot frames agree). ``left_foot`` (per kick): kick with the
-        left foot, the right-foot kick in mirror image (the NAO's kicker only): its aim and
-        ball mirrored for the motion, the rollout in the real scene."""
+        facing +x, so world and robot frames agree), as far as the joint ranges and motor
+        speeds allow (:mod:`.adaptive`; ``adapt_fraction`` in the results). ``left_foot``
+        (one flag, or one per kick): kick with the left foot, the right-foot kick in mirror
+        image (the NAO's kicker only): its aim and ball mirrored for the motion, the rollout
+        in the real scene."""
         g = np.atleast_2d(np.asarray(genomes, dtype=float))
         aims = np.broadcast_to(np.asarray(aims_rad, dtype=float), (len(g),))
         ball0 = np.asarray(ball_xy, dtype=float).reshape(len(g), 2)
         exec_t = execution_time_s(g)
-        left = np.broadcast_to(np.asarray(left_foot, dtype=bool), (len(g),))
-        if left.any() and self.kicker.mirror is None:
-            raise InputError(f"left-foot kick: {self.robot.name}'s kicker has no mirror image "
-                             "(the NAO's closed-form kick only)")
+        left = left_flags(left_foot, len(g), self.kicker.mirror, self.robot.name)
         flip = np.where(left, -1.0, 1.0)
         aims_k = aims * flip  # the right-foot kick's aim and ball, mirrored where left
         ball_k = ball0 * np.stack([np.ones(len(g)), flip], axis=1)
-        shift = ball_k - self.ball_xy(g, aims_k) if adapt else None
+        shift, frac = None, np.zeros(len(g))
+        if adapt:
+            shift, frac = followed_shift(self, g, aims_k,
+                                         ball_k - self.wanted_ball_xy(g, aims_k), left)
         keys, ctrl, end, ik_error = self.controls(g, aims_k, shift)
         if left.any():
             keys[left], ctrl[left] = self.kicker.mirror(keys[left]), self.kicker.mirror(
@@ -307,7 +315,7 @@ class KickProblem:
         deficit = np.cumsum(np.where(in_kick, short, 0.0), axis=1)[:, -1] * self.dt
         range_x, speed_x, speed_ratio = limit_excess(keys, self.cfg.speed_margin,
                                                      self.kicker.limits)
-        out = {"travel": travel, "along_m": along, "lateral_m": lateral,
+        out = {"travel": travel, "along_m": along, "lateral_m": lateral, "adapt_fraction": frac,
                "angle_error_rad": angle_err, "fell": fell, "zmp_deficit_m_s": deficit,
                "min_margin_m": np.min(np.where(in_kick, margin, np.inf), axis=1),
                "range_excess_rad": range_x, "speed_excess_s": speed_x,

@@ -1,11 +1,13 @@
 """The NAO's left-right mirror: the joint targets that play a motion in mirror image about the
 torso's sagittal (x-z) plane.
 
-The model is symmetric (``tests/sim/robots/nao/test_mirror.py`` checks every body's position
-under random poses to 1e-12 m): each ``L*`` joint's mirror is its ``R*`` partner with the same
-angle for pitch joints (a common y axis) and for the hip yaw-pitch (whose two axes are already
-mirror images), and the opposite angle for roll and yaw joints (x and z axes). A right-foot
-kick mirrored this way is the same kick with the left foot.
+The model's kinematics and masses are symmetric (``tests/sim/robots/nao/test_mirror.py``
+checks every body's position under random poses to 1e-12 m; the joint ranges of the knee and
+ankle pitch differ between the sides by about 0.01 rad, the ankle roll's by 0.0002 rad): each
+``L*`` joint's mirror is its ``R*`` partner with the same angle for pitch joints (a common y
+axis) and for the hip yaw-pitch (whose two axes are already mirror images), and the opposite
+angle for roll and yaw joints (x and z axes). A right-foot kick mirrored this way is the same
+kick with the left foot.
 """
 
 from __future__ import annotations
