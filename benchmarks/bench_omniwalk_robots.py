@@ -24,7 +24,6 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
-import math
 import subprocess
 import sys
 import time
@@ -44,20 +43,13 @@ def evolve(out: Path, robot: str, seed: int, threads: int) -> float:
     return time.perf_counter() - t0
 
 
-def forward(problem, x, mean, std) -> list[dict]:
-    from evomotion.studies.humanoid_omniwalk.compare import _play, quiet_problem
+def forward(quiet, x, mean, std) -> list[dict]:
+    """The forward commands of :data:`FORWARD` alone in ``quiet`` (compare's top-speed test)."""
+    from evomotion.studies.humanoid_omniwalk.compare import top_speeds
 
-    p = quiet_problem(problem)
-    C = math.ceil(p.nstep / p.control_steps)
-    ramp = np.clip(np.arange(C) * p.ctl.control_dt / p.cfg.ramp_s, 0.0, 1.0)
-    cmds = np.array([[v, 0.0, 0.0] for v in FORWARD])[:, None, :] * ramp[None, :, None]
-    m = _play(p, x, mean, std, np.zeros(len(FORWARD), np.int64), cmds)
-    half = m["vx"].shape[1] // 2
-    out = [{"command_mps": v, "vx_mps": float(m["vx"][i, half:].mean()),
-            "vy_mps": float(m["vy"][i, half:].mean()), "fell": bool(m["survived"][i] < 1)}
-           for i, v in enumerate(FORWARD)]
-    p.sim.close()
-    return out
+    tests = {f"{v:g}": (v, 0.0, 0.0) for v in FORWARD}
+    return [dict(r, command_mps=r["command"][0])
+            for r in top_speeds(quiet, x, mean, std, tests).values()]
 
 
 def nominal_random(problem, x, mean, std, worlds: int, duration_s: float) -> float:
@@ -72,16 +64,17 @@ def nominal_random(problem, x, mean, std, worlds: int, duration_s: float) -> flo
 
 
 def measure(folder: Path, worlds: int, duration_s: float) -> dict:
-    from evomotion.studies.humanoid_omniwalk.compare import compare, load_run
+    from evomotion.studies.humanoid_omniwalk.compare import compare, load_run, quiet_problem
 
     problem, policy, _ = load_run(folder)
+    quiet = quiet_problem(problem)
     o = problem.obs_dim
     rows = {"controller": (policy.params, policy.obs_mean, policy.obs_std),
             "engine": (problem.ctl.initial_params(), np.zeros(o), np.ones(o))}
     out: dict = {"robot": problem.robot.name, "period_s": problem.ctl.gait.period_s,
                  "params": int(problem.genome.dim)}
     for name, (x, mean, std) in rows.items():
-        out[name] = {"forward": forward(problem, x, mean, std),
+        out[name] = {"forward": forward(quiet, x, mean, std),
                      "nominal_random_survival": nominal_random(problem, x, mean, std, worlds,
                                                                duration_s)}
     c = compare(folder, worlds=worlds, duration_s=duration_s)
@@ -90,6 +83,7 @@ def measure(folder: Path, worlds: int, duration_s: float) -> dict:
                                                           "relative_yaw_rate_error")}
         out[name]["top_speeds"] = c[name]["top_speeds"]
     out["push_ns"] = c["push_ns"]
+    quiet.sim.close()
     problem.sim.close()
     return out
 

@@ -392,6 +392,13 @@ def config_from_run_dir(run_dir: Path) -> tuple[str, dict[str, Any]]:
     return raw["study"], raw
 
 
+def configured_robot(raw: dict[str, Any]) -> Any:
+    """A raw run config's ``problem.robot`` as written (``""``, the study's own robot, when
+    there is none); the caller checks what it may load."""
+    problem = raw.get("problem")
+    return problem.get("robot", "") if isinstance(problem, dict) else ""
+
+
 def run_of_study(path: str | Path, study: str, option: str = "RUN",
                  subfolder: str | None = None) -> Path:
     """The run folder ``path`` if its ``config.toml`` names ``study`` (``path`` may also be

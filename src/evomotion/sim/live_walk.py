@@ -22,7 +22,6 @@ import numpy as np
 from evomotion.core.checks import check_number
 from evomotion.sim.policy_player import PolicyPlayer
 from evomotion.sim.robots import load_robot
-from evomotion.sim.robots.nao.model import initial_state
 from evomotion.sim.state import STATE_SPEC
 from evomotion.sim.walk_to_pose import fallen_test, torso_pose
 
@@ -51,9 +50,7 @@ class LiveWalk:
         """The robot standing in its nominal stance, the clock at 0, no command."""
         m, d = self.model, self.data
         mujoco.mj_resetData(m, d)
-        state = (initial_state(m, self.player.nominal) if self.robot.has("leg_ik")
-                 else self.robot.state_at(self.player.nominal))
-        mujoco.mj_setState(m, d, state, STATE_SPEC)
+        mujoco.mj_setState(m, d, self.robot.state_at(self.player.nominal), STATE_SPEC)
         mujoco.mj_forward(m, d)
         self.player.start(d)
         self.fell, self._push = False, None

@@ -67,14 +67,13 @@ def robot_of(run_dir: Path) -> str | None:
     """The run config's ``problem.robot`` (``""``: the study's own robot) if the studio may
     load it (:func:`check_robot`: else one :class:`InputError` line); None without a readable
     config."""
-    from evomotion.run.config import config_from_run_dir
+    from evomotion.run.config import config_from_run_dir, configured_robot
 
     try:
         _, raw = config_from_run_dir(run_dir)
     except Exception:  # noqa: BLE001 - no readable config
         return None
-    problem = raw.get("problem")
-    return check_robot(problem.get("robot", "") if isinstance(problem, dict) else "")
+    return check_robot(configured_robot(raw))
 
 
 def scene_of(run_dir: Path, default: str = "nao") -> str:

@@ -106,13 +106,16 @@ def quiet_problem(problem):
                                                push_max_ns=0.0))
 
 
-def top_speeds(p, params, mean, std) -> dict[str, dict[str, float]]:
+def top_speeds(p, params, mean, std, tests: dict[str, tuple] | None = None
+               ) -> dict[str, dict[str, float]]:
     """Each direction alone at its range limit in ``p`` (a :func:`quiet_problem`; module
-    doc)."""
+    doc), or each command of ``tests`` (name -> (vx, vy, ω)) alone."""
     cfg = p.cfg
-    tests = {"forward": (cfg.vx_max, 0, 0), "backward": (cfg.vx_min, 0, 0),
-             "left": (0, cfg.vy_max, 0), "right": (0, -cfg.vy_max, 0),
-             "turn_left": (0, 0, cfg.yaw_rate_max), "turn_right": (0, 0, -cfg.yaw_rate_max)}
+    if tests is None:
+        tests = {"forward": (cfg.vx_max, 0, 0), "backward": (cfg.vx_min, 0, 0),
+                 "left": (0, cfg.vy_max, 0), "right": (0, -cfg.vy_max, 0),
+                 "turn_left": (0, 0, cfg.yaw_rate_max),
+                 "turn_right": (0, 0, -cfg.yaw_rate_max)}
     C = math.ceil(p.nstep / p.control_steps)
     t = np.arange(C) * p.ctl.control_dt
     ramp = np.clip(t / cfg.ramp_s, 0.0, 1.0)[None, :, None]

@@ -32,7 +32,6 @@ from evomotion.sim.closed_loop import ClosedLoopResult, ClosedLoopSimulator
 from evomotion.sim.observations import ObservationSpec
 from evomotion.sim.robots import load_robot, nao
 from evomotion.sim.robots.nao.joint_limits import SPEED_LIMITS
-from evomotion.sim.robots.nao.model import initial_state
 from evomotion.sim.rollout import ServoWork
 from evomotion.studies.humanoid_omniwalk.ik_gait import IKGait
 from evomotion.studies.humanoid_omniwalk.omni_gait import OmniGait, targets
@@ -99,8 +98,7 @@ class Controller:
             low=self.sim.lower - self.nominal[self.columns],
             high=self.sim.upper - self.nominal[self.columns])
         self.window = max(1, int(round(self.gait.period_s / self.control_dt)))  # one cycle
-        self.state0 = (initial_state(r.model, self.nominal) if self.closed_form
-                       else r.state_at(self.nominal))
+        self.state0 = r.state_at(self.nominal)  # the NAO's own rule, bit for bit (build.py)
         self.speed_limits = np.array([speeds.get(j, np.inf) for j in self.driven])
         self.work = ServoWork(r.model, self.columns)
 

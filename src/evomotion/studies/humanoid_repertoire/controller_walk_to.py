@@ -26,7 +26,6 @@ import numpy as np
 
 from evomotion.sim.policy_player import PolicyPlayer
 from evomotion.sim.robots import load_robot
-from evomotion.sim.robots.nao.model import initial_state
 from evomotion.sim.state import STATE_SPEC
 from evomotion.sim.walk_to_pose import (
     Walker,
@@ -45,11 +44,9 @@ STOP_S = 0.5  # from the last walking targets to the standing stance (s)
 def run_robot(run: Path) -> str:
     """The robot of a humanoid-omniwalk run folder (its config's ``problem.robot``; "" when
     it names none: the NAO)."""
-    from evomotion.run.config import config_from_run_dir
+    from evomotion.run.config import config_from_run_dir, configured_robot
 
-    _, raw = config_from_run_dir(run)
-    problem = raw.get("problem")
-    robot = problem.get("robot", "") if isinstance(problem, dict) else ""
+    robot = configured_robot(config_from_run_dir(run)[1])
     return robot if isinstance(robot, str) else ""
 
 
@@ -64,9 +61,7 @@ def controller_walk_to(run: Path, x: float, y: float, theta_deg: float,
     vmax = command_limits(player, str(Path(run) / "policy.json"))
     d = mujoco.MjData(m)
     sites = (robot.sole_site("left"), robot.sole_site("right"))
-    state = (initial_state(m, player.nominal) if robot.has("leg_ik")
-             else robot.state_at(player.nominal))
-    mujoco.mj_setState(m, d, state, STATE_SPEC)
+    mujoco.mj_setState(m, d, robot.state_at(player.nominal), STATE_SPEC)
     mujoco.mj_forward(m, d)
     start = torso_pose(d)
     under = soles(d, sites)[:2] - start[:2]  # feet under the torso (start heading is 0)

@@ -42,7 +42,7 @@ def check_walk_run(run: Path, option: str = "RUN") -> None:
     """One line unless the folder ``run`` is a ``humanoid-walk`` run of a foot-placement
     walk (the NAO's; its ``config.toml`` names the study and a robot with the capabilities of
     :data:`.gaits.FOOT_CAPABILITIES`; another study's run is refused, naming it)."""
-    from evomotion.run.config import config_from_run_dir
+    from evomotion.run.config import config_from_run_dir, configured_robot
     from evomotion.sim.robots import capabilities_of
     from evomotion.studies.humanoid_walk.gaits import FOOT_CAPABILITIES
 
@@ -50,8 +50,7 @@ def check_walk_run(run: Path, option: str = "RUN") -> None:
     if name != "humanoid-walk":
         raise InputError(f"{option} {run}: a {name} run, expected a humanoid-walk run folder "
                          "(or a .motion file)")
-    problem = raw.get("problem", {})
-    robot = problem.get("robot", "") if isinstance(problem, dict) else ""
+    robot = configured_robot(raw)
     if not isinstance(robot, str) or not set(FOOT_CAPABILITIES) <= set(capabilities_of(robot)):
         raise InputError(f"{option} {run}: a walk of robot {str(robot)[:80]!r}; compare "
                          "replays NAO walks beside Webots' NAO motions")
