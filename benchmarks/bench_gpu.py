@@ -144,7 +144,7 @@ def memory(args, device: str) -> list[dict]:
     from evomotion.studies import get_study
 
     rows = []
-    for name in ("humanoid-step", "humanoid-walk", "humanoid-repertoire"):
+    for name in ("humanoid-step", "humanoid-walk-open-loop", "humanoid-repertoire"):
         study = get_study(name)
         over = ["problem.backend=warp", f"problem.warp_device={device}"]
         cfg = resolve_config(study, None, over)

@@ -1,5 +1,5 @@
 """The omnidirectional walk controller's figures (issue 34): per seed, evolve with the default
-settings (timed), then ``humanoid-omniwalk compare`` on unseen perturbed worlds of random
+settings (timed), then ``humanoid-walk compare`` on unseen perturbed worlds of random
 commands and the top-speed tests; a table per seed and the means over seeds.
 
     python benchmarks/bench_omniwalk.py --seeds 0 1 2 --out /tmp/omniwalk \
@@ -7,7 +7,7 @@ commands and the top-speed tests; a table per seed and the means over seeds.
 
 ``--reuse`` measures runs already in ``OUT/seed-N`` instead of evolving them again. One run at
 a time, all cores (2 here); write the printed table into benchmarks/README.md and
-docs/humanoid-omniwalk.md.
+docs/humanoid-walk.md.
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ import numpy as np
 def evolve(out: Path, seed: int, sets: tuple[str, ...] = ()) -> float:
     t0 = time.perf_counter()
     extra = [a for s in sets for a in ("--set", s)]
-    subprocess.run([sys.executable, "-m", "evomotion.cli", "run", "humanoid-omniwalk", "--out",
+    subprocess.run([sys.executable, "-m", "evomotion.cli", "run", "humanoid-walk", "--out",
                     str(out), "--set", f"run.seed={seed}", *extra, "--quiet"], check=True)
     return time.perf_counter() - t0
 

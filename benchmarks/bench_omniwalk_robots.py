@@ -1,4 +1,4 @@
-"""humanoid-omniwalk on other bipeds (issue 34, item 5): per robot and seed, evolve the walk
+"""humanoid-walk on other bipeds (issue 34, item 5): per robot and seed, evolve the walk
 controller with the study's defaults on that robot (``--robot NAME``), timed; then, for the
 evolved controller and the engine it started from (the fitted tape without feedback, open
 loop):
@@ -8,7 +8,7 @@ loop):
   whether it fell;
 - **nominal world, random commands**: ``--worlds`` schedules of ``--duration`` s of the run's
   random commands in the nominal world without pushes: survival;
-- **perturbed worlds**: as ``humanoid-omniwalk compare`` (unseen worlds, the run's pushes):
+- **perturbed worlds**: as ``humanoid-walk compare`` (unseen worlds, the run's pushes):
   survival and the relative speed error; and compare's top speeds (each direction alone at the
   run's range limit, nominal world).
 
@@ -16,7 +16,7 @@ loop):
         --out /tmp/omniwalk-robots [--worlds 20] [--duration 60] [--reuse] [--threads 1]
 
 ``--reuse`` measures runs already in ``OUT/ROBOT-seed-N``. Write the printed table into
-benchmarks/README.md and docs/humanoid-omniwalk.md.
+benchmarks/README.md and docs/humanoid-walk.md.
 """
 
 from __future__ import annotations
@@ -36,7 +36,7 @@ FORWARD = (0.1, 0.2, 0.3)
 
 def evolve(out: Path, robot: str, seed: int, threads: int) -> float:
     t0 = time.perf_counter()
-    subprocess.run([sys.executable, "-m", "evomotion.cli", "run", "humanoid-omniwalk",
+    subprocess.run([sys.executable, "-m", "evomotion.cli", "run", "humanoid-walk",
                     "--robot", robot, "--out", str(out), "--overwrite", "--set",
                     f"run.seed={seed}", "--set", f"problem.threads={threads}", "--quiet"],
                    check=True)

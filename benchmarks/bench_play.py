@@ -2,7 +2,7 @@
 
 The robot starts at the origin facing +x; each pair (from ``--seed``): the ball U(1, 2) m away
 at a bearing U(-60, 60) deg, the target U(2.3, 3.4) m beyond the ball, its direction within
-+-45 deg of the robot->ball line. Per play (``--walk``: a humanoid-omniwalk run's controller,
++-45 deg of the robot->ball line. Per play (``--walk``: a humanoid-walk run's controller,
 a humanoid-repertoire run or ``model``, default the shipped controller; ``--kick``: a
 biped-kick run, default the shipped kick): the ball's
 distance from the target line where it passes the target (``line_error_m``: the distance of the
@@ -41,7 +41,7 @@ def pairs(seed: int, n: int = 10) -> list[tuple[np.ndarray, np.ndarray]]:
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--walk", default=None,
-                    help="a humanoid-omniwalk or humanoid-repertoire run, or 'model'; "
+                    help="a humanoid-walk or humanoid-repertoire run, or 'model'; "
                          "default: the shipped walk controller (as the CLI)")
     ap.add_argument("--kick", type=Path, default=None)
     ap.add_argument("--seed", type=int, default=34)

@@ -8,7 +8,8 @@ Runs, through ``evomotion.run`` (the CLI's run loop), and prints one row per run
   population 100 x 80 generations; the 41 kg dm humanoid with a 3 s step of 6 intervals:
   with the default 2 s and 10 intervals the best of a run stepped backward): forward step,
   lateral drift, heading, falls;
-- ``humanoid-walk --robot op3``, ``dm-humanoid`` and ``dm-quadruped`` (``--preset nominal``:
+- ``humanoid-walk-open-loop --robot op3``, ``dm-humanoid`` and ``dm-quadruped``
+  (``--preset nominal``:
   CMA-ES, population 16, nominal world; 60-80 generations; ``walk_s = 6``): distance, speed,
   straightness, heading, falls;
 - ``humanoid-repertoire --robot op3`` and ``dm-humanoid`` (CMA-ME, the study's defaults but
@@ -32,11 +33,11 @@ RUNS = {
     "step-dm-humanoid": ("humanoid-step", "dm-humanoid", None,
                          {"problem": {"motion_s": 3.0, "intervals": 6}}),
     "step-op3": ("humanoid-step", "op3", None, {}),
-    "walk-op3": ("humanoid-walk", "op3", "nominal",
+    "walk-op3": ("humanoid-walk-open-loop", "op3", "nominal",
                  {"problem": {"walk_s": 6.0}, "run": {"generations": 80}}),
-    "walk-dm-humanoid": ("humanoid-walk", "dm-humanoid", "nominal",
+    "walk-dm-humanoid": ("humanoid-walk-open-loop", "dm-humanoid", "nominal",
                          {"problem": {"walk_s": 6.0}, "run": {"generations": 60}}),
-    "walk-dm-quadruped": ("humanoid-walk", "dm-quadruped", "nominal",
+    "walk-dm-quadruped": ("humanoid-walk-open-loop", "dm-quadruped", "nominal",
                           {"problem": {"walk_s": 6.0}, "run": {"generations": 60}}),
     "repertoire-op3": ("humanoid-repertoire", "op3", None, {"run": {"generations": 100}}),
     "repertoire-dm-humanoid": ("humanoid-repertoire", "dm-humanoid", None,

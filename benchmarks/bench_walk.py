@@ -1,4 +1,5 @@
-"""humanoid-walk benchmark (issue 13): evaluations per second with K = 1 and K = 8 worlds, and
+"""humanoid-walk-open-loop benchmark (issue 13): evaluations per second with K = 1 and K = 8
+worlds, and
 the CMA-ES run loop's physics throughput against raw ``mujoco.rollout``.
 
 1. Evaluations/s of the walk problem (each evaluation = one gait over the whole horizon,
@@ -52,7 +53,7 @@ def evaluations(pop: int, threads: int, repeat: int) -> None:
 
 
 def loop(pop: int, generations: int, threads: int) -> None:
-    study = get_study("humanoid-walk")
+    study = get_study("humanoid-walk-open-loop")
     cfg = resolve_config(study, None, [f"algorithm.pop_size={pop}",
                                        f"run.generations={generations}",
                                        f"problem.threads={threads}", "problem.worlds=1",

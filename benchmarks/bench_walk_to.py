@@ -1,6 +1,6 @@
 """``humanoid-repertoire walk-to`` with walk controllers (issue 34): the five targets of the
 repertoire's table in docs/humanoid-repertoire.md plus two longer ones, walked closed loop by
-each humanoid-omniwalk run given (the NAO alone, nominal world); position and heading error
+each humanoid-walk run given (the NAO alone, nominal world); position and heading error
 after standing 2 s, the time walked, falls.
 
     python benchmarks/bench_walk_to.py OMNIWALK_RUN [OMNIWALK_RUN ...]

@@ -224,7 +224,7 @@ def repertoire_hold(value: str):
 
 def walk_compare_kick(b: Box) -> str:
     fixture(b, "kick")
-    return expect_error(b.cli("humanoid-walk", "compare", "kick", "--json"))
+    return expect_error(b.cli("humanoid-walk-open-loop", "compare", "kick", "--json"))
 
 
 def spec_copy(b: Box, edit: dict | None = None, name: str = "robot") -> Path:
@@ -378,7 +378,7 @@ def cases() -> dict:
         "A4 humanoid-repertoire export --hold nan": repertoire_hold("nan"),
         "A5 humanoid-repertoire export --hold inf": repertoire_hold("inf"),
         "A6 humanoid-repertoire export --hold -1": repertoire_hold("-1"),
-        "A7 humanoid-walk compare on a biped-kick run": walk_compare_kick,
+        "A7 humanoid-walk-open-loop compare on a biped-kick run": walk_compare_kick,
         "A8 robot spec clearance_m = 1e300":
             spec_value({"clearance_m = 0.0005": "clearance_m = 1e300"}),
         "A9 quadruped goal inside an obstacle (refused within 8 s)": goal_in_obstacle,

@@ -30,7 +30,7 @@ SMOKE = {
     "biped-kick": ["algorithm.pop_size=4", "run.max_evaluations=0"],
     "humanoid-step": ["algorithm.pop_size=6", "problem.motion_s=0.4", "problem.hold_s=0.2",
                       "problem.intervals=4"],
-    "humanoid-walk": ["algorithm.pop_size=4", "problem.walk_s=0.5", "problem.hold_s=0.2",
+    "humanoid-walk-open-loop": ["algorithm.pop_size=4", "problem.walk_s=0.5", "problem.hold_s=0.2",
                       "problem.worlds=2"],
     "humanoid-repertoire": ["algorithm.emitters=2", "algorithm.pop_size=4", "problem.hold_s=0.2"],
     "quadruped-plan": QUAD_SMOKE,

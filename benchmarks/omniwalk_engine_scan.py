@@ -7,7 +7,7 @@ whose gait the leg cannot reach prints its one-line error.
     python benchmarks/omniwalk_engine_scan.py dm-humanoid \
         --grid "{'sway_m': [0.01, 0.015], 'step_height_m': [0.005, 0.01], 'period_s': [0.4]}"
 
-What docs/humanoid-omniwalk.md ("Other bipeds") reports for the OP3 and the dm humanoid was
+What docs/humanoid-walk.md ("Other bipeds") reports for the OP3 and the dm humanoid was
 scanned this way (about 100 settings on the dm humanoid).
 """
 

@@ -8,16 +8,17 @@ called with the tree's ``src`` first on ``PYTHONPATH``), so module renames insid
 not matter. Cases (``--list`` prints them with their commands):
 
 - ``run/<study>/default`` and ``run/<study>/<preset>``: ``evomotion run`` of every registered
-  study with its defaults and with its paper preset (``--preset seed``; humanoid-walk's
+  study with its defaults and with its paper preset (``--preset seed``; humanoid-walk-open-loop's
   ``nominal`` and humanoid-repertoire's ``map_elites``, which have none), 3 generations (1 for
   the MuJoCo studies), videos off, no wall-clock budget; functions once per method (ga, cga,
   cmaes; map_elites and cma_me with ``problem.measures=linear_projection``). Some add the
   study's deterministic follow-up commands on the run folder: ``grid-path make-map``,
-  ``humanoid-walk compare --json``, ``humanoid-repertoire pick / walk-to --json``, ``biped-kick
+  ``humanoid-walk-open-loop compare --json``, ``humanoid-repertoire pick / walk-to --json``,
+  ``biped-kick
   play --json``, ``quadruped-plan check / simulate --json``.
-- ``robot/<robot>/<study>``: ``--robot op3`` for humanoid-step, humanoid-walk,
+- ``robot/<robot>/<study>``: ``--robot op3`` for humanoid-step, humanoid-walk-open-loop,
   humanoid-repertoire and biped-kick (a tree that refuses it compares by its one-line error),
-  ``--robot dm-humanoid`` for the first three, ``--robot dm-quadruped`` for humanoid-walk
+  ``--robot dm-humanoid`` for the first three, ``--robot dm-quadruped`` for humanoid-walk-open-loop
   with its ``nominal`` preset (the step needs a biped; the 8-world walk takes minutes).
 - ``study/...``: the seed experiments with small settings: ``grid-path study`` (seed and
   beyond), ``arm-ik study --wall-seconds 0``, ``humanoid-step study --quick``, ``biped-kick
@@ -65,13 +66,13 @@ from same_seed_compare import Paths, first_difference, folder_values, stdout_val
 
 INTERNAL = Path(__file__).with_name("same_seed_internal.py")
 LOG_PREFIX = "same-seed-command-"  # each command's stdout and stderr, kept with --keep
-MUJOCO = {"humanoid-step", "humanoid-walk", "humanoid-repertoire", "biped-kick"}
-PRESETS = {"grid-path": "seed", "humanoid-step": "seed", "humanoid-walk": "nominal",
+MUJOCO = {"humanoid-step", "humanoid-walk-open-loop", "humanoid-repertoire", "biped-kick"}
+PRESETS = {"grid-path": "seed", "humanoid-step": "seed", "humanoid-walk-open-loop": "nominal",
            "humanoid-repertoire": "map_elites", "arm-ik": "seed", "biped-kick": "seed",
            "quadruped-plan": "seed"}
 FOLLOW_UP = {  # deterministic commands on the default run folder ("out")
     "grid-path": [["grid-path", "make-map", "random.map", "--seed", "3"]],
-    "humanoid-walk": [["humanoid-walk", "compare", "out", "--json"]],
+    "humanoid-walk-open-loop": [["humanoid-walk-open-loop", "compare", "out", "--json"]],
     "humanoid-repertoire": [["humanoid-repertoire", "pick", "out", "--dx", "0.05", "--json"],
                             ["humanoid-repertoire", "walk-to", "out", "--x", "0.3", "--json",
                              "--out", "walk.motion"]],
@@ -105,13 +106,15 @@ def cases() -> list[Case]:
     for study, preset in PRESETS.items():
         out.append(Case(f"run/{study}/default", [run_args(study), *FOLLOW_UP.get(study, [])]))
         out.append(Case(f"run/{study}/{preset}", [run_args(study, "--preset", preset)]))
-    robots = [("op3", s) for s in ("humanoid-step", "humanoid-walk", "humanoid-repertoire",
+    robots = [("op3", s) for s in ("humanoid-step", "humanoid-walk-open-loop",
+                                    "humanoid-repertoire",
                                    "biped-kick")]
-    robots += [("dm-humanoid", s) for s in ("humanoid-step", "humanoid-walk",
+    robots += [("dm-humanoid", s) for s in ("humanoid-step", "humanoid-walk-open-loop",
                                             "humanoid-repertoire")]
     out += [Case(f"robot/{r}/{s}", [run_args(s, "--robot", r)]) for r, s in robots]
     out.append(Case("robot/dm-quadruped/humanoid-walk-nominal",  # its trot; 8 worlds: minutes
-                    [run_args("humanoid-walk", "--robot", "dm-quadruped", "--preset", "nominal")]))
+                    [run_args("humanoid-walk-open-loop", "--robot", "dm-quadruped", "--preset",
+                              "nominal")]))
     out += [
         Case("study/grid-path/seed", [["grid-path", "study", "--seeds", "2", "--generations",
                                        "5", "--map", "seed10a", "--map", "seed20"]]),

@@ -94,6 +94,10 @@ def run(problem_or_study: Any, config: dict[str, Any] | None = None,
                              "argument and the preset as preset=")
     if preset is not None and not isinstance(preset, str):
         raise InputError(f"evomotion.run: preset must be a name, got {preset!r}")
+    if isinstance(problem_or_study, str) and not resume:  # a preset may be another study
+        from evomotion.studies import study_with_preset
+
+        study, preset = study_with_preset(problem_or_study, preset)
     if resume:
         from evomotion.run.resume import resume_config
 

@@ -9,7 +9,13 @@ from typing import Annotated
 import typer
 
 from evomotion.errors import ClusterError, InputError
-from evomotion.studies import STUDIES, all_studies, get_study
+from evomotion.studies import (
+    OLD_STUDY_NAMES,
+    STUDIES,
+    all_studies,
+    get_study,
+    study_with_preset,
+)
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
                   help="Evolve and search robot motions: gaits, steps, kicks, reaches, plans.")
@@ -28,7 +34,7 @@ def studies_cmd() -> None:
         typer.echo(f"{s.name:16s} {s.description}")
         algs = ", ".join(study_algorithms(s))
         typer.echo(f"{'':16s}   methods: {algs} (default {default_algorithm(s)})")
-        for p in s.presets:
+        for p in (*s.presets, *s.preset_studies):
             typer.echo(f"{'':16s}   --preset {p}: {s.preset_notes.get(p, '')}")
 
 
@@ -56,7 +62,7 @@ def run_cmd(
     from evomotion.run.folder import make_run_dir
     from evomotion.run.runner import run_study
 
-    s = get_study(study)
+    s, preset = study_with_preset(study, preset)  # a preset may be another study
     overrides = list(sets or [])
     if robot is not None:
         import dataclasses
@@ -217,9 +223,9 @@ def replay_cmd(
                              "(a .motion file of it can be given instead)")
         walk = {k: v for k, v in (("command", command), ("duration_s", duration))
                 if v is not None}
-        if walk and study.name != "humanoid-omniwalk":
+        if walk and study.name != "humanoid-walk":
             raise InputError("replay: --command and --duration are for a walk controller run "
-                             f"(humanoid-omniwalk), not a {study.name} run")
+                             f"(humanoid-walk), not a {study.name} run")
         study.replay_run(motion, json_out=json_out, video=video,
                          stress=stress if stress is not None else trials, seed=seed,
                          push_ns=push, **walk)
@@ -287,8 +293,8 @@ def studio_cmd(
 def _mount_study_app(argv: list[str]) -> None:
     """Mount the ``evomotion <study> ...`` command groups: the one named on the command line,
     or all of them for the top-level help (importing every study costs a second or two)."""
-    if len(argv) > 1 and argv[1] in STUDIES:
-        names = [argv[1]]
+    if len(argv) > 1 and (argv[1] in STUDIES or argv[1] in OLD_STUDY_NAMES):
+        names = [argv[1]]  # an old name: its study's commands under the name given
     elif len(argv) == 1 or argv[1] in ("--help", "-h"):
         names = list(STUDIES)
     else:
@@ -296,7 +302,7 @@ def _mount_study_app(argv: list[str]) -> None:
     for name in names:
         s = get_study(name)
         if s.cli is not None:
-            app.add_typer(s.cli, name=s.name, help=s.description)
+            app.add_typer(s.cli, name=name, help=s.description)
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -11,7 +11,8 @@ from evomotion.sim.backend import physics_record, robot_identity
 from evomotion.studies import get_study
 
 
-@pytest.mark.parametrize("name", ["humanoid-step", "humanoid-walk", "humanoid-repertoire"])
+@pytest.mark.parametrize("name", ["humanoid-step", "humanoid-walk-open-loop",
+                                  "humanoid-repertoire"])
 def test_batches_of_rollouts_give_the_same_evaluation(name):
     """A population evaluated ``batch_rollouts`` at a time (here 2 or 3) equals the population
     evaluated at once, bit for bit: a rollout does not depend on its batch."""

@@ -50,7 +50,7 @@ def test_another_robots_controller_walks_that_robot(tmp_path):
     from evomotion.run.runner import run_study
     from evomotion.studies import get_study
 
-    s = get_study("humanoid-omniwalk")
+    s = get_study("humanoid-walk")
     out = tmp_path / "op3"
     run_study(s, resolve_config(s, None, ["problem.robot='op3'", *s.smoke,
                                           "run.generations=1", "run.videos=false"]),

@@ -1,5 +1,5 @@
 """Makes the studies' shared test helpers (``hostile_cli``) importable from every study's
-test folder; ``omniwalk_run``: a tiny humanoid-omniwalk run (one generation) whose exported
+test folder; ``omniwalk_run``: a tiny humanoid-walk run (one generation) whose exported
 controller the kick's ``play`` and ``walk-to`` walk with."""
 
 import sys
@@ -21,7 +21,7 @@ def omniwalk_run(tmp_path_factory):
     from evomotion.studies import get_study
 
     out = tmp_path_factory.mktemp("omniwalk") / "run"
-    s = get_study("humanoid-omniwalk")
+    s = get_study("humanoid-walk")
     assert run_study(s, resolve_config(s, None, list(OMNIWALK_TINY)), out,
                      quiet=True).exit_code == 0
     return out

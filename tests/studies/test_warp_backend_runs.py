@@ -28,7 +28,8 @@ def _overrides(name: str) -> list[str]:
             "run.wall_seconds=0", "run.seed=5", "run.videos=false"]
 
 
-@pytest.mark.parametrize("name", ["humanoid-step", "humanoid-walk", "humanoid-repertoire"])
+@pytest.mark.parametrize("name", ["humanoid-step", "humanoid-walk-open-loop",
+                                  "humanoid-repertoire"])
 def test_study_runs_on_warp_and_resumes_bit_identically(name, tmp_path):
     s = get_study(name)
     cfg = resolve_config(s, None, _overrides(name))

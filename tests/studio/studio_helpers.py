@@ -17,7 +17,8 @@ ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking", "--n
 
 def smoke_sets(name: str) -> list[str]:
     extra = {"quadruped-plan": ["run.generations=400"], "arm-ik": ["run.history_every=1"],
-             "humanoid-step": ["run.history_every=1"], "humanoid-walk": ["run.history_every=1"],
+             "humanoid-step": ["run.history_every=1"],
+             "humanoid-walk-open-loop": ["run.history_every=1"],
              "biped-kick": ["run.history_every=1"],
              "humanoid-repertoire": ["run.history_every=1"]}
     return [*get_study(name).smoke, "run.generations=5", "run.wall_seconds=0",

@@ -21,11 +21,11 @@ from evomotion.studies import STUDIES, get_study
 pytestmark = pytest.mark.slow
 
 VIEW = {"arm-ik": ".view-image", "grid-path": ".view-image", "quadruped-plan": ".view-image",
-        "humanoid-step": ".nao-scene", "humanoid-walk": ".nao-scene",
+        "humanoid-step": ".nao-scene", "humanoid-walk-open-loop": ".nao-scene",
         "biped-kick": ".kick-table", "humanoid-repertoire": ".repertoire-map",
         "functions": "text=no view of its own", "gym": "text=no view of its own",
         "humanoid-balance": ".played-caption:has-text('unseen world 0')",
-        "humanoid-omniwalk": ".drive-scene"}
+        "humanoid-walk": ".drive-scene"}
 
 
 def _rows(page) -> int:
@@ -85,10 +85,10 @@ def test_run_page_shows_curves_and_the_study_view(page, studio, name):
 def test_live_run_grows_then_stop_and_resume_from_the_page(page, studio):
     base, root = studio
     out = root / "live"
-    sets = [*smoke_sets("humanoid-walk"), "run.generations=400", "run.checkpoint_every=2"]
+    sets = [*smoke_sets("humanoid-walk-open-loop"), "run.generations=400", "run.checkpoint_every=2"]
     args = [a for s in sets for a in ("--set", s)]
-    proc = subprocess.Popen([sys.executable, "-m", "evomotion.cli", "run", "humanoid-walk",
-                             *args, "--out", str(out), "--quiet"])
+    proc = subprocess.Popen([sys.executable, "-m", "evomotion.cli", "run",
+                             "humanoid-walk-open-loop", *args, "--out", str(out), "--quiet"])
     try:
         _wait(lambda: (out / "stats.csv").exists(), what="the run to start")
         page.goto(f"{base}/")  # the list shows it running (it refreshes itself)
@@ -465,7 +465,7 @@ def test_two_motions_ghosted_in_one_scene(page, studio):
     page.screenshot(path=str(root / "ghost.png"), full_page=True)
 
 
-@pytest.mark.parametrize("name", ["humanoid-step", "humanoid-walk", "biped-kick",
+@pytest.mark.parametrize("name", ["humanoid-step", "humanoid-walk-open-loop", "biped-kick",
                                   "humanoid-repertoire"])
 def test_the_best_of_any_generation_is_replayed(page, studio, name):
     """Issue 35: a slider over the recorded generations (run.history_every) replays the best of
@@ -501,7 +501,7 @@ def test_drive_the_walk_controller_live_from_the_keyboard(page, studio):
 
     base, root = studio
     run = root / "drive-shipped"
-    shutil.copytree(root / "humanoid-omniwalk", run)
+    shutil.copytree(root / "humanoid-walk", run)
     for name in ("policy.json", "policy.npz"):
         (run / name).write_bytes(
             (files("evomotion.studies.biped_kick") / "default_walk" / name).read_bytes())

@@ -301,8 +301,9 @@ def resolve_config(study: ConfiguredStudy, file: Path | None = None,
     if preset is not None:
         presets = study.presets
         if preset not in presets:
+            known = [*presets, *getattr(study, "preset_studies", {})]
             raise InputError(f"--preset: unknown preset {preset!r} for study {study.name!r}; "
-                             f"available: {', '.join(presets) or 'none'}")
+                             f"available: {', '.join(known) or 'none'}")
         chosen = presets[preset]
         p_alg = chosen.get("algorithm", {}).get("name")
         if p_alg is not None and p_alg != defaults.get("algorithm", {}).get("name"):
@@ -381,14 +382,39 @@ def config_to_toml(cfg: Config) -> str:
     return tomli_w.dumps(_strip_none(data))
 
 
+#: Studies renamed since run folders were written: (the name a folder records, a
+#: ``[problem]`` key only the old study had, or None for any folder) -> the name now. Issue
+#: 34: the closed-loop walk controller became ``humanoid-walk`` (it was
+#: ``humanoid-omniwalk``) and the open-loop walk ``humanoid-walk-open-loop`` (an open-loop
+#: folder records ``humanoid-walk`` and its ``walk_s``).
+RENAMED_STUDIES: tuple[tuple[str, str | None, str], ...] = (
+    ("humanoid-omniwalk", None, "humanoid-walk"),
+    ("humanoid-walk", "walk_s", "humanoid-walk-open-loop"),
+)
+
+
+def current_study_name(name: str, problem_keys: Any = ()) -> str:
+    """The study a run folder (or a checkpoint's record) naming ``name`` with these
+    ``[problem]`` keys is now (:data:`RENAMED_STUDIES`); ``name`` when it was not renamed."""
+    keys = set(problem_keys) if isinstance(problem_keys, dict | list | set | tuple) else set()
+    for old, key, new in RENAMED_STUDIES:
+        if name == old and (key is None or key in keys):
+            return new
+    return name
+
+
 def config_from_run_dir(run_dir: Path) -> tuple[str, dict[str, Any]]:
-    """Study name and raw config saved in a run folder (``config.toml``)."""
+    """Study name and raw config saved in a run folder (``config.toml``); a folder of a
+    study renamed since is read under its name now (:func:`current_study_name`)."""
     path = Path(run_dir) / "config.toml"
     if not path.exists():
         raise InputError(f"{run_dir}: not a run folder (no config.toml)")
     raw = load_toml(path)
     if not isinstance(raw.get("study"), str):
         raise FileFormatError(path, None, "expected a top-level 'study' key naming the study")
+    problem = raw.get("problem")
+    raw["study"] = current_study_name(raw["study"], problem if isinstance(problem, dict)
+                                      else ())
     return raw["study"], raw
 
 

@@ -16,7 +16,7 @@ from typing import Any
 from evomotion.core.state import rng_from_state
 from evomotion.errors import InputError
 from evomotion.run.checkpoint import NAME, CheckpointError, candidates, load_checkpoint
-from evomotion.run.config import Config
+from evomotion.run.config import Config, current_study_name
 from evomotion.run.contracts import LoopStudy
 from evomotion.run.counters import Counters
 from evomotion.run.driver import Driver
@@ -90,6 +90,9 @@ def check_same_config(recorded: Any, config: Config, run_dir: Path,
     if not isinstance(recorded, dict):
         raise CheckpointError("config: expected an object")
     now = config_record(config)
+    if isinstance(recorded.get("study"), str):  # a study renamed since (run/config.py)
+        problem = [k.partition(".")[2] for k in recorded if k.startswith("problem.")]
+        recorded = {**recorded, "study": current_study_name(recorded["study"], problem)}
     if moved:
         recorded = moved_record(recorded, moved, now)
     for key in sorted(set(recorded) | set(now)):

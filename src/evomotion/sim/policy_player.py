@@ -1,7 +1,7 @@
 """Play an exported walk controller on one robot inside any MuJoCo model that holds it (the NAO
 beside a ball, say): the robot-side loop that ``policy.json`` describes, run in simulation.
 
-A policy-search run (humanoid-omniwalk, humanoid-balance) leaves ``policy.npz`` (raw
+A policy-search run (humanoid-walk, humanoid-balance) leaves ``policy.npz`` (raw
 observation -> action, normalisation inside; :mod:`evomotion.core.policies.export`) and
 ``policy.json`` (the observation columns in order, the gait clock's period, the control period,
 the driven joints with their nominal pose and bounds, the follower joint, the command ranges

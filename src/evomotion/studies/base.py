@@ -24,6 +24,9 @@ class Study:
       ``{"algorithm": {"pop_size": 100, "crossover": "blx_alpha"}, "run": {"generations": 60}}``.
     - ``presets``: named settings over the defaults (``--preset paper``: the paper's literal
       setting), same form as ``defaults``; ``preset_notes`` says in one line what each is.
+    - ``preset_studies``: presets that are another registered study, ``name -> study``
+      (``humanoid-walk-open-loop --preset open-loop`` runs ``humanoid-walk-open-loop``, a problem of
+      another kind); ``preset_notes`` says what each is.
     - ``core_algorithms``: the registered optimizers the study accepts (``None``: all of them).
     - ``algorithms``: the study's own methods, ``name -> (config dataclass, factory(problem,
       config) -> Driver)``, for methods that are not plain ask/tell (a multi-phase schedule, a
@@ -62,6 +65,7 @@ class Study:
     defaults: dict[str, dict[str, Any]] = field(default_factory=dict)
     presets: dict[str, dict[str, dict[str, Any]]] = field(default_factory=dict)
     preset_notes: dict[str, str] = field(default_factory=dict)
+    preset_studies: dict[str, str] = field(default_factory=dict)
     core_algorithms: tuple[str, ...] | None = None
     algorithms: dict[str, tuple[type, Callable[..., Any]]] = field(default_factory=dict)
     on_checkpoint: Callable[[RunContext], None] | None = None

@@ -1,5 +1,5 @@
 """Episode worlds of a closed-loop policy search, one per episode seed (shared by the studies
-that evolve policies: humanoid-balance, humanoid-omniwalk).
+that evolve policies: humanoid-balance, humanoid-walk).
 
 An episode's world comes from ``numpy.random.default_rng(seed)`` alone (:func:`episode_world`):
 with ``perturb`` the friction, link masses, torso CoM, motor strength and servo latency of

@@ -68,9 +68,10 @@ def run_command(study: str, preset: str | None, sets: list[str], out: Path) -> l
 def check_new_run(study: str, preset: str | None, sets: list[str]) -> Any:
     """The resolved config, or the CLI's one-line :class:`InputError`."""
     from evomotion.run.config import resolve_config
-    from evomotion.studies import get_study
+    from evomotion.studies import study_with_preset
 
-    return resolve_config(get_study(study), None, sets, preset=preset)
+    s, preset = study_with_preset(study, preset)  # as `evomotion run` resolves them
+    return resolve_config(s, None, sets, preset=preset)
 
 
 def new_run_dir(root: Path, study: str) -> Path:

@@ -18,6 +18,7 @@ run and one hostile folder cannot hold the list up.
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import math
 import os
@@ -29,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from evomotion.errors import InputError
+from evomotion.run.config import RENAMED_STUDIES, config_from_run_dir
 from evomotion.run.lock import LOCK_NAME, LockOwner, owner_state
 from evomotion.run.lock import lock_owner as read_lock_owner
 from evomotion.run.stats import step_values
@@ -183,7 +185,11 @@ def study_name(run_dir: Path) -> str:
     """The ``study = "..."`` line of ``config.toml`` (read without parsing the file)."""
     first, _ = head_tail(run_dir / "config.toml", 0)
     if first.startswith("study"):
-        return one_line(first.partition("=")[2].strip().strip('"'), 80)
+        name = first.partition("=")[2].strip().strip('"')
+        if any(name == old for old, _, _ in RENAMED_STUDIES):  # renamed since: parse it
+            with contextlib.suppress(InputError, OSError):
+                name = config_from_run_dir(run_dir)[0]
+        return one_line(name, 80)
     return "?"
 
 

@@ -241,7 +241,7 @@ def test_go_to_pose_command_faces_the_goal_far_and_corrects_near():
 
 
 def test_play_walks_with_a_walk_controller_in_the_same_simulation(omniwalk_run):
-    """``play --walk`` with a humanoid-omniwalk run: its exported controller walks the robot
+    """``play --walk`` with a humanoid-walk run: its exported controller walks the robot
     in the kick scene (stance, closed-loop walk, crouch), then the kick is played from where
     it stands; the video's frames cover the whole simulation."""
     from evomotion.studies.biped_kick.controller_walk import CROUCH_S, SETTLE_S, STANCE_S
@@ -279,4 +279,4 @@ def test_a_walk_folder_of_another_study_or_a_broken_controller_is_one_line(omniw
     r = _cli("--walk", str(bad), cwd=tmp_path)
     lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
     assert r.returncode == 2 and len(lines) == 1 and "a arm-ik run, expected a " \
-        "humanoid-omniwalk run" in lines[0], r.stderr
+        "humanoid-walk run" in lines[0], r.stderr

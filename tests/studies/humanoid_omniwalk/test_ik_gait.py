@@ -130,8 +130,8 @@ def test_an_op3_run_leaves_its_controller_and_compares(tmp_path):
     from evomotion.studies.humanoid_omniwalk.compare import compare, table
 
     out = tmp_path / "op3"
-    smoke = [a for s in get_study("humanoid-omniwalk").smoke for a in ("--set", s)]
-    r = subprocess.run([sys.executable, "-m", "evomotion.cli", "run", "humanoid-omniwalk",
+    smoke = [a for s in get_study("humanoid-walk").smoke for a in ("--set", s)]
+    r = subprocess.run([sys.executable, "-m", "evomotion.cli", "run", "humanoid-walk",
                         "--robot", "op3", "--out", str(out), *smoke, "--set",
                         "run.generations=1", "--set", "run.videos=false", "--quiet"],
                        capture_output=True, text=True, timeout=300)

@@ -1,4 +1,4 @@
-"""humanoid-omniwalk: the controller starts as the walk engine, evaluations are independent of
+"""humanoid-walk: the controller starts as the walk engine, evaluations are independent of
 their neighbours, the run's files, compare, one-line errors."""
 
 from __future__ import annotations
@@ -30,7 +30,7 @@ def problem():
 @pytest.fixture(scope="module")
 def run_dir(tmp_path_factory):
     out = tmp_path_factory.mktemp("omniwalk") / "run"
-    s = get_study("humanoid-omniwalk")
+    s = get_study("humanoid-walk")
     run_study(s, resolve_config(s, None, list(TINY)), out, quiet=True)
     return out
 
@@ -109,7 +109,7 @@ def test_bad_input_is_one_line(run_dir, tmp_path):
         compare(run_dir, worlds=0)
     with pytest.raises(InputError, match="--duration"):
         compare(run_dir, worlds=1, duration_s=float("nan"))
-    with pytest.raises(InputError, match="expected a humanoid-omniwalk run folder"):
+    with pytest.raises(InputError, match="expected a humanoid-walk run folder"):
         compare(tmp_path / "nothing")
     with pytest.raises(InputError, match="control_period_s"):
         OmniWalkProblem(OmniWalkConfig(control_period_s=0.01, threads=1))
@@ -236,7 +236,7 @@ def test_command_feedback_starts_where_it_is_set():
     plain = OmniWalkProblem(OmniWalkConfig(duration_s=1.0, threads=1, command_feedback=False))
     fed = OmniWalkProblem(OmniWalkConfig(duration_s=1.0, threads=1, command_feedback=True,
                                          command_feedback_start=0.1))
-    new = resolve_config(get_study("humanoid-omniwalk"), None, []).problem  # a new run's
+    new = resolve_config(get_study("humanoid-walk"), None, []).problem  # a new run's
     assert new.command_feedback and new.command_feedback_start == 0.1
     assert not OmniWalkConfig().command_feedback  # what a run folder without the key meant
     (C, _), (K, _), (G, _) = fed.policy.unflatten(fed.ctl.initial_params())

@@ -1,4 +1,4 @@
-"""``walk-to`` with a humanoid-omniwalk run: the controller walks the NAO closed loop to the
+"""``walk-to`` with a humanoid-walk run: the controller walks the NAO closed loop to the
 target (issue 34); the repertoire's A* chain stays the command for a repertoire run."""
 
 from __future__ import annotations
@@ -41,7 +41,7 @@ def test_walk_to_walks_the_runs_robot(tmp_path):
         run_robot,
     )
 
-    s = get_study("humanoid-omniwalk")
+    s = get_study("humanoid-walk")
     out = tmp_path / "op3"
     run_study(s, resolve_config(s, None, [*s.smoke, "run.generations=1", "run.videos=false",
                                           "problem.robot='op3'"]), out, quiet=True)

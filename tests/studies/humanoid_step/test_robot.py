@@ -61,7 +61,7 @@ def test_robot_nao_is_the_default_nao():
 
     from evomotion.sim.robots import spec_path
 
-    for name in ("humanoid-step", "humanoid-walk", "humanoid-repertoire"):
+    for name in ("humanoid-step", "humanoid-walk-open-loop", "humanoid-repertoire"):
         s = get_study(name)
         base = s.make_problem(resolve_config(s, None, [*s.smoke, "problem.worlds=1"]
                                              if name != "humanoid-repertoire" else

@@ -1,4 +1,5 @@
-"""humanoid-walk on other robots (``--robot``): the joint-space gait and the walk problem."""
+"""humanoid-walk-open-loop on other robots (``--robot``): the joint-space gait and the walk
+problem."""
 
 from __future__ import annotations
 
@@ -42,7 +43,7 @@ def test_gait_starts_at_the_pose_and_swings_the_legs_in_antiphase():
 
 
 def test_walk_on_op3_in_perturbed_worlds(tmp_path):
-    s = get_study("humanoid-walk")
+    s = get_study("humanoid-walk-open-loop")
     over = [*s.smoke, "problem.robot=op3", "run.generations=1"]  # smoke: 2 worlds
     res = run_study(s, resolve_config(s, None, over), tmp_path / "r", quiet=True)
     assert res.generation == 1 and np.isfinite(res.best_fitness)
@@ -57,7 +58,7 @@ def test_walk_on_op3_in_perturbed_worlds(tmp_path):
 
 @pytest.mark.skipif(not HAS_DM, reason="dm_control is not installed")
 def test_quadruped_trot_evaluates():
-    s = get_study("humanoid-walk")
+    s = get_study("humanoid-walk-open-loop")
     cfg = resolve_config(s, None, ["problem.robot=dm-quadruped", "problem.worlds=1",
                                    "problem.walk_s=1.0"])
     p = s.make_problem(cfg.problem)
@@ -71,7 +72,7 @@ def test_a_robot_without_gait_roles_is_refused(tmp_path):
     text = (load_robot("op3").spec.path.read_text().split("[gait]")[0]
             .replace('mjcf = "evomotion:', 'mjcf = "evomotion:'))
     spec.write_text(text)
-    s = get_study("humanoid-walk")
+    s = get_study("humanoid-walk-open-loop")
     with pytest.raises(InputError, match=r"has no \[gait\] section"):
         s.make_problem(resolve_config(s, None, [f"problem.robot={spec}",
                                                 "problem.worlds=1"]).problem)

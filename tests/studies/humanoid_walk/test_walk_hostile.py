@@ -1,5 +1,6 @@
-"""humanoid-walk against hostile input (issue 31): ``compare`` checks that a run folder is a
-humanoid-walk run of the NAO (from its config.toml) before replaying anything, and the
+"""humanoid-walk-open-loop against hostile input (issue 31): ``compare`` checks that a run
+folder is a
+humanoid-walk-open-loop run of the NAO (from its config.toml) before replaying anything, and the
 problem's floats have documented ranges."""
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ from evomotion.sim.motion import format_motion
 from evomotion.sim.robots.nao.webots_motions import shipped_motion
 from evomotion.studies.humanoid_walk.problem import HumanoidWalkConfig
 
-cli = study_cli("humanoid-walk")
+cli = study_cli("humanoid-walk-open-loop")
 
 
 @pytest.fixture()
@@ -37,12 +38,12 @@ def _run(d: Path, config: str) -> Path:
 
 def test_compare_refuses_another_studys_run_naming_it(tmp_path, no_replay):
     kick = _run(tmp_path / "kick", 'study = "biped-kick"\n')
-    one_error(*cli("compare", kick), "biped-kick", "humanoid-walk")
+    one_error(*cli("compare", kick), "biped-kick", "humanoid-walk-open-loop")
     one_error(*cli("compare", tmp_path), "config.toml")  # not a run folder at all
 
 
 def test_compare_refuses_a_walk_of_another_robot(tmp_path, no_replay):
-    op3 = _run(tmp_path / "op3", 'study = "humanoid-walk"\n[problem]\nrobot = "op3"\n')
+    op3 = _run(tmp_path / "op3", 'study = "humanoid-walk-open-loop"\n[problem]\nrobot = "op3"\n')
     one_error(*cli("compare", op3), "op3")
 
 
@@ -50,7 +51,7 @@ def test_compare_refuses_a_walk_of_another_robot(tmp_path, no_replay):
                                          (["--hold", "1e300"], "--hold"),
                                          (["--trials", "-1"], "--trials")])
 def test_compare_refuses_non_physical_numbers(tmp_path, no_replay, args, needle):
-    walk = _run(tmp_path / "walk", 'study = "humanoid-walk"\n')
+    walk = _run(tmp_path / "walk", 'study = "humanoid-walk-open-loop"\n')
     one_error(*cli("compare", walk, *args), needle)
 
 

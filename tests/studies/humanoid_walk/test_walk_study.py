@@ -1,4 +1,4 @@
-"""The humanoid-walk study end to end (tiny budget): artifacts, exports, compare."""
+"""The humanoid-walk-open-loop study end to end (tiny budget): artifacts, exports, compare."""
 
 import json
 import subprocess
@@ -25,7 +25,7 @@ def cli(*args: str) -> subprocess.CompletedProcess:
 @pytest.fixture(scope="module")
 def walk_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("walk") / "run"
-    res = runner.invoke(app, ["run", "humanoid-walk", "--out", str(out), "--quiet",
+    res = runner.invoke(app, ["run", "humanoid-walk-open-loop", "--out", str(out), "--quiet",
                               "--set", "run.generations=1", "--set", "algorithm.pop_size=4",
                               "--set", "problem.walk_s=1.0", "--set", "problem.hold_s=0.3",
                               "--set", "problem.threads=1"])
@@ -35,7 +35,7 @@ def walk_run(tmp_path_factory):
 
 def test_run_writes_the_walk_and_its_parts(walk_run):
     best = json.loads((walk_run / "best.json").read_text())
-    assert best["study"] == "humanoid-walk" and set(foot_gait.NAMES) <= set(best["gait"])
+    assert best["study"] == "humanoid-walk-open-loop" and set(foot_gait.NAMES) <= set(best["gait"])
     m = read_motion(walk_run / "best.motion")
     parts = [read_motion(walk_run / n) for n in ("walk_start.motion", "walk_cycle.motion",
                                                  "walk_stop.motion")]
@@ -54,15 +54,15 @@ def test_compare_puts_the_walk_beside_webots(walk_run):
     assert names[0].startswith("evolved walk") and len(names) == 1 + len(compare.WEBOTS)
     table = compare.table(rows)
     assert "Webots TurnLeft40" in table and table.count("\n") == len(rows) + 1
-    res = cli("humanoid-walk", "compare", str(walk_run), "--json", "--hold", "0.5")
+    res = cli("humanoid-walk-open-loop", "compare", str(walk_run), "--json", "--hold", "0.5")
     assert res.returncode == 0, res.stderr
     assert set(json.loads(res.stdout)) == set(rows)
 
 
 def test_compare_refuses_a_folder_without_a_walk(tmp_path):
-    (tmp_path / "config.toml").write_text('study = "humanoid-walk"\n')
+    (tmp_path / "config.toml").write_text('study = "humanoid-walk-open-loop"\n')
     with pytest.raises(InputError, match="best.motion"):
         compare.walk_motion_path(tmp_path)
-    res = cli("humanoid-walk", "compare", str(tmp_path))
+    res = cli("humanoid-walk-open-loop", "compare", str(tmp_path))
     assert res.returncode != 0 and "Traceback" not in res.stderr
     assert len(res.stderr.strip().splitlines()) == 1 and "best.motion" in res.stderr

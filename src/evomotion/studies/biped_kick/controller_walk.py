@@ -1,5 +1,5 @@
 """Walking to the kick's stand pose with a closed-loop walk controller, in the kick's own
-simulation (issue 34: ``play --walk`` with a ``humanoid-omniwalk`` run).
+simulation (issue 34: ``play --walk`` with a ``humanoid-walk`` run).
 
 The controller is the run's exported ``policy.npz`` + ``policy.json``, played by
 :class:`evomotion.sim.policy_player.PolicyPlayer` in the kick scene (NAO + ball; foot contacts

@@ -7,7 +7,7 @@ it rests (paper 002's whole chain for one ball and target, field frame, metres, 
    measured on the straight kick: ``ball_tolerant_offset_m`` in the report); the cubic Bézier
    approach from the robot's pose to it.
 2. **Walk**, in one MuJoCo simulation (NAO + ball, field frame) with the kick: given a
-   ``humanoid-omniwalk`` run (``--walk RUN``; the command's default is the shipped controller
+   ``humanoid-walk`` run (``--walk RUN``; the command's default is the shipped controller
    :data:`DEFAULT_WALK`), its closed-loop walk controller takes the robot there along the
    approach (:mod:`.controller_walk`); given a ``humanoid-repertoire`` run, the
    robot walks there with its steps, closed loop (:mod:`.walk_play`); otherwise with the
@@ -38,7 +38,7 @@ from evomotion.textio import decode_utf8, loads_json, read_file_bytes
 
 #: the kick shipped with evomotion (evolved by ``evomotion run biped-kick``, see its docs)
 DEFAULT_KICK = Path(__file__).with_name("default_kick.json")
-#: the walk controller ``play`` walks with by default: a humanoid-omniwalk run's exported
+#: the walk controller ``play`` walks with by default: a humanoid-walk run's exported
 #: ``policy.npz`` and ``policy.json`` (where from: its ``source.json``)
 DEFAULT_WALK = Path(__file__).with_name("default_walk")
 WALK_MODEL = WalkModel()
@@ -88,7 +88,7 @@ def check_kick_run(run: Path, option: str = "--kick") -> None:
 
 
 def walk_kind(path: Path, option: str = "--walk") -> str:
-    """``"controller"`` for a humanoid-omniwalk run folder, else ``"repertoire"`` (a
+    """``"controller"`` for a humanoid-walk run folder, else ``"repertoire"`` (a
     humanoid-repertoire run or its ``repertoire/``, checked when it is read); a run of any
     other study is one :class:`InputError` line."""
     from evomotion.run.config import config_from_run_dir
@@ -96,10 +96,10 @@ def walk_kind(path: Path, option: str = "--walk") -> str:
     p = Path(path)
     if p.is_dir() and (p / "config.toml").is_file():
         name, _ = config_from_run_dir(p)
-        if name == "humanoid-omniwalk":
+        if name == "humanoid-walk":
             return "controller"
         if name != "humanoid-repertoire":
-            raise InputError(f"{option} {path}: a {name} run, expected a humanoid-omniwalk "
+            raise InputError(f"{option} {path}: a {name} run, expected a humanoid-walk "
                              "run (its walk controller) or a humanoid-repertoire run")
     elif p.is_dir() and (p / "policy.json").is_file() and (p / "policy.npz").is_file():
         return "controller"  # exported controller files alone (the shipped default_walk/)

@@ -83,7 +83,7 @@ def play_cmd(
     kick: Annotated[Path | None, typer.Option(
         help="a biped-kick run folder (or its best.json); default: the shipped kick")] = None,
     walk: Annotated[str | None, typer.Option(
-        help="a humanoid-omniwalk run folder (walk there with its closed-loop controller) or "
+        help="a humanoid-walk run folder (walk there with its closed-loop controller) or "
              "a humanoid-repertoire run folder (with its steps), simulated; 'model': the "
              "walking model (places the robot, not simulated); default: the shipped walk "
              "controller")] = None,

@@ -1,1 +1,2 @@
-"""Study ``humanoid-omniwalk``: a closed-loop omnidirectional NAO walk controller."""
+"""Study ``humanoid-walk`` (once ``humanoid-omniwalk``): a closed-loop omnidirectional NAO
+walk controller."""

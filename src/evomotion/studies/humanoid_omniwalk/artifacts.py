@@ -1,4 +1,4 @@
-"""What a humanoid-omniwalk run leaves: the best controller as ``policy.npz``, ``policy.py``,
+"""What a humanoid-walk run leaves: the best controller as ``policy.npz``, ``policy.py``,
 ``policy.onnx`` and ``policy.json`` (what a robot-side loop needs: the observation columns in
 order, the command and how it is ramped, the gait clock's period, the control period, the
 driven joints with their nominal pose and bounds, the joint that follows another)."""
@@ -64,7 +64,7 @@ def write_naoqi(ctx: Any) -> None:
     if p is None or npz is None or not npz.is_file() or not p.robot.has("naoqi_policy"):
         return
     info = policy_info(p)
-    export = p.robot.capability("naoqi_policy", "humanoid-omniwalk's NAOqi export")
+    export = p.robot.capability("naoqi_policy", "humanoid-walk's NAOqi export")
     try:
         export.write_naoqi_policy(ctx.out_dir / "naoqi", read_policy_npz(npz), p.obs_names,
                                   info["joints"], info["nominal_rad"], info["lower_rad"],
@@ -85,9 +85,9 @@ def finalize(ctx: Any) -> int | None:
     write_naoqi(ctx)
     s = ctx.state
     if s is not None and s.best_cost < float("inf"):
-        ctx.log(f"humanoid-omniwalk: best centre score {-s.best_cost:.3f} after "
+        ctx.log(f"humanoid-walk: best centre score {-s.best_cost:.3f} after "
                 f"{s.train_episodes} training episodes; policy.npz, policy.py, policy.json"
                 + (", policy.onnx" if not ctx.cache.get("onnx_note") else "")
-                + "; evomotion humanoid-omniwalk compare RUN measures it")
+                + "; evomotion humanoid-walk compare RUN measures it")
     return None
 

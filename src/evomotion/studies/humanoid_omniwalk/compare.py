@@ -1,6 +1,6 @@
-"""A humanoid-omniwalk run's controller measured beside the walk engine it started from.
+"""A humanoid-walk run's controller measured beside the walk engine it started from.
 
-``evomotion humanoid-omniwalk compare RUN --worlds 100 --duration 60``:
+``evomotion humanoid-walk compare RUN --worlds 100 --duration 60``:
 
 - **Random commands**: the best centre (``policy.npz``, its frozen normaliser inside) and the
   engine (the fitted tape without feedback: the open-loop walk the search started from) walk
@@ -28,7 +28,7 @@ import numpy as np
 from evomotion.errors import InputError
 from evomotion.studies.humanoid_omniwalk.commands import tracking
 
-STUDY_NAME = "humanoid-omniwalk"
+STUDY_NAME = "humanoid-walk"
 EVAL_SEED_BASE = 2**40  # above every training seed (< 2^31)
 MAX_WORLDS = 10_000
 SPEED_TEST_S = 10.0
@@ -37,7 +37,7 @@ BATCH = 20  # worlds per closed-loop call (the recorded states of 60 s are large
 
 def load_run(path: str | Path, duration_s: float | None = None,
              option: str = "RUN") -> tuple[Any, Any, Path]:
-    """(problem, exported policy, run folder) of a humanoid-omniwalk run folder (or its
+    """(problem, exported policy, run folder) of a humanoid-walk run folder (or its
     ``policy.npz``); the problem's episodes last ``duration_s`` when given."""
     from evomotion.core.policies.export import read_policy_npz
     from evomotion.run.config import config_from_dict, config_from_run_dir, run_of_study

@@ -78,7 +78,7 @@ class Controller:
             self.gait, self.engine, self.columns = ik.gait, ik.targets, ik.columns
             self.driven = tuple(r.joints[c] for c in self.columns)
             self.followers = {}
-            speeds = (r.capability("speed_limits", "humanoid-omniwalk").SPEED_LIMITS
+            speeds = (r.capability("speed_limits", "humanoid-walk").SPEED_LIMITS
                       if r.has("speed_limits") else {})
         phases = np.linspace(0.0, 1.0, 48, endpoint=False)
         self.nominal = self.engine(phases, np.zeros((48, 3))).mean(axis=0)

@@ -1,5 +1,5 @@
 """The omnidirectional walk controller as a policy-search problem
-(``evomotion run humanoid-omniwalk``).
+(``evomotion run humanoid-walk``).
 
 The controller (:mod:`.controller`) is a structured policy: a phase tape modulated by the
 command ``(vx, vy, ω)`` (fitted by least squares to the walk engine of :mod:`.omni_gait`, where
@@ -53,7 +53,7 @@ METRICS = ("return", "steps", "survived", "time_up_s", "speed_error_mps",
 
 @dataclass(frozen=True)
 class OmniWalkConfig:
-    """``[problem]`` of humanoid-omniwalk (SI units)."""
+    """``[problem]`` of humanoid-walk (SI units)."""
 
     robot: str = ""  # "" or "nao": the NAO; another bundled biped (op3, dm-humanoid) or a spec
     duration_s: float = 8.0  # episode length (s)

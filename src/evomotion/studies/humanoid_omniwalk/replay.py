@@ -1,4 +1,4 @@
-"""``evomotion replay RUN`` for a humanoid-omniwalk run: its controller walked under a command.
+"""``evomotion replay RUN`` for a humanoid-walk run: its controller walked under a command.
 
 The command is ``--command vx,vy,w`` (held, ramped from standing over the run's ``ramp_s``), a
 command file (``--command FILE``: lines ``t_s, vx, vy, w``, a new command from each time on,
@@ -151,7 +151,7 @@ def replay_walk(path: str | Path, stress: int | None = None, seed: int = 0,
 def replay_walk_command(path: Path, json_out: bool = False, video: Path | None = None,
                         stress: int | None = None, seed: int = 0, push_ns: float | None = None,
                         command: str | None = None, duration_s: float | None = None) -> None:
-    """CLI body of ``evomotion replay RUN`` for a humanoid-omniwalk run."""
+    """CLI body of ``evomotion replay RUN`` for a humanoid-walk run."""
     summary, skipped = replay_walk(path, stress, seed, push_ns, video, command,
                                    20.0 if duration_s is None else duration_s)
     if skipped is not None:

@@ -1,13 +1,15 @@
-"""Study ``humanoid-omniwalk``: a closed-loop omnidirectional walk controller for the NAO (or
+"""Study ``humanoid-walk``: a closed-loop omnidirectional walk controller for the NAO (or
 another biped, ``--robot``), evolved by ARS (or OpenAI-ES, PGPE, SNES, CMA-ES) from a fitted
-walk engine through the run loop.
+walk engine through the run loop. It was ``humanoid-omniwalk`` until it became the walk's
+default (issue 34); the open-loop walk it replaced is ``--preset open-loop`` (the study
+``humanoid-walk-open-loop``, package ``studies/humanoid_walk``).
 
-``evomotion run humanoid-omniwalk`` evolves the controller of :mod:`.controller` (a phase
+``evomotion run humanoid-walk`` evolves the controller of :mod:`.controller` (a phase
 tape modulated by the command ``(vx, vy, ω)`` plus feedback from the IMU, the joints and the
 feet) over random command schedules in perturbed, pushed worlds; beside the run's files it
 writes ``policy.npz``, ``policy.py``, ``policy.onnx`` and ``policy.json``.
-``evomotion humanoid-omniwalk compare RUN`` measures it against the walk engine it started
-from. See docs/humanoid-omniwalk.md.
+``evomotion humanoid-walk compare RUN`` measures it against the walk engine it started
+from. See docs/humanoid-walk.md.
 """
 
 from __future__ import annotations
@@ -28,7 +30,7 @@ cli = typer.Typer(help="A closed-loop omnidirectional walk (the NAO, or --robot 
 
 
 @cli.command("compare")
-def compare_cmd(run: Path = typer.Argument(..., help="a humanoid-omniwalk run folder"),
+def compare_cmd(run: Path = typer.Argument(..., help="a humanoid-walk run folder"),
                 worlds: int = typer.Option(100, "--worlds", help="unseen perturbed worlds "
                                                                  "(1 to 10000)"),
                 duration: float = typer.Option(60.0, "--duration", help="seconds of random "
@@ -45,7 +47,7 @@ def compare_cmd(run: Path = typer.Argument(..., help="a humanoid-omniwalk run fo
 
 
 STUDY = Study(
-    name="humanoid-omniwalk",
+    name="humanoid-walk",
     description="A closed-loop omnidirectional NAO walk (or another biped's, --robot): a "
                 "command-modulated gait tape plus sensor feedback, evolved by ARS over random "
                 "commands in pushed worlds.",
@@ -54,14 +56,20 @@ STUDY = Study(
     # ARS V2-t (Mania et al. 2018), 16 directions, the best 8, noise 0.005: noise 0.02 (0.6
     # rad over the 885 parameters) knocked every perturbed walk over and the centre sank; step
     # 0.002 stalled near generation 120 and drifted; step 0.001 keeps improving for 300
-    # generations (all measured: docs/humanoid-omniwalk.md)
+    # generations (all measured: docs/humanoid-walk.md)
     # command feedback started at the probe's forward-lean gain: survival 68 / 62 / 65 %
     # against 57 / 54 / 63 % without it (3 seeds), speed error 0.031-0.038 against 0.027-0.032
-    # m/s (docs/humanoid-omniwalk.md); --set problem.command_feedback=false for the former
+    # m/s (docs/humanoid-walk.md); --set problem.command_feedback=false for the former
     defaults={"algorithm": {"name": "ars", "pop_size": 32, "step_size": 0.001,
                             "noise_std": 0.005, "top_directions": 8},
               "run": {"generations": 300, "checkpoint_every": 20},
               "problem": {"command_feedback": True, "command_feedback_start": 0.1}},
+    # the open-loop walk (a tape of 14 gait parameters, forward only, CMA-ES) is a problem of
+    # another kind, so its preset is its own study
+    preset_studies={"open-loop": "humanoid-walk-open-loop"},
+    preset_notes={"open-loop": "the open-loop walk it replaced (a tape of 14 gait "
+                               "parameters, forward only, CMA-ES; the study "
+                               "humanoid-walk-open-loop)"},
     core_algorithms=(),
     algorithms=policy_algorithms(),
     on_checkpoint=lazy_hook(ARTIFACTS, "write_policy"),

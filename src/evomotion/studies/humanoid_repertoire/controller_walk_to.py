@@ -1,5 +1,5 @@
 """``walk-to`` with a closed-loop walk controller (issue 34): ``evomotion humanoid-repertoire
-walk-to RUN`` where RUN is a ``humanoid-omniwalk`` run walks the NAO to the target pose with the
+walk-to RUN`` where RUN is a ``humanoid-walk`` run walks the NAO to the target pose with the
 run's exported controller instead of a chain of repertoire steps (which remains the command for
 a humanoid-repertoire run). The robot is the run's (``problem.robot``: the NAO, or the OP3 of
 ``--robot op3``).
@@ -42,7 +42,7 @@ STOP_S = 0.5  # from the last walking targets to the standing stance (s)
 
 
 def run_robot(run: Path) -> str:
-    """The robot of a humanoid-omniwalk run folder (its config's ``problem.robot``; "" when
+    """The robot of a humanoid-walk run folder (its config's ``problem.robot``; "" when
     it names none: the NAO)."""
     from evomotion.run.config import config_from_run_dir, configured_robot
 
@@ -53,7 +53,7 @@ def run_robot(run: Path) -> str:
 def controller_walk_to(run: Path, x: float, y: float, theta_deg: float,
                        video: Path | None = None, hold_s: float = 2.0, tol_m: float = 0.02,
                        tol_deg: float = 3.0, max_s: float = 60.0) -> dict[str, Any]:
-    """Walk to (x, y, theta_deg) with the controller of the humanoid-omniwalk run ``run``, on
+    """Walk to (x, y, theta_deg) with the controller of the humanoid-walk run ``run``, on
     the run's robot."""
     robot = load_robot(run_robot(Path(run)) or "nao")
     m = robot.model

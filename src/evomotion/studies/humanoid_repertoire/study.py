@@ -59,7 +59,7 @@ def export_cmd(run: Path = typer.Argument(..., help="a humanoid-repertoire run f
 @cli.command("walk-to")
 def walk_to_cmd(run: Path = typer.Argument(..., help="a humanoid-repertoire run folder (a "
                                                      "chain of its steps), or a "
-                                                     "humanoid-omniwalk run (its closed-loop "
+                                                     "humanoid-walk run (its closed-loop "
                                                      "walk controller)"),
                 x: float = typer.Option(..., "--x", help="target forward (m), within +-10"),
                 y: float = typer.Option(0.0, "--y", help="target left (m), within +-10"),
@@ -100,12 +100,12 @@ def _is_controller_run(run: Path) -> bool:
     from evomotion.run.config import config_from_run_dir
 
     return (run.is_dir() and (run / "config.toml").is_file()
-            and config_from_run_dir(run)[0] == "humanoid-omniwalk")
+            and config_from_run_dir(run)[0] == "humanoid-walk")
 
 
 def _controller_walk_to(run: Path, x: float, y: float, theta: float, video: Path | None,
                         out: Path | None) -> dict:
-    """``walk-to`` with a humanoid-omniwalk run: checks, then the closed-loop walk."""
+    """``walk-to`` with a humanoid-walk run: checks, then the closed-loop walk."""
     from evomotion.outfile import check_target
     from evomotion.studies.humanoid_repertoire.controller_walk_to import controller_walk_to
     from evomotion.studies.humanoid_repertoire.step_planning import check_request

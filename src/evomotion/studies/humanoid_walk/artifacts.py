@@ -1,4 +1,4 @@
-"""Run-folder artifacts of ``humanoid-walk``.
+"""Run-folder artifacts of ``humanoid-walk-open-loop``.
 
 - ``best.motion``: the whole walk (start-up, the repeated cycle, stop), 22 joints, 20 ms
   poses; ``walk_start.motion``, ``walk_cycle.motion`` (loop it) and ``walk_stop.motion``: its

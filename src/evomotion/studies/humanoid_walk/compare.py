@@ -1,4 +1,4 @@
-"""``evomotion humanoid-walk compare``: an evolved walk beside Webots' own NAO motions.
+"""``evomotion humanoid-walk-open-loop compare``: an evolved walk beside Webots' own NAO motions.
 
 Every motion is replayed open loop on the same model and contact (``evomotion replay``):
 the walk (``best.motion`` of a run folder, or any ``.motion``) and the step and turn motions
@@ -26,20 +26,20 @@ MIN_DISTANCE_M = 0.05
 
 
 def walk_motion_path(run: Path) -> Path:
-    """``run/best.motion`` for a run folder (a humanoid-walk run of the NAO, checked by its
-    ``config.toml``), ``run`` for a ``.motion`` file."""
+    """``run/best.motion`` for a run folder (a humanoid-walk-open-loop run of the NAO, checked
+    by its ``config.toml``), ``run`` for a ``.motion`` file."""
     run = Path(run)
     if run.is_dir():
         check_walk_run(run)
     path = run / "best.motion" if run.is_dir() else run
     if not path.is_file():
-        raise InputError(f"{run}: expected a humanoid-walk run folder (with best.motion) or "
-                         "a .motion file")
+        raise InputError(f"{run}: expected a humanoid-walk-open-loop run folder (with "
+                         "best.motion) or a .motion file")
     return path
 
 
 def check_walk_run(run: Path, option: str = "RUN") -> None:
-    """One line unless the folder ``run`` is a ``humanoid-walk`` run of a foot-placement
+    """One line unless the folder ``run`` is a ``humanoid-walk-open-loop`` run of a foot-placement
     walk (the NAO's; its ``config.toml`` names the study and a robot with the capabilities of
     :data:`.gaits.FOOT_CAPABILITIES`; another study's run is refused, naming it)."""
     from evomotion.run.config import config_from_run_dir, configured_robot
@@ -47,9 +47,9 @@ def check_walk_run(run: Path, option: str = "RUN") -> None:
     from evomotion.studies.humanoid_walk.gaits import FOOT_CAPABILITIES
 
     name, raw = config_from_run_dir(run)
-    if name != "humanoid-walk":
-        raise InputError(f"{option} {run}: a {name} run, expected a humanoid-walk run folder "
-                         "(or a .motion file)")
+    if name != "humanoid-walk-open-loop":
+        raise InputError(f"{option} {run}: a {name} run, expected a humanoid-walk-open-loop "
+                         "run folder (or a .motion file)")
     robot = configured_robot(raw)
     if not isinstance(robot, str) or not set(FOOT_CAPABILITIES) <= set(capabilities_of(robot)):
         raise InputError(f"{option} {run}: a walk of robot {str(robot)[:80]!r}; compare "

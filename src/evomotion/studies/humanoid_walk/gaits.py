@@ -52,8 +52,8 @@ class FootPlacementGait:
 
     def __init__(self, robot, cfg, dt: float) -> None:
         for cap in FOOT_CAPABILITIES:
-            robot.capability(cap, "humanoid-walk's foot-placement gait")
-        limits = robot.capability("speed_limits", "humanoid-walk").SPEED_LIMITS
+            robot.capability(cap, "humanoid-walk-open-loop's foot-placement gait")
+        limits = robot.capability("speed_limits", "humanoid-walk-open-loop").SPEED_LIMITS
         self.robot, self.cfg, self.dt = robot, cfg, dt
         self.kind = "biped"
         self.genome = GenomeSpec(foot_gait.LOWER.copy(), foot_gait.UPPER.copy(),

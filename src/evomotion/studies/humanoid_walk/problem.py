@@ -95,7 +95,8 @@ class WalkKeys:
 
 @dataclass(frozen=True)
 class HumanoidWalkConfig(PhysicsConfig, PerturbedWorldsConfig, WalkKeys):
-    """The ``[problem]`` section of ``humanoid-walk``: its own keys (:class:`WalkKeys`), the
+    """The ``[problem]`` section of ``humanoid-walk-open-loop``: its own keys
+    (:class:`WalkKeys`), the
     perturbed worlds' (the study sets ``worlds = 8``) and the physics'
     (:mod:`evomotion.sim.physics_config`), the robot."""
 
@@ -293,5 +294,5 @@ def soft_floor(quality: np.ndarray) -> np.ndarray:
 def make_problem(cfg: HumanoidWalkConfig) -> HumanoidWalkProblem:
     """The walk of ``cfg.robot`` (the NAO by default)."""
     if not isinstance(cfg, HumanoidWalkConfig):
-        raise InputError("humanoid-walk: expected a HumanoidWalkConfig")
+        raise InputError("humanoid-walk-open-loop: expected a HumanoidWalkConfig")
     return HumanoidWalkProblem(cfg)

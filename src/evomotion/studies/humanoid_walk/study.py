@@ -1,4 +1,6 @@
-"""``humanoid-walk``: a NAO walk whose gait parameters are evolved by CMA-ES (or the GA)."""
+"""``humanoid-walk-open-loop`` (``humanoid-walk --preset open-loop``; it was ``humanoid-walk``
+until the closed-loop controller became the default, issue 34): a NAO walk whose gait
+parameters are evolved by CMA-ES (or the GA), played open loop."""
 
 from __future__ import annotations
 
@@ -15,7 +17,7 @@ cli = typer.Typer(help="A NAO walk: 14 gait parameters evolved by CMA-ES.",
 
 
 @cli.command("compare")
-def compare_cmd(run: Path = typer.Argument(..., help="a humanoid-walk run folder, or a "
+def compare_cmd(run: Path = typer.Argument(..., help="a humanoid-walk-open-loop run folder, or a "
                                                      ".motion file of a walk"),
                 hold: float = typer.Option(1.0, "--hold", help="seconds held after each "
                                                                "motion (0 to 60)"),
@@ -34,10 +36,11 @@ def compare_cmd(run: Path = typer.Argument(..., help="a humanoid-walk run folder
 ARTIFACTS = "evomotion.studies.humanoid_walk.artifacts"
 
 STUDY = Study(
-    name="humanoid-walk",
-    description="A periodic NAO H25 walk in MuJoCo: 14 gait parameters (period, step "
-                "length and height, sway, lean, arm swing, ...) through leg IK, evolved by "
-                "CMA-ES over 10 s of walking; exported as Webots .motion and NAOqi script.",
+    name="humanoid-walk-open-loop",
+    description="The open-loop NAO walk (humanoid-walk --preset open-loop): 14 gait "
+                "parameters (period, step length and height, sway, lean, arm swing, ...) "
+                "through leg IK, evolved by CMA-ES over 10 s of walking; exported as Webots "
+                ".motion and NAOqi script.",
     problem_config=HumanoidWalkConfig,
     make_problem=make_problem,
     defaults={
