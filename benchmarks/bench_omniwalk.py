@@ -58,16 +58,18 @@ def main() -> int:
         print(table(res) + "\n", flush=True)
         rows.append(res)
     print(f"## mean over seeds {args.seeds}\n")
-    print("| controller | survival | relative speed error | relative yaw-rate error | "
-          "forward | backward | left | right | turn left | turn right |")
+    print("| controller | survival | relative speed error (steady) | relative yaw-rate error "
+          "(steady) | forward | backward | left | right | turn left | turn right |")
     print("|---|---|---|---|---|---|---|---|---|---|")
     for key in ("controller", "engine"):
         def m(f):
             return float(np.mean([f(r[key]) for r in rows]))
         ts = lambda name, axis: m(lambda r: r["top_speeds"][name][axis])  # noqa: E731
         print(f"| {key} | {100 * m(lambda r: r['survival']):.0f} % | "
-              f"{100 * m(lambda r: r['relative_speed_error']):.0f} % | "
-              f"{100 * m(lambda r: r['relative_yaw_rate_error']):.0f} % | "
+              f"{100 * m(lambda r: r['relative_speed_error']):.0f} % "
+              f"({100 * m(lambda r: r['steady_relative_speed_error']):.0f} %) | "
+              f"{100 * m(lambda r: r['relative_yaw_rate_error']):.0f} % "
+              f"({100 * m(lambda r: r['steady_relative_yaw_rate_error']):.0f} %) | "
               f"{ts('forward', 'vx_mps'):.2f} m/s | {ts('backward', 'vx_mps'):.2f} m/s | "
               f"{ts('left', 'vy_mps'):.2f} m/s | {ts('right', 'vy_mps'):.2f} m/s | "
               f"{ts('turn_left', 'yaw_rate_dps'):.0f} deg/s | "

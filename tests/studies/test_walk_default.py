@@ -107,3 +107,12 @@ def test_the_api_runs_the_preset_study(tmp_path):
         tmp_path / "run", preset="open-loop")
     assert res.exit_code == 0
     assert config_from_run_dir(tmp_path / "run")[0] == "humanoid-walk-open-loop"
+
+
+def test_every_preset_study_is_registered_and_named_apart_from_the_presets():
+    from evomotion.studies import all_studies
+
+    for s in all_studies():
+        for preset, target in s.preset_studies.items():
+            assert preset not in s.presets and preset in s.preset_notes, (s.name, preset)
+            assert get_study(target).name == target != s.name

@@ -225,14 +225,13 @@ def _pushes(worlds: list[World], nstep: int) -> tuple[np.ndarray, np.ndarray]:
     return push, np.where(push.any(axis=1) & (step < nstep), step, -1)
 
 
-def _segment_controls(ctrl: np.ndarray, push: np.ndarray, step: np.ndarray, rows: np.ndarray,
+def _segment_controls(c: np.ndarray, push: np.ndarray, step: np.ndarray, rows: np.ndarray,
                       start: int, stop: int, base: mujoco.MjModel,
                       pushed: bool) -> tuple[np.ndarray, int]:
-    """Controls of ``rows`` for steps ``start:stop`` and their ``control_spec``. When any world
-    of the batch is ``pushed``, every segment carries ``xfrc_applied`` columns (zero but at a
-    push), so no force is left over in a thread's ``MjData`` and a trajectory does not depend
-    on the other trajectories of its batch."""
-    c = ctrl[rows, start:stop]
+    """The controls ``c`` of ``rows`` for steps ``start:stop`` with their ``control_spec``.
+    When any world of the batch is ``pushed``, every segment carries ``xfrc_applied`` columns
+    (zero but at a push), so no force is left over in a thread's ``MjData`` and a trajectory
+    does not depend on the other trajectories of its batch."""
     if not pushed:
         return np.ascontiguousarray(c, dtype=np.float64), int(mujoco.mjtState.mjSTATE_CTRL)
     spec = int(mujoco.mjtState.mjSTATE_CTRL) | int(mujoco.mjtState.mjSTATE_XFRC_APPLIED)
@@ -259,8 +258,8 @@ def aggregate_worlds(ev: Evaluation, n: int, k: int, aggregate: str = "mean",
 
 def simulate_worlds(worlds: list[World], initial_state: np.ndarray, controls: np.ndarray,
                     nthread: int = 1, sensors: bool = False, stopped=None,
-                    segment_steps: int = 0,
-                    simulator=None) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+                    segment_steps: int = 0, simulator=None, feedback=None,
+                    control_steps: int = 0) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
     """Roll out every world from ``initial_state`` (``[nstate]`` or ``[k, nstate]``,
     ``STATE_SPEC``) under ``controls`` (``[nstep, nu]`` or ``[k, nstep, nu]``), delayed and
     pushed per world, in one ``mujoco.rollout`` batch with ``nthread`` threads (0: all cores).
@@ -276,11 +275,26 @@ def simulate_worlds(worlds: list[World], initial_state: np.ndarray, controls: np
     same states.
 
     With a :class:`~evomotion.sim.warp_rollout.WarpSimulator` as ``simulator`` the batch runs
-    on MuJoCo Warp instead (:mod:`evomotion.sim.warp_worlds`); ``nthread`` is then unused."""
+    on MuJoCo Warp instead (:mod:`evomotion.sim.warp_worlds`); ``nthread`` is then unused.
+
+    With ``feedback(rows, start, states) -> delta[len(rows), nu]`` (a controller reading the
+    state of trajectories ``rows`` at step ``start``) the batch is stepped ``control_steps``
+    at a time; each period's targets are ``controls`` plus the feedback read at its start, and
+    reach the servos after each world's latency like the rest (the CPU only; the early stop
+    is then checked every control period)."""
     if not worlds:
         raise InputError("simulate_worlds: expected at least one world")
     k, base = len(worlds), worlds[0].model
-    ctrl = delayed_controls(controls, np.array([w.latency_steps for w in worlds]))
+    lat = np.array([w.latency_steps for w in worlds], dtype=np.int64)
+    if feedback is None:
+        ctrl = delayed_controls(controls, lat)
+    else:
+        if getattr(simulator, "backend", "cpu") == "warp" or control_steps < 1:
+            raise InputError("simulate_worlds: feedback runs on the CPU, every control_steps "
+                             ">= 1 physics steps")
+        ctrl = np.array(np.broadcast_to(controls, (k, *np.shape(controls)[-2:])), float)
+        segment_steps, stop_rule = int(control_steps), stopped
+        stopped = stop_rule if stop_rule is not None else (lambda s: np.zeros(len(s), bool))
     nstep = ctrl.shape[1]
     push, step = _pushes(worlds, nstep)
     nstate = mujoco.mj_stateSize(base, STATE_SPEC)
@@ -299,8 +313,16 @@ def simulate_worlds(worlds: list[World], initial_state: np.ndarray, controls: np
     runner = mj_rollout.Rollout(nthread=nthread) if nthread > 1 else None
     datas = [mujoco.MjData(base) for _ in range(nthread)]
 
+    def segment(rows: np.ndarray, start: int, stop: int, init: np.ndarray) -> np.ndarray:
+        if feedback is None:
+            return ctrl[rows, start:stop]
+        ctrl[rows, start:stop] += np.asarray(feedback(rows, start, init))[:, None, :]
+        sent = np.maximum(np.arange(start, stop)[None, :] - lat[rows][:, None], 0)
+        return ctrl[rows[:, None], sent]  # what the servos act on: sent latency steps ago
+
     def roll(rows: np.ndarray, start: int, stop: int, init: np.ndarray):
-        c, spec = _segment_controls(ctrl, push, step, rows, start, stop, base, pushed)
+        c, spec = _segment_controls(segment(rows, start, stop, init), push, step, rows, start,
+                                    stop, base, pushed)
         args = ([models[i] for i in rows], datas if runner else datas[0], init, c)
         kw = {"control_spec": spec, "nstep": stop - start}
         return runner.rollout(*args, **kw) if runner else mj_rollout.rollout(*args, **kw)

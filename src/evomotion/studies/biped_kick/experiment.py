@@ -71,16 +71,18 @@ def on_grid(evals: np.ndarray, best: np.ndarray, grid: np.ndarray) -> np.ndarray
     return np.where(idx >= 0, best[np.maximum(idx, 0)], np.nan)
 
 
-def kick_worlds(problem: KickProblem, n: int, rng: np.random.Generator) -> list:
+def kick_worlds(problem: KickProblem, n: int, rng: np.random.Generator,
+                push_ns: tuple[float, float] = (0.0, 0.0)) -> list:
     """``n`` perturbed worlds of the kick scene (:func:`evomotion.sim.worlds.draw_worlds` with
     the default ranges: friction x0.5-1.4, link masses +-10 %, torso CoM +-2 cm, motors
-    +-10 %, latency 0-40 ms; no push: a kick is short and the check is about its aim). The
+    +-10 %, latency 0-40 ms; no push by default: a kick is short and the check is about its
+    aim; ``push_ns``: a lateral push U(lo, hi) N s at 25-75 % of the kick). The
     carpet stays calibrated: the ball's friction is set back to its nominal values in every
     world (the ball-floor contact takes the larger of the two geoms' coefficients), so the
     friction scale perturbs the robot's feet, not the ball's roll."""
     base = problem.model
     duration = float(SETTLE_S + execution_time_s(problem.kicker.start[None])[0])
-    worlds = draw_worlds(base, Perturbation(push_ns=(0.0, 0.0)), int(n), rng, duration)
+    worlds = draw_worlds(base, Perturbation(push_ns=tuple(push_ns)), int(n), rng, duration)
     ball = base.geom("ball").id
     for w in worlds:
         w.model.geom_friction[ball] = base.geom_friction[ball]

@@ -42,9 +42,10 @@ from evomotion.core.problem import Evaluation, GenomeSpec
 from evomotion.errors import InputError
 from evomotion.sim.robots import nao
 from evomotion.sim.rollout import BatchSimulator, fall_step, interpolate_controls, torso_track
-from evomotion.sim.worlds import simulate_worlds
+from evomotion.sim.worlds import World, simulate_worlds
 from evomotion.studies.biped_kick import scene
 from evomotion.studies.biped_kick.adaptive import followed_shift, left_flags
+from evomotion.studies.biped_kick.balance import MAX_GAIN_S, BalanceFeedback, control_steps
 from evomotion.studies.biped_kick.kickers import kicker_for
 from evomotion.studies.biped_kick.motion import (
     GENES,
@@ -106,6 +107,11 @@ class KickConfig:
     #: leg IK (robot_motion.py); its [fall] thresholds apply unless fall_height_m /
     #: fall_tilt_rad are set
     robot: str = ""
+    #: balance feedback during the kick (balance.py, eq. 1): the support ankle's pitch and
+    #: roll targets move by these gains (s) x the torso's pitch and roll rates (rad/s), read
+    #: every control_period_s (s); (0, 0): the open-loop kick (the NAO's kick only)
+    balance_gains: tuple[float, float] = (0.0, 0.0)
+    control_period_s: float = 0.012
 
     def for_worker(self) -> KickConfig:
         """The config of a one-core evaluator worker: ``nthread`` 0 (all cores) becomes 1."""
@@ -135,6 +141,13 @@ class KickConfig:
                      lo_open=True)
         check_number("problem.nthread", self.nthread, lo=0, hi=MAX_THREADS, integer=True)
         check_text("problem.robot", self.robot)
+        if len(self.balance_gains) != 2:
+            raise InputError("problem.balance_gains: expected two gains (s), the support "
+                             f"ankle's pitch and roll, got {len(self.balance_gains)}")
+        for i, g in enumerate(self.balance_gains):
+            check_number(f"problem.balance_gains[{i}]", g, lo=-MAX_GAIN_S, hi=MAX_GAIN_S)
+        check_number("problem.control_period_s", self.control_period_s, lo=0.0, hi=1.0,
+                     lo_open=True)
 
     def genome_dim(self) -> int:
         return len(GENES)
@@ -213,6 +226,11 @@ class KickProblem:
         self._toe = k.toe
         self.fall_height_m, self.fall_tilt_rad = r.fall_thresholds(cfg.fall_height_m,
                                                                    cfg.fall_tilt_rad)
+        self.closed_loop = any(g != 0 for g in cfg.balance_gains)
+        self.control_steps = 0
+        if self.closed_loop:  # its checks: the period, the robot's ankles
+            self.control_steps = control_steps(self.model, cfg.control_period_s)
+            BalanceFeedback(self.model, cfg.balance_gains, np.zeros(0, bool))
 
     def initial_population(self, n: int, rng: np.random.Generator) -> np.ndarray:
         """The hand-set kick :data:`.motion.START` (CMA-ES starts its mean there) and ``n - 1``
@@ -291,14 +309,17 @@ class KickProblem:
                 ctrl[left])
         nstep = ctrl.shape[1]
         state0 = np.stack([self.kicker.initial_state(b) for b in ball0])
-        if worlds is None:
+        if worlds is not None and len(worlds) != len(g):
+            raise InputError(f"kicks: expected one world per kick ({len(g)}), got "
+                             f"{len(worlds)}")
+        if worlds is None and not self.closed_loop:
             states, sensors = self.sim.run_with_sensors(state0, ctrl)
-        else:
-            if len(worlds) != len(g):
-                raise InputError(f"kicks: expected one world per kick ({len(g)}), got "
-                                 f"{len(worlds)}")
-            states, sensors = simulate_worlds(worlds, state0, ctrl, self.cfg.nthread,
-                                              sensors=True)
+        else:  # perturbed worlds, or the balance feedback's closed loop (balance.py)
+            fb = (BalanceFeedback(self.model, self.cfg.balance_gains, left)
+                  if self.closed_loop else None)
+            states, sensors = simulate_worlds(
+                worlds if worlds is not None else [World(self.model)] * len(g), state0, ctrl,
+                self.cfg.nthread, sensors=True, feedback=fb, control_steps=self.control_steps)
         rest, roll_s = self.ball_rest(states[np.arange(len(g)), end - 1])
         travel = rest - ball0
         u = np.stack([np.cos(aims), np.sin(aims)], axis=1)

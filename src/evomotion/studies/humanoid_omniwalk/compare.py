@@ -8,7 +8,11 @@
   training episode uses), each ``duration`` seconds of the run's random command schedule with
   one push of up to the run's ``push_max_ns``. Reported: survival (never fallen), mean time up,
   the tracking errors (m/s, rad/s) and the relative error ``Σ|v − v_cmd| / Σ|v_cmd|`` over the
-  one-cycle windows while up (velocity and yaw rate apart).
+  one-cycle windows while up (velocity and yaw rate apart); and the **steady** relative errors:
+  the same sums over the windows that begin :data:`SETTLE_S` or more after the command last
+  changed (its ramp included), each quantity over the windows where it is commanded
+  (``|v_cmd| >= 0.05`` m/s, ``|ω_cmd| >= 0.1`` rad/s): how well a held command is walked,
+  without the response to its changes and without drift during the other kinds of command.
 - **Top speeds**: each direction commanded alone at the run's range limit (forward ``vx_max``,
   backward ``vx_min``, left/right ``±vy_max``, turning ``±yaw_rate_max``) for
   :data:`SPEED_TEST_S` in the nominal world without a push; the walked velocity is the mean over
@@ -33,6 +37,20 @@ EVAL_SEED_BASE = 2**40  # above every training seed (< 2^31)
 MAX_WORLDS = 10_000
 SPEED_TEST_S = 10.0
 BATCH = 20  # worlds per closed-loop call (the recorded states of 60 s are large)
+SETTLE_S = 1.0  # a window is steady when it begins this long after the command's last change
+STEADY_MIN_V_MPS, STEADY_MIN_W_RPS = 0.05, 0.1  # the commanded quantities of the steady errors
+
+
+def steady_windows(cmds: np.ndarray, window: int, settle: int) -> np.ndarray:
+    """``[n, C + 1 − window]``: whether each one-cycle window (ending at control step
+    ``window .. C``) begins ``settle`` or more control steps after ``cmds[n, C, 3]`` last
+    changed."""
+    n, C, _ = cmds.shape
+    changed = np.zeros((n, C), bool)
+    changed[:, 1:] = (cmds[:, 1:] != cmds[:, :-1]).any(axis=2)
+    last = np.maximum.accumulate(np.where(changed, np.arange(C)[None], 0), axis=1)
+    ends = np.arange(window, C + 1)
+    return last[:, ends - 1] <= ends[None] - window - settle
 
 
 def load_run(path: str | Path, duration_s: float | None = None,
@@ -78,9 +96,14 @@ def _play(problem, params: np.ndarray, mean: np.ndarray, std: np.ndarray, seeds:
         ev, ew = tr.errors()
         ends = np.arange(problem.ctl.window, cmds.shape[1] + 1)
         up = ends[None] * problem.control_steps <= res.fall_step[:, None]
+        cv, cw = np.hypot(tr.cmd[..., 0], tr.cmd[..., 1]), np.abs(tr.cmd[..., 2])
+        steady = up & steady_windows(cmds, problem.ctl.window,
+                                     int(round(SETTLE_S / problem.ctl.control_dt)))
+        sv, sw = steady & (cv >= STEADY_MIN_V_MPS), steady & (cw >= STEADY_MIN_W_RPS)
         m = dict(m, err_v=(ev * up).sum(1), err_w=(ew * up).sum(1),
-                 cmd_v=(np.hypot(tr.cmd[..., 0], tr.cmd[..., 1]) * up).sum(1),
-                 cmd_w=(np.abs(tr.cmd[..., 2]) * up).sum(1),
+                 cmd_v=(cv * up).sum(1), cmd_w=(cw * up).sum(1),
+                 steady_err_v=(ev * sv).sum(1), steady_cmd_v=(cv * sv).sum(1),
+                 steady_err_w=(ew * sw).sum(1), steady_cmd_w=(cw * sw).sum(1),
                  vx=tr.vx, vy=tr.vy, w=tr.yaw_rate)
         for k, v in m.items():
             out.setdefault(k, []).append(v)
@@ -93,6 +116,10 @@ def _summary(m: dict) -> dict[str, float]:
             "yaw_rate_error_rps": float(m["yaw_rate_error_rps"].mean()),
             "relative_speed_error": float(m["err_v"].sum() / max(m["cmd_v"].sum(), 1e-12)),
             "relative_yaw_rate_error": float(m["err_w"].sum() / max(m["cmd_w"].sum(), 1e-12)),
+            "steady_relative_speed_error": float(m["steady_err_v"].sum()
+                                                 / max(m["steady_cmd_v"].sum(), 1e-12)),
+            "steady_relative_yaw_rate_error": float(m["steady_err_w"].sum()
+                                                    / max(m["steady_cmd_w"].sum(), 1e-12)),
             "power_w": float(m["power_w"].mean()),
             "speed_excess": float(m["speed_excess"].mean())}
 
@@ -163,15 +190,18 @@ def table(res: dict[str, Any]) -> str:
     robot = {"nao": "NAO", "op3": "OP3"}.get(res.get("robot", "nao"), res.get("robot"))
     lines = [f"{robot}, {res['worlds']} unseen perturbed worlds, {res['duration_s']:g} s of random "
              f"commands each, one push U({lo:g}, {hi:g}) N s (seed {res['seed']})", "",
-             "| controller | survival | time up (s) | speed error (m/s) | relative | yaw-rate "
-             "error (deg/s) | relative | power (W) |", "|---|---|---|---|---|---|---|---|"]
+             "| controller | survival | time up (s) | speed error (m/s) | relative | steady | "
+             "yaw-rate error (deg/s) | relative | steady | power (W) |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     for key, name in (("controller", "evolved controller"), ("engine", "walk engine (open "
                                                                        "loop, the start)")):
         r = res[key]
         lines.append(f"| {name} | {100 * r['survival']:.0f} % | {r['time_up_s']:.1f} | "
                      f"{r['speed_error_mps']:.3f} | {100 * r['relative_speed_error']:.0f} % | "
+                     f"{100 * r['steady_relative_speed_error']:.0f} % | "
                      f"{np.degrees(r['yaw_rate_error_rps']):.1f} | "
-                     f"{100 * r['relative_yaw_rate_error']:.0f} % | {r['power_w']:.0f} |")
+                     f"{100 * r['relative_yaw_rate_error']:.0f} % | "
+                     f"{100 * r['steady_relative_yaw_rate_error']:.0f} % | {r['power_w']:.0f} |")
     lines += ["", f"Top speeds (nominal world, each command alone for {SPEED_TEST_S:g} s, the "
               "mean over the last half):", "",
               "| command | controller | engine |", "|---|---|---|"]
