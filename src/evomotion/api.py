@@ -94,10 +94,16 @@ def run(problem_or_study: Any, config: dict[str, Any] | None = None,
                              "argument and the preset as preset=")
     if preset is not None and not isinstance(preset, str):
         raise InputError(f"evomotion.run: preset must be a name, got {preset!r}")
-    if isinstance(problem_or_study, str) and not resume:  # a preset may be another study
-        from evomotion.studies import study_with_preset
+    if isinstance(problem_or_study, str):  # a preset may be another study
+        from evomotion.studies import get_study, study_with_preset
 
         study, preset = study_with_preset(problem_or_study, preset)
+        if resume and out_dir is not None and (Path(out_dir) / "config.toml").is_file():
+            from evomotion.run.config import config_from_run_dir
+
+            name = config_from_run_dir(Path(out_dir))[0]  # its preset's study
+            if name in study.preset_studies.values():
+                study = get_study(name)
     if resume:
         from evomotion.run.resume import resume_config
 
@@ -171,8 +177,12 @@ def load_run(path: str | Path) -> Run:
                  if p.is_file() and p.name not in _ENGINE_FILES
                  and "checkpoints" not in p.relative_to(root).parts
                  and not p.name.startswith(".")}
-    return Run(root, str(config.get("study", "")), config, stats, best, artifacts, physics,
-               log)
+    from evomotion.run.config import current_study_name
+
+    problem = config.get("problem")
+    study = current_study_name(str(config.get("study", "")),  # a study renamed since
+                               problem if isinstance(problem, dict) else ())
+    return Run(root, study, config, stats, best, artifacts, physics, log)
 
 
 def _read_json(path: Path) -> dict[str, Any] | None:

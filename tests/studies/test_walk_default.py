@@ -107,6 +107,10 @@ def test_the_api_runs_the_preset_study(tmp_path):
         tmp_path / "run", preset="open-loop")
     assert res.exit_code == 0
     assert config_from_run_dir(tmp_path / "run")[0] == "humanoid-walk-open-loop"
+    _as_old(tmp_path / "run", "humanoid-walk")  # the API resumes it by either name
+    for name, gens in (("humanoid-walk", 2), ("humanoid-walk-open-loop", 3)):
+        res = api.run(name, {"run": {"generations": gens}}, tmp_path / "run", resume=True)
+        assert res.exit_code == 0 and res.generation == gens
 
 
 def test_every_preset_study_is_registered_and_named_apart_from_the_presets():
@@ -116,3 +120,29 @@ def test_every_preset_study_is_registered_and_named_apart_from_the_presets():
         for preset, target in s.preset_studies.items():
             assert preset not in s.presets and preset in s.preset_notes, (s.name, preset)
             assert get_study(target).name == target != s.name
+
+
+def test_old_folders_are_named_as_now_everywhere_they_are_listed(tmp_path):
+    """The studio's run list and compare table and ``evomotion.load_run`` name an old
+    folder's study as it is now (a folder holding only its config is enough to be named)."""
+    from evomotion.studio.compare import configs
+    from evomotion.studio.data import study_name
+
+    folders = {"open": ('study = "humanoid-walk"\n\n[problem]\nwalk_s = 10.0\n',
+                        "humanoid-walk-open-loop"),
+               "omni": ('study = "humanoid-omniwalk"\n\n[problem]\nduration_s = 8.0\n',
+                        "humanoid-walk"),
+               "now": ('study = "humanoid-walk"\n\n[problem]\nduration_s = 8.0\n',
+                       "humanoid-walk")}
+    for name, (text, want) in folders.items():
+        (tmp_path / name).mkdir()
+        (tmp_path / name / "config.toml").write_text(text)
+        assert study_name(tmp_path / name) == want
+        assert api.load_run(tmp_path / name).study == want
+    assert [c["study"] for c in configs([tmp_path / n for n in folders])] == \
+        [want for _, want in folders.values()]
+
+
+def test_a_preset_of_the_preset_study_says_where_it_is():
+    with pytest.raises(InputError, match="'nominal' is a preset of humanoid-walk-open-loop"):
+        study_with_preset("humanoid-walk", "nominal")

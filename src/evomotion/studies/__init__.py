@@ -9,6 +9,7 @@ from __future__ import annotations
 import importlib
 
 from evomotion.core.registry import lookup
+from evomotion.errors import InputError
 from evomotion.studies.base import Study
 
 STUDIES: dict[str, str] = {
@@ -48,6 +49,12 @@ def study_with_preset(name: str, preset: str | None) -> tuple[Study, str | None]
     study = get_study(name)
     if preset is not None and preset in study.preset_studies:
         return get_study(study.preset_studies[preset]), None
+    if preset is not None and preset not in study.presets:
+        for key, target in study.preset_studies.items():  # a preset of the preset's study
+            if preset in get_study(target).presets:
+                raise InputError(f"--preset: {preset!r} is a preset of {target} (the "
+                                 f"{key!r} preset of {study.name}): run {target} "
+                                 f"--preset {preset}")
     return study, preset
 
 

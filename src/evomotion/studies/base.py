@@ -25,7 +25,7 @@ class Study:
     - ``presets``: named settings over the defaults (``--preset paper``: the paper's literal
       setting), same form as ``defaults``; ``preset_notes`` says in one line what each is.
     - ``preset_studies``: presets that are another registered study, ``name -> study``
-      (``humanoid-walk-open-loop --preset open-loop`` runs ``humanoid-walk-open-loop``, a problem of
+      (``humanoid-walk --preset open-loop`` runs ``humanoid-walk-open-loop``, a problem of
       another kind); ``preset_notes`` says what each is.
     - ``core_algorithms``: the registered optimizers the study accepts (``None``: all of them).
     - ``algorithms``: the study's own methods, ``name -> (config dataclass, factory(problem,

@@ -126,8 +126,11 @@ def start_run(root: Path, study: str, preset: str | None, sets: list[str],
               name: str = "", tags: tuple[str, ...] = ()) -> tuple[Path, Any]:
     """Check the settings (one-line error), then start the run in ``ROOT/name`` (or a
     stamped folder) with ``tags`` (:mod:`.tags`); ``(run folder, process)``."""
+    from evomotion.studies import study_with_preset
     from evomotion.studio.tags import check_tags, write_tags
 
+    s, preset = study_with_preset(study, preset)  # a preset that is another study: that one
+    study = s.name
     check_new_run(study, preset, sets)
     tags = check_tags(tags)
     out = make_run_folder(root, study, name)  # checks the name before making anything

@@ -182,7 +182,9 @@ def _int(v: Any, default: int) -> int:
 
 
 def study_name(run_dir: Path) -> str:
-    """The ``study = "..."`` line of ``config.toml`` (read without parsing the file)."""
+    """The ``study = "..."`` line of ``config.toml`` (read without parsing the file; a name a
+    study had before a rename, :data:`~evomotion.run.config.RENAMED_STUDIES`, parses it to
+    tell which study it is now)."""
     first, _ = head_tail(run_dir / "config.toml", 0)
     if first.startswith("study"):
         name = first.partition("=")[2].strip().strip('"')

@@ -1,7 +1,8 @@
 """Balance feedback during the kick (issue 34: "the kick evolved with the walk's balance
 feedback"): the support leg's ankle reads the torso's gyro.
 
-Every ``control_period_s`` the support ankle's pitch and roll targets move by
+Every ``control_period_s`` of the rollout (the settle before the kick, the kick and the
+ball's roll after it) the support ankle's pitch and roll targets move by
 
     Δq_pitch = k_pitch · ω_y,    Δq_roll = k_roll · ω_x                       (1)
 

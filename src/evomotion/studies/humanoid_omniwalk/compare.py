@@ -43,8 +43,9 @@ STEADY_MIN_V_MPS, STEADY_MIN_W_RPS = 0.05, 0.1  # the commanded quantities of th
 
 def steady_windows(cmds: np.ndarray, window: int, settle: int) -> np.ndarray:
     """``[n, C + 1 − window]``: whether each one-cycle window (ending at control step
-    ``window .. C``) begins ``settle`` or more control steps after ``cmds[n, C, 3]`` last
-    changed."""
+    ``window .. C``) begins ``settle`` or more control steps after the command of its
+    episode (``cmds[n, C, 3]``, ramps included) last changed; the episode's start counts as
+    a change."""
     n, C, _ = cmds.shape
     changed = np.zeros((n, C), bool)
     changed[:, 1:] = (cmds[:, 1:] != cmds[:, :-1]).any(axis=2)
