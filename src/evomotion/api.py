@@ -177,11 +177,9 @@ def load_run(path: str | Path) -> Run:
                  if p.is_file() and p.name not in _ENGINE_FILES
                  and "checkpoints" not in p.relative_to(root).parts
                  and not p.name.startswith(".")}
-    from evomotion.run.config import current_study_name
+    from evomotion.run.config import renamed
 
-    problem = config.get("problem")
-    study = current_study_name(str(config.get("study", "")),  # a study renamed since
-                               problem if isinstance(problem, dict) else ())
+    study = str(renamed(config).get("study", ""))  # a study renamed since: its name now
     return Run(root, study, config, stats, best, artifacts, physics, log)
 
 

@@ -403,6 +403,18 @@ def current_study_name(name: str, problem_keys: Any = ()) -> str:
     return name
 
 
+def renamed(raw: dict[str, Any]) -> dict[str, Any]:
+    """A raw run config with its ``study`` under the name it has now
+    (:func:`current_study_name` of its ``[problem]`` keys); ``raw`` itself when it names no
+    study or one not renamed."""
+    name = raw.get("study")
+    if not isinstance(name, str):
+        return raw
+    problem = raw.get("problem")
+    now = current_study_name(name, problem if isinstance(problem, dict) else ())
+    return raw if now == name else {**raw, "study": now}
+
+
 def config_from_run_dir(run_dir: Path) -> tuple[str, dict[str, Any]]:
     """Study name and raw config saved in a run folder (``config.toml``); a folder of a
     study renamed since is read under its name now (:func:`current_study_name`)."""
@@ -412,9 +424,7 @@ def config_from_run_dir(run_dir: Path) -> tuple[str, dict[str, Any]]:
     raw = load_toml(path)
     if not isinstance(raw.get("study"), str):
         raise FileFormatError(path, None, "expected a top-level 'study' key naming the study")
-    problem = raw.get("problem")
-    raw["study"] = current_study_name(raw["study"], problem if isinstance(problem, dict)
-                                      else ())
+    raw = renamed(raw)
     return raw["study"], raw
 
 

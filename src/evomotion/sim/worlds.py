@@ -293,8 +293,9 @@ def simulate_worlds(worlds: list[World], initial_state: np.ndarray, controls: np
             raise InputError("simulate_worlds: feedback runs on the CPU, every control_steps "
                              ">= 1 physics steps")
         ctrl = np.array(np.broadcast_to(controls, (k, *np.shape(controls)[-2:])), float)
-        segment_steps, stop_rule = int(control_steps), stopped
-        stopped = stop_rule if stop_rule is not None else (lambda s: np.zeros(len(s), bool))
+        segment_steps = int(control_steps)  # rollout_segments steps a stop rule's segments
+        if stopped is None:
+            stopped = lambda s: np.zeros(len(s), bool)  # noqa: E731 - never stops
     nstep = ctrl.shape[1]
     push, step = _pushes(worlds, nstep)
     nstate = mujoco.mj_stateSize(base, STATE_SPEC)

@@ -38,18 +38,13 @@ def flat_config(raw: dict[str, Any]) -> dict[str, str]:
 def configs(run_dirs: list[Path]) -> list[dict[str, str]]:
     """Each run's :func:`flat_config` and its tags (key ``tags``: a group-by choice and a diff
     row where they differ)."""
-    from evomotion.run.config import current_study_name
+    from evomotion.run.config import renamed
     from evomotion.studio.data import read_config
     from evomotion.studio.tags import read_tags
 
     out = []
     for d in run_dirs:
-        raw = read_config(d)[1]
-        if isinstance(raw, dict) and isinstance(raw.get("study"), str):  # renamed since
-            problem = raw.get("problem")
-            raw = {**raw, "study": current_study_name(
-                raw["study"], problem if isinstance(problem, dict) else ())}
-        flat = flat_config(raw)
+        flat = flat_config(renamed(read_config(d)[1]))  # a study renamed since: its name now
         flat["tags"] = " ".join(read_tags(d)) or MISSING
         out.append(flat)
     return out

@@ -153,7 +153,7 @@ def build(root: Path) -> None:
 def _cloned(root: Path, name: str) -> tuple[dict, str]:
     """The config table of run ``name`` to start the form from, and a line saying so (or
     why not: the form then starts from the defaults)."""
-    from evomotion.run.config import current_study_name
+    from evomotion.run.config import renamed
     from evomotion.studio.data import read_config, resolve_run
 
     try:
@@ -162,11 +162,7 @@ def _cloned(root: Path, name: str) -> tuple[dict, str]:
         return {}, f"not cloned: {e}"
     if not table:
         return {}, f"not cloned: {name}'s config.toml does not parse ({text[:80]})"
-    if isinstance(table.get("study"), str):  # a study renamed since (run/config.py)
-        problem = table.get("problem")
-        table = {**table, "study": current_study_name(
-            table["study"], problem if isinstance(problem, dict) else ())}
-    return table, (f"cloned from {name}: its preset, algorithm and every value it set are "
+    return renamed(table), (f"cloned from {name}: its preset, algorithm and every value it set are "
                    "filled in (the fields that differ from the defaults)")
 
 
