@@ -151,6 +151,19 @@ def test_run_started_from_the_form_is_the_cli_run(page, studio, tmp_path):
     assert (run_dir / "config.toml").read_text() == (cli / "config.toml").read_text()
 
 
+def test_a_preset_that_is_another_study_opens_that_studys_form(page, studio):
+    """`humanoid-walk --preset open-loop` runs the study humanoid-walk-open-loop: the form
+    lists the preset and opens that study's own form (its fields follow the study)."""
+    base, _ = studio
+    page.goto(f"{base}/new?study=humanoid-walk")
+    page.wait_for_selector(".new-command")
+    page.locator(".new-preset").click()
+    page.get_by_role("option", name="open-loop: the study humanoid-walk-open-loop").click()
+    page.wait_for_url("**/new?study=humanoid-walk-open-loop")
+    _wait(lambda: "run humanoid-walk-open-loop" in page.locator(".new-command").inner_text(),
+          20, "the open-loop walk's form")
+
+
 def test_compare_page_draws_median_and_band(page, studio):
     base, root = studio
     page.goto(f"{base}/compare?runs=functions,grid-path")

@@ -34,7 +34,10 @@ def build(root: Path) -> None:
         with ui.row().classes("items-end"):
             pick = ui.select(list(STUDIES), value=study, label="study").classes("w-56 new-study")
             presets = {"": "default (best known)", **{p: f"{p}: {s.preset_notes.get(p, '')}"
-                                                      for p in s.presets}}
+                                                      for p in s.presets},
+                       # a preset that is another study opens that study's form
+                       **{p: f"{p}: the study {t} (its own form)"
+                          for p, t in s.preset_studies.items()}}
             preset0 = cloned.get("preset") if cloned.get("preset") in s.presets else ""
             preset = ui.select(presets, value=preset0, label="preset") \
                 .classes("w-96 new-preset")
@@ -138,6 +141,9 @@ def build(root: Path) -> None:
 
         def preset_changed() -> None:
             p = preset.value or None
+            if p in s.preset_studies:
+                ui.navigate.to(f"/new?study={quote(s.preset_studies[p])}")
+                return
             name = actions.check_new_run(study, p, []).algorithm.name
             if alg.value != name:
                 alg.set_value(name)  # its handler rebuilds the fields
@@ -153,7 +159,7 @@ def build(root: Path) -> None:
 def _cloned(root: Path, name: str) -> tuple[dict, str]:
     """The config table of run ``name`` to start the form from, and a line saying so (or
     why not: the form then starts from the defaults)."""
-    from evomotion.run.config import renamed
+    from evomotion.run.config import as_now
     from evomotion.studio.data import read_config, resolve_run
 
     try:
@@ -162,7 +168,7 @@ def _cloned(root: Path, name: str) -> tuple[dict, str]:
         return {}, f"not cloned: {e}"
     if not table:
         return {}, f"not cloned: {name}'s config.toml does not parse ({text[:80]})"
-    return renamed(table), (f"cloned from {name}: its preset, algorithm and every value it set are "
+    return as_now(table), (f"cloned from {name}: its preset, algorithm and every value it set are "
                    "filled in (the fields that differ from the defaults)")
 
 
