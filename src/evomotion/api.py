@@ -177,9 +177,9 @@ def load_run(path: str | Path) -> Run:
                  if p.is_file() and p.name not in _ENGINE_FILES
                  and "checkpoints" not in p.relative_to(root).parts
                  and not p.name.startswith(".")}
-    from evomotion.run.config import renamed
+    from evomotion.run.config import as_now
 
-    study = str(renamed(config).get("study", ""))  # a study renamed since: its name now
+    study = str(as_now(config).get("study", ""))  # a study renamed since: its name now
     return Run(root, study, config, stats, best, artifacts, physics, log)
 
 

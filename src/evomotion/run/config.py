@@ -403,28 +403,44 @@ def current_study_name(name: str, problem_keys: Any = ()) -> str:
     return name
 
 
-def renamed(raw: dict[str, Any]) -> dict[str, Any]:
-    """A raw run config with its ``study`` under the name it has now
-    (:func:`current_study_name` of its ``[problem]`` keys); ``raw`` itself when it names no
-    study or one not renamed."""
+#: keys a study gained after run folders were written whose default changes what such a run
+#: does: absent from a saved config, they read as these values (what those runs did).
+#: 33: humanoid-balance's stance (sim/stance.py; those runs stood in the spec pose).
+ADDED_KEYS: dict[str, dict[str, dict[str, Any]]] = {
+    "humanoid-balance": {"problem": {"stance_width_rad": 0.0, "stance_stagger_rad": 0.0,
+                                     "stance_crouch_rad": 0.0}},
+}
+
+
+def as_now(raw: dict[str, Any]) -> dict[str, Any]:
+    """A raw run config as its study reads it now: its ``study`` under the name it has now
+    (:func:`current_study_name` of its ``[problem]`` keys), and the keys added since
+    (:data:`ADDED_KEYS`) that it lacks set to what it ran with; ``raw`` itself when it names
+    no study or neither applies."""
     name = raw.get("study")
     if not isinstance(name, str):
         return raw
     problem = raw.get("problem")
     now = current_study_name(name, problem if isinstance(problem, dict) else ())
-    return raw if now == name else {**raw, "study": now}
+    out = raw if now == name else {**raw, "study": now}
+    for section, keys in ADDED_KEYS.get(now, {}).items():
+        table = out.get(section)
+        if isinstance(table, dict) and any(k not in table for k in keys):
+            out = {**out, section: {**keys, **table}}
+    return out
 
 
 def config_from_run_dir(run_dir: Path) -> tuple[str, dict[str, Any]]:
-    """Study name and raw config saved in a run folder (``config.toml``); a folder of a
-    study renamed since is read under its name now (:func:`current_study_name`)."""
+    """Study name and raw config saved in a run folder (``config.toml``), as the study reads it
+    now (:func:`as_now`: a study renamed since under its name now, keys added since as the run
+    had them)."""
     path = Path(run_dir) / "config.toml"
     if not path.exists():
         raise InputError(f"{run_dir}: not a run folder (no config.toml)")
     raw = load_toml(path)
     if not isinstance(raw.get("study"), str):
         raise FileFormatError(path, None, "expected a top-level 'study' key naming the study")
-    raw = renamed(raw)
+    raw = as_now(raw)
     return raw["study"], raw
 
 

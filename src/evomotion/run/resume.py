@@ -16,7 +16,7 @@ from typing import Any
 from evomotion.core.state import rng_from_state
 from evomotion.errors import InputError
 from evomotion.run.checkpoint import NAME, CheckpointError, candidates, load_checkpoint
-from evomotion.run.config import Config, current_study_name
+from evomotion.run.config import ADDED_KEYS, Config, current_study_name
 from evomotion.run.contracts import LoopStudy
 from evomotion.run.counters import Counters
 from evomotion.run.driver import Driver
@@ -93,6 +93,8 @@ def check_same_config(recorded: Any, config: Config, run_dir: Path,
     if isinstance(recorded.get("study"), str):  # a study renamed since (run/config.py)
         problem = [k.partition(".")[2] for k in recorded if k.startswith("problem.")]
         recorded = {**recorded, "study": current_study_name(recorded["study"], problem)}
+        for section, keys in ADDED_KEYS.get(recorded["study"], {}).items():
+            recorded = {**{f"{section}.{k}": v for k, v in keys.items()}, **recorded}
     if moved:
         recorded = moved_record(recorded, moved, now)
     for key in sorted(set(recorded) | set(now)):

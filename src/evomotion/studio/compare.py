@@ -38,13 +38,13 @@ def flat_config(raw: dict[str, Any]) -> dict[str, str]:
 def configs(run_dirs: list[Path]) -> list[dict[str, str]]:
     """Each run's :func:`flat_config` and its tags (key ``tags``: a group-by choice and a diff
     row where they differ)."""
-    from evomotion.run.config import renamed
+    from evomotion.run.config import as_now
     from evomotion.studio.data import read_config
     from evomotion.studio.tags import read_tags
 
     out = []
     for d in run_dirs:
-        flat = flat_config(renamed(read_config(d)[1]))  # a study renamed since: its name now
+        flat = flat_config(as_now(read_config(d)[1]))  # a study renamed since: its name now
         flat["tags"] = " ".join(read_tags(d)) or MISSING
         out.append(flat)
     return out

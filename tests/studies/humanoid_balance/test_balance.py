@@ -172,3 +172,63 @@ def test_bad_config_is_one_line():
         HumanoidBalanceProblem(HumanoidBalanceConfig(observations="joint_pos,nose"))
     with pytest.raises(InputError, match="push_max_ns"):
         HumanoidBalanceConfig(push_min_ns=3.0, push_max_ns=2.0).validate()
+    with pytest.raises(InputError, match="problem.stance_width_rad"):
+        HumanoidBalanceConfig(stance_width_rad=2.0).validate()
+    with pytest.raises(InputError, match="problem.stance_width_rad.*AnkleRoll at"):
+        HumanoidBalanceProblem(HumanoidBalanceConfig(stance_width_rad=0.6, threads=1))
+
+
+SPEC_POSE = ("problem.stance_width_rad=0", "problem.stance_stagger_rad=0",
+             "problem.stance_crouch_rad=0")
+
+
+def _before_the_stance(run) -> None:
+    """Make ``run`` look written before problem.stance_* existed: no such keys anywhere."""
+    import re
+
+    cfg = run / "config.toml"
+    cfg.write_text(re.sub(r"^stance_\w+ = .*\n", "", cfg.read_text(), flags=re.M))
+    for ck in (run / "checkpoints").glob("gen-*.json"):
+        meta = json.loads(ck.read_text())
+        meta["config"] = {k: v for k, v in meta["config"].items() if "stance_" not in k}
+        ck.write_text(json.dumps(meta))
+
+
+def test_the_default_stance_is_wider_and_a_folder_from_before_it_resumes_in_the_spec_pose(
+        tmp_path):
+    """The default stands in the wide, staggered, lower stance (sim/stance.py); a run folder
+    written before the stance keys existed (it stood in the spec pose) is read, and resumed
+    bit for bit, as the run it was."""
+    from evomotion.run.config import config_from_run_dir
+    from evomotion.sim.robots import load_robot
+    from evomotion.studies.humanoid_balance.compare import load_run
+
+    spec = load_robot("nao").pose
+    assert not np.array_equal(HumanoidBalanceProblem(HumanoidBalanceConfig(threads=1))
+                              .robot.pose, spec)
+    tiny = [*(t for t in TINY if not t.startswith("run.generations")), *SPEC_POSE]
+    full, part = tmp_path / "full", tmp_path / "part"
+    for out, gens in ((full, 3), (part, 2)):
+        sets = [a for t in (*tiny, f"run.generations={gens}") for a in ("--set", t)]
+        proc = subprocess.run([sys.executable, "-m", "evomotion.cli", "run", "humanoid-balance",
+                               *sets, "--out", str(out), "--quiet"], capture_output=True,
+                              text=True, timeout=600)
+        assert proc.returncode == 0, proc.stderr
+    _before_the_stance(part)
+    assert "stance_" not in (part / "config.toml").read_text()
+    raw = config_from_run_dir(part)[1]["problem"]
+    assert [raw[k] for k in ("stance_width_rad", "stance_stagger_rad",
+                             "stance_crouch_rad")] == [0.0, 0.0, 0.0]
+    problem = load_run(part)[0]
+    np.testing.assert_array_equal(problem.robot.pose, spec)
+    problem.sim.close()
+    proc = subprocess.run([sys.executable, "-m", "evomotion.cli", "resume", str(part), "--set",
+                           "run.generations=3", "--quiet"], capture_output=True, text=True,
+                          timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    from evomotion.run.stats import read_stats
+
+    a, b = read_stats(full / "stats.csv"), read_stats(part / "stats.csv")
+    assert len(a["generation"]) == len(b["generation"]) == 4
+    for col in set(a) - {"wall_s", "evals_per_s"}:
+        np.testing.assert_array_equal(a[col], b[col], err_msg=col)

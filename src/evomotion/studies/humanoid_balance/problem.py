@@ -1,8 +1,9 @@
 """The balance task as a policy-search problem (``evomotion run humanoid-balance``).
 
 The robot (``problem.robot``: "" = the NAO, or any biped spec) starts standing in its nominal
-pose; a policy (:mod:`evomotion.core.policies`: linear as in ARS, a tanh MLP, or structured:
-a phase tape plus feedback) reads its sensors every ``control_period_s`` (20 ms: 5 NAO physics
+pose (its spec pose in the stance of ``problem.stance_*``: :mod:`evomotion.sim.stance`); a
+policy (:mod:`evomotion.core.policies`: linear as in ARS, a tanh MLP, or structured: a phase
+tape plus feedback) reads its sensors every ``control_period_s`` (20 ms: 5 NAO physics
 steps) and sets offsets (rad) from the nominal pose of its ``[evolve]`` joints, for
 ``duration_s`` = 10 s. Every episode is one perturbed world with a push of up to
 ``push_max_ns`` N s in a random horizontal direction (:mod:`.episodes`); a robot that falls
@@ -46,6 +47,11 @@ class HumanoidBalanceConfig:
     """``[problem]`` of humanoid-balance."""
 
     robot: str = ""  # "" or "nao": the NAO; another bundled biped (op3) or a spec .toml
+    #: the stance it stands in, the policy's actions offsets from it (sim/stance.py; rad):
+    #: feet wider apart, the left ahead of the right, lower; 0, 0, 0: the spec pose
+    stance_width_rad: float = 0.3
+    stance_stagger_rad: float = 0.2
+    stance_crouch_rad: float = 0.15
     duration_s: float = 10.0  # episode length (s)
     control_period_s: float = 0.02  # the policy's period (s), a whole number of physics steps
     #: the observation channels (sim/observations.py), comma-separated
@@ -78,6 +84,8 @@ class HumanoidBalanceConfig:
     def validate(self) -> None:
         check_fields(self, "problem")
         check_text("problem.robot", self.robot)
+        for key in ("stance_width_rad", "stance_stagger_rad", "stance_crouch_rad"):
+            check_number(f"problem.{key}", getattr(self, key), lo=-1.0, hi=1.0)
         check_number("problem.duration_s", self.duration_s, lo=0.0, hi=MAX_DURATION_S,
                      lo_open=True)
         check_number("problem.control_period_s", self.control_period_s, lo=0.0, hi=1.0,
@@ -135,13 +143,17 @@ class HumanoidBalanceProblem:
         from evomotion.sim.closed_loop import ClosedLoopSimulator
         from evomotion.sim.observations import ObservationSpec
         from evomotion.sim.robots import load_robot
+        from evomotion.sim.stance import with_stance
 
         self.cfg = cfg = cfg or HumanoidBalanceConfig()
         cfg.validate()
-        self.robot = r = load_robot(cfg.robot or "nao")
+        r = load_robot(cfg.robot or "nao")
         if len(r.feet) != 2:
             raise InputError(f"problem.robot: {r.name} has {len(r.feet)} feet; the balance "
                              "task stands a biped")
+        self.robot = r = with_stance(r, cfg.stance_width_rad, cfg.stance_stagger_rad,
+                                     cfg.stance_crouch_rad, "problem.stance_width_rad, "
+                                     "stance_stagger_rad, stance_crouch_rad")
         self.dt = float(r.model.opt.timestep)
         k = cfg.control_period_s / self.dt
         if abs(k - round(k)) > 1e-6 or round(k) < 1:

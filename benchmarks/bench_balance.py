@@ -1,0 +1,96 @@
+"""The balance task by push direction (issue 33): for each humanoid-balance run folder, its
+exported policy and the open-loop stand-still in the run's stance, and the stand-still in the
+robot's spec pose (the stance before ``problem.stance_*``), on the same 100 unseen perturbed
+worlds as ``evomotion humanoid-balance compare RUN --worlds 100 --push P`` (seed 0): survival
+overall and by the push's direction (the NAO faces +x; forward = within 45 deg of +x).
+
+    python benchmarks/bench_balance.py RUN [RUN ...] [--push 4 3 2] [--worlds 100] [--json]
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+from evomotion.studies.humanoid_balance.compare import eval_seeds, load_run, play_policy
+from evomotion.studies.humanoid_balance.episodes import push_range
+
+SECTORS = {"forward": (-45, 45), "left": (45, 135), "right": (-135, -45)}
+
+
+def by_direction(survived: np.ndarray, angle_deg: np.ndarray) -> dict[str, float]:
+    out = {"all": float(survived.mean())}
+    for name, (lo, hi) in SECTORS.items():
+        out[name] = float(survived[(angle_deg > lo) & (angle_deg <= hi)].mean())
+    back = np.abs(angle_deg) > 135
+    out["backward"] = float(survived[back].mean())
+    return out
+
+
+def measure(run: Path, push: float, worlds: int) -> dict:
+    from evomotion.sim.closed_loop import ClosedLoopSimulator
+
+    problem, policy, _ = load_run(run)
+    seeds = eval_seeds(worlds, 0)
+    scaled = push_range(problem.robot, push, push)[0]
+    vec = np.array([w.push_ns for w in problem.worlds(seeds, scaled)])
+    angle = np.degrees(np.arctan2(vec[:, 1], vec[:, 0]))
+    out = {"push_ns": push, "worlds": worlds,
+           "count": {k: int(((angle > lo) & (angle <= hi)).sum())
+                     for k, (lo, hi) in SECTORS.items()}}
+    out["count"]["backward"] = int((np.abs(angle) > 135).sum())
+    for key, zero in (("policy", False), ("stand_still", True)):
+        ep = play_policy(problem, policy, seeds, scaled, zero=zero)
+        out[key] = by_direction(ep.survived.astype(bool), angle)
+    # the stand-still in the robot's spec pose, in the same worlds
+    from evomotion.sim.robots import load_robot
+
+    spec = load_robot(problem.cfg.robot or "nao")
+    threads = problem.sim.nthread
+    problem.sim.close()
+    robot = dataclasses.replace(problem.robot, pose=spec.pose, state0=spec.state0)
+    problem.robot = robot
+    problem.sim = ClosedLoopSimulator(robot, problem.obs_spec, problem.control_steps, threads)
+    ep = play_policy(problem, policy, seeds, scaled, zero=True)
+    out["stand_still_spec_pose"] = by_direction(ep.survived.astype(bool), angle)
+    problem.sim.close()
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("runs", type=Path, nargs="+")
+    ap.add_argument("--push", type=float, nargs="+", default=[4.0])
+    ap.add_argument("--worlds", type=int, default=100)
+    ap.add_argument("--json", action="store_true")
+    args = ap.parse_args()
+    res = []
+    for run in args.runs:
+        for push in args.push:
+            t0 = time.perf_counter()
+            r = measure(run, push, args.worlds)
+            r.update(run=str(run), wall_s=time.perf_counter() - t0)
+            res.append(r)
+    if args.json:
+        print(json.dumps(res, indent=1))
+        return
+    print("| run | push (N s) | controller | survival | forward | backward | left | right |\n"
+          "|---|---|---|---|---|---|---|---|")
+    for r in res:
+        c = r["count"]
+        for key, name in (("policy", "evolved policy"), ("stand_still", "stand still, stance"),
+                          ("stand_still_spec_pose", "stand still, spec pose")):
+            s = r[key]
+            print(f"| {r['run']} | {r['push_ns']:g} | {name} | {s['all']:.0%} | "
+                  f"{s['forward']:.0%} of {c['forward']} | {s['backward']:.0%} of "
+                  f"{c['backward']} | {s['left']:.0%} of {c['left']} | {s['right']:.0%} of "
+                  f"{c['right']} |")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,82 @@
+"""A biped's standing stance, widened, staggered and lowered from its spec pose, soles flat.
+
+Defined on the robot's ``[gait]`` roles (one channel per leg, left then right, each signed so
+that + hip_pitch moves the thigh forward, + knee flexes, + ankle_pitch lifts the toes,
++ hip_roll moves the foot towards +y, ankle_roll turns about +x; :data:`.robots.spec
+.GAIT_ROLES`), so it means the same on every biped. Changes from the spec's ``[pose]`` (rad):
+
+- ``width_rad`` w: each hip rolls its foot outwards by w (left +w, right -w) and the ankle rolls
+  back by as much, so the sole keeps its roll (the support polygon widens by about
+  ``2 w x leg length``);
+- ``stagger_rad`` s: the left thigh swings forward by s and the right one back by s, each ankle
+  pitching the other way by as much (the left foot ahead, the right behind: the polygon
+  lengthens);
+- ``crouch_rad`` c: hips +c, knees +2c, ankles +c (lower, the torso kept upright).
+
+Each sole keeps its pitch (hip_pitch - knee + ankle_pitch is unchanged) and its roll (hip_roll
++ ankle_roll is unchanged), exactly where only pitch joints summing to zero lie between the two
+roll joints: the NAO's and the OP3's soles stay within 0.01 deg of their spec pose's (tested);
+the dm humanoid's hip yaw joint lies between, and its soles tilt by 2.1 deg at a width of
+0.3 rad. Pushes that
+topple a biped standing in its narrow spec pose (the NAO's soles are 9 cm wide, 5 cm apart) are
+what a wider base is for (docs/humanoid-balance.md).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from evomotion.errors import InputError
+from evomotion.sim.robots.build import Robot
+
+ROLES = ("hip_pitch", "knee", "ankle_pitch", "hip_roll", "ankle_roll")
+
+
+def stance_pose(robot: Robot, width_rad: float = 0.0, stagger_rad: float = 0.0,
+                crouch_rad: float = 0.0, where: str = "stance") -> np.ndarray:
+    """The targets ``[nu]`` of the stance (module doc); the spec pose itself, bit for bit, when
+    all three are 0. One :class:`InputError` line (naming ``where``) for a robot without the
+    biped gait roles or a stance beyond a joint's range."""
+    pose = np.array(robot.pose, dtype=float)
+    if width_rad == 0.0 and stagger_rad == 0.0 and crouch_rad == 0.0:
+        return pose
+    missing = [r for r in ROLES if r not in robot.gait]
+    if robot.gait_kind != "biped" or missing:
+        raise InputError(f"{where}: robot {robot.name!r} declares no biped [gait] roles "
+                         f"({', '.join(missing) or 'not a biped'} missing) to place a "
+                         "stance with; set the stance's keys to 0 (the spec pose)")
+    change = {
+        "hip_roll": (width_rad, -width_rad),
+        "ankle_roll": (-width_rad, width_rad),
+        "hip_pitch": (crouch_rad + stagger_rad, crouch_rad - stagger_rad),
+        "knee": (2.0 * crouch_rad, 2.0 * crouch_rad),
+        "ankle_pitch": (crouch_rad - stagger_rad, crouch_rad + stagger_rad),
+    }
+    for role, per_leg in change.items():
+        for (column, sign), delta in zip(robot.gait[role], per_leg, strict=True):
+            pose[column] += sign * delta
+    lo = np.where(robot.model.actuator_ctrllimited.astype(bool),
+                  robot.model.actuator_ctrlrange[:, 0], -np.inf)
+    hi = np.where(robot.model.actuator_ctrllimited.astype(bool),
+                  robot.model.actuator_ctrlrange[:, 1], np.inf)
+    lo[robot.columns] = np.maximum(lo[robot.columns], robot.lower)  # the [evolve] ranges
+    hi[robot.columns] = np.minimum(hi[robot.columns], robot.upper)
+    bad = np.flatnonzero((pose < lo) | (pose > hi))
+    if bad.size:
+        a = int(bad[0])
+        raise InputError(f"{where}: the stance puts {robot.joints[a]} at {pose[a]:.3f} rad, "
+                         f"outside its range [{lo[a]:.3f}, {hi[a]:.3f}]")
+    return pose
+
+
+def with_stance(robot: Robot, width_rad: float = 0.0, stagger_rad: float = 0.0,
+                crouch_rad: float = 0.0, where: str = "stance") -> Robot:
+    """``robot`` standing in the stance: its ``pose`` and its initial state at rest in it
+    (the lowest sole ``clearance_m`` above the floor, as the spec pose's); the robot itself
+    when all three are 0."""
+    pose = stance_pose(robot, width_rad, stagger_rad, crouch_rad, where)
+    if np.array_equal(pose, robot.pose):
+        return robot
+    return dataclasses.replace(robot, pose=pose, state0=robot.state_at(pose))
