@@ -23,12 +23,17 @@ from evomotion.studies.humanoid_balance.episodes import push_range
 SECTORS = {"forward": (-45, 45), "left": (45, 135), "right": (-135, -45)}
 
 
+def sectors(angle_deg: np.ndarray) -> dict[str, np.ndarray]:
+    """Each push's sector (forward, left, right as :data:`SECTORS`; backward: the rest)."""
+    out = {k: (angle_deg > lo) & (angle_deg <= hi) for k, (lo, hi) in SECTORS.items()}
+    out["backward"] = ~(out["forward"] | out["left"] | out["right"])
+    return out
+
+
 def by_direction(survived: np.ndarray, angle_deg: np.ndarray) -> dict[str, float]:
     out = {"all": float(survived.mean())}
-    for name, (lo, hi) in SECTORS.items():
-        out[name] = float(survived[(angle_deg > lo) & (angle_deg <= hi)].mean())
-    back = np.abs(angle_deg) > 135
-    out["backward"] = float(survived[back].mean())
+    for name, m in sectors(angle_deg).items():
+        out[name] = float(survived[m].mean()) if m.any() else float("nan")
     return out
 
 
@@ -41,9 +46,7 @@ def measure(run: Path, push: float, worlds: int) -> dict:
     vec = np.array([w.push_ns for w in problem.worlds(seeds, scaled)])
     angle = np.degrees(np.arctan2(vec[:, 1], vec[:, 0]))
     out = {"push_ns": push, "worlds": worlds,
-           "count": {k: int(((angle > lo) & (angle <= hi)).sum())
-                     for k, (lo, hi) in SECTORS.items()}}
-    out["count"]["backward"] = int((np.abs(angle) > 135).sum())
+           "count": {k: int(m.sum()) for k, m in sectors(angle).items()}}
     for key, zero in (("policy", False), ("stand_still", True)):
         ep = play_policy(problem, policy, seeds, scaled, zero=zero)
         out[key] = by_direction(ep.survived.astype(bool), angle)
@@ -51,7 +54,7 @@ def measure(run: Path, push: float, worlds: int) -> dict:
     from evomotion.sim.robots import load_robot
 
     spec = load_robot(problem.cfg.robot or "nao")
-    threads = problem.sim.nthread
+    threads = getattr(problem.sim, "nthread", 2)  # the CPU simulator's (a Warp run: 2)
     problem.sim.close()
     robot = dataclasses.replace(problem.robot, pose=spec.pose, state0=spec.state0)
     problem.robot = robot
