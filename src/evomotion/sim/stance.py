@@ -29,6 +29,7 @@ import dataclasses
 import numpy as np
 
 from evomotion.errors import InputError
+from evomotion.sim.closed_loop_parts import target_bounds
 from evomotion.sim.robots.build import Robot
 
 ROLES = ("hip_pitch", "knee", "ankle_pitch", "hip_roll", "ankle_roll")
@@ -57,10 +58,7 @@ def stance_pose(robot: Robot, width_rad: float = 0.0, stagger_rad: float = 0.0,
     for role, per_leg in change.items():
         for (column, sign), delta in zip(robot.gait[role], per_leg, strict=True):
             pose[column] += sign * delta
-    lo = np.where(robot.model.actuator_ctrllimited.astype(bool),
-                  robot.model.actuator_ctrlrange[:, 0], -np.inf)
-    hi = np.where(robot.model.actuator_ctrllimited.astype(bool),
-                  robot.model.actuator_ctrlrange[:, 1], np.inf)
+    lo, hi = target_bounds(robot, np.arange(robot.model.nu))  # joint and control ranges
     lo[robot.columns] = np.maximum(lo[robot.columns], robot.lower)  # the [evolve] ranges
     hi[robot.columns] = np.minimum(hi[robot.columns], robot.upper)
     bad = np.flatnonzero((pose < lo) | (pose > hi))

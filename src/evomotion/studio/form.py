@@ -168,8 +168,8 @@ def _cloned(root: Path, name: str) -> tuple[dict, str]:
         return {}, f"not cloned: {e}"
     if not table:
         return {}, f"not cloned: {name}'s config.toml does not parse ({text[:80]})"
-    return as_now(table), (f"cloned from {name}: its preset, algorithm and every value it set are "
-                   "filled in (the fields that differ from the defaults)")
+    return as_now(table), (f"cloned from {name}: its preset, algorithm and every value it set "
+                           "are filled in (the fields that differ from the defaults)")
 
 
 def _fields(ui, fields: list, state: dict, check) -> None:
