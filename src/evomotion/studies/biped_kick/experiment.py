@@ -27,8 +27,11 @@ from evomotion.errors import InputError
 from evomotion.run.config import Config, RunSection
 from evomotion.run.in_memory import run_in_memory
 from evomotion.sim.worlds import Perturbation, draw_worlds
+from evomotion.studies.biped_kick.aim_table import AimTable
+from evomotion.studies.biped_kick.aim_table import command as aim_command
 from evomotion.studies.biped_kick.keyframe import keyframe_kicks
 from evomotion.studies.biped_kick.motion import SETTLE_S, execution_time_s, named
+from evomotion.studies.biped_kick.planning import wrap
 from evomotion.studies.biped_kick.problem import KickConfig, KickProblem
 
 
@@ -91,14 +94,17 @@ def kick_worlds(problem: KickProblem, n: int, rng: np.random.Generator,
 
 def perturbed_kicks(problem: KickProblem, genome: np.ndarray, offsets: np.ndarray,
                     aim_deg: float = 0.0, worlds: list | None = None,
-                    adapt: bool = False, left_foot: bool = False) -> dict[str, np.ndarray]:
+                    adapt: bool = False, left_foot: bool = False,
+                    table: AimTable | None = None) -> dict[str, np.ndarray]:
     """One kick per ball offset ``[n, 2]`` (world frame, from where the kick wants the ball
     plus the configured ``ball_dx_m``/``ball_dy_m``) at ``aim_deg`` (a single batch);
     ``worlds``: one perturbed world per kick (:func:`kick_worlds`), else the nominal scene;
     ``adapt``: the swing follows the ball's offset within the limits; ``left_foot``: the
     mirrored kick, the ball where it wants it (:meth:`.problem.KickProblem.kicks`). With the
     joint-range and motor-speed excess of the key poses as played and the share of the offset
-    the swing followed."""
+    the swing followed. ``table``: the commanded aim chosen per kick from the ball's place
+    (:func:`.aim_table.command`; with ``adapt``), the results still measured against
+    ``aim_deg`` (``command_deg``: the aims commanded)."""
     if not isinstance(left_foot, bool | np.bool_):
         raise InputError(f"perturbed kicks: left_foot is one true/false, got {left_foot!r}")
     offsets = np.asarray(offsets, dtype=float)
@@ -112,9 +118,18 @@ def perturbed_kicks(problem: KickProblem, genome: np.ndarray, offsets: np.ndarra
                                                                  problem.cfg.ball_dy_m]
     else:
         ball = problem.ball_xy(g, aims)
-    k = problem.kicks(g, aims, ball + offsets, worlds=worlds, adapt=adapt, left_foot=left_foot)
-    return {"distance_m": k["along_m"], "lateral_m": k["lateral_m"],
-            "angle_error_deg": np.degrees(k["angle_error_rad"]), "fell": k["fell"].astype(float),
+    commanded = aims
+    if table is not None:
+        commanded = np.radians(aim_command(table, problem, genome, aim_deg, ball + offsets,
+                                           left_foot))
+    k = problem.kicks(g, commanded, ball + offsets, worlds=worlds, adapt=adapt,
+                      left_foot=left_foot)
+    u = np.stack([np.cos(aims), np.sin(aims)], axis=1)  # against the aim, not the command
+    travel = k["travel"]
+    return {"distance_m": (travel * u).sum(1),
+            "lateral_m": u[:, 0] * travel[:, 1] - u[:, 1] * travel[:, 0],
+            "angle_error_deg": np.degrees(wrap(np.arctan2(travel[:, 1], travel[:, 0]) - aims)),
+            "command_deg": np.degrees(commanded), "fell": k["fell"].astype(float),
             "min_margin_m": k["min_margin_m"], "exec_time_s": k["exec_time_s"],
             "range_excess_rad": k["range_excess_rad"], "speed_excess_s": k["speed_excess_s"],
             "adapt_fraction": k["adapt_fraction"]}
