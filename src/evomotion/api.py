@@ -130,7 +130,8 @@ def _read_toml(path: Path) -> dict[str, Any]:
 
 @dataclass(frozen=True)
 class Run:
-    """A run folder as data: ``config`` (the sections of config.toml), ``stats`` (column ->
+    """A run folder as data: ``config`` (the sections of config.toml, as the study reads them
+    now: :func:`evomotion.run.config.as_now`), ``stats`` (column ->
     array of stats.csv), ``best`` (best.json, ``None`` before the first checkpoint),
     ``artifacts`` (file name -> path of everything else the run wrote: best.motion, plots,
     videos, ...), ``physics`` (physics.json of the MuJoCo studies) and the ``log`` lines."""
@@ -165,7 +166,11 @@ def load_run(path: str | Path) -> Run:
     cfg_path = root / "config.toml"
     if not cfg_path.is_file():
         raise InputError(f"{root}: not a run folder (no config.toml)")
-    config = _read_toml(cfg_path)
+    from evomotion.run.config import as_now
+
+    # as the study reads it now: a study renamed since under its name now, keys added since
+    # as the run had them (run/config.py ADDED_KEYS)
+    config = as_now(_read_toml(cfg_path))
     stats_path = root / "stats.csv"
     stats = read_stats(stats_path) if stats_path.is_file() else {}
     best = _read_json(root / "best.json")
@@ -177,10 +182,7 @@ def load_run(path: str | Path) -> Run:
                  if p.is_file() and p.name not in _ENGINE_FILES
                  and "checkpoints" not in p.relative_to(root).parts
                  and not p.name.startswith(".")}
-    from evomotion.run.config import as_now
-
-    study = str(as_now(config).get("study", ""))  # a study renamed since: its name now
-    return Run(root, study, config, stats, best, artifacts, physics, log)
+    return Run(root, str(config.get("study", "")), config, stats, best, artifacts, physics, log)
 
 
 def _read_json(path: Path) -> dict[str, Any] | None:

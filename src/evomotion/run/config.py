@@ -284,7 +284,7 @@ def resolve_config(study: ConfiguredStudy, file: Path | None = None,
     (``study.moved_keys``) are read at their new place, with a note (:mod:`.moved_keys`)."""
     layers: list[dict[str, Any]] = []  # each source alone: an old and a new key in one clash
     if file is not None:
-        layers.append(load_toml(file))
+        layers.append(saved_as_now(study, load_toml(file)))
         layers[-1].pop("study", None)
         layers[-1].pop("preset", None)
     if values:
@@ -426,6 +426,29 @@ def as_now(raw: dict[str, Any]) -> dict[str, Any]:
     for section, keys in ADDED_KEYS.get(now, {}).items():
         table = out.get(section)
         if isinstance(table, dict) and any(k not in table for k in keys):
+            out = {**out, section: {**keys, **table}}
+    return out
+
+
+def saved_as_now(study: ConfiguredStudy, raw: dict[str, Any]) -> dict[str, Any]:
+    """A ``--config`` file that is a saved run config of ``study`` (it names the study, and a
+    section that lacks keys added since (:data:`ADDED_KEYS`) holds every other key of that
+    section, as the run loop writes them) with those keys as its runs had them, so it reruns
+    the same experiment; any other file (a hand-written partial one: a key it lacks takes the
+    default) as it is."""
+    name = raw.get("study")
+    problem = raw.get("problem")
+    if not isinstance(name, str) or current_study_name(
+            name, problem if isinstance(problem, dict) else ()) != study.name:
+        return raw
+    classes = {"run": RunSection, "problem": study.problem_config}
+    out = raw
+    for section, keys in ADDED_KEYS.get(study.name, {}).items():
+        table = raw.get(section)
+        if not isinstance(table, dict) or all(k in table for k in keys):
+            continue
+        older = {f.name for f in dataclasses.fields(classes[section])} - set(keys)
+        if older <= set(table):
             out = {**out, section: {**keys, **table}}
     return out
 

@@ -222,6 +222,23 @@ def test_the_default_stance_is_wider_and_a_folder_from_before_it_resumes_in_the_
     problem = load_run(part)[0]
     np.testing.assert_array_equal(problem.robot.pose, spec)
     problem.sim.close()
+    # its config.toml fed back as --config reruns it in the spec pose, and the API reads it so;
+    # a hand-written file without the keys takes the defaults
+    import evomotion as em
+    from evomotion.run.config import resolve_config
+    from evomotion.studies import get_study
+
+    study, zeros = get_study("humanoid-balance"), (0.0, 0.0, 0.0)
+
+    def stance(cfg):
+        return (cfg.stance_width_rad, cfg.stance_stagger_rad, cfg.stance_crouch_rad)
+
+    assert stance(resolve_config(study, part / "config.toml").problem) == zeros
+    assert tuple(em.load_run(part).config["problem"][k] for k in (
+        "stance_width_rad", "stance_stagger_rad", "stance_crouch_rad")) == zeros
+    hand = tmp_path / "hand.toml"
+    hand.write_text('study = "humanoid-balance"\n[problem]\nduration_s = 2.0\n')
+    assert stance(resolve_config(study, hand).problem) == stance(HumanoidBalanceConfig())
     proc = subprocess.run([sys.executable, "-m", "evomotion.cli", "resume", str(part), "--set",
                            "run.generations=3", "--quiet"], capture_output=True, text=True,
                           timeout=600)
