@@ -71,3 +71,14 @@ def test_a_stance_beyond_a_joint_range_or_without_gait_roles_is_one_line():
     with pytest.raises(InputError, match="no biped \\[gait\\] roles"):
         stance_pose(bare, width_rad=0.1)
     np.testing.assert_array_equal(stance_pose(bare), r.pose)  # no stance asked: fine
+
+
+def test_gait_roles_listed_right_leg_first_are_one_line():
+    """A spec whose [gait] lists the right leg first would cross the feet: refused."""
+    r = load_robot("nao")
+    swapped = {role: tuple(reversed(ch)) for role, ch in r.gait.items()}
+    bad = dataclasses.replace(r, gait=swapped)
+    with pytest.raises(InputError, match="feet together.*left leg's channel first") as e:
+        with_stance(bad, 0.3, 0.2, 0.15, where="problem.stance")
+    assert str(e.value).startswith("problem.stance: ") and "\n" not in str(e.value)
+    assert with_stance(r, 0.3, 0.2, 0.15) is not r  # listed left first: fine

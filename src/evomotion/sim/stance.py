@@ -31,6 +31,7 @@ import numpy as np
 from evomotion.errors import InputError
 from evomotion.sim.closed_loop_parts import target_bounds
 from evomotion.sim.robots.build import Robot
+from evomotion.sim.worlds import torso_id
 
 ROLES = ("hip_pitch", "knee", "ankle_pitch", "hip_roll", "ankle_roll")
 
@@ -73,8 +74,29 @@ def with_stance(robot: Robot, width_rad: float = 0.0, stagger_rad: float = 0.0,
                 crouch_rad: float = 0.0, where: str = "stance") -> Robot:
     """``robot`` standing in the stance: its ``pose`` and its initial state at rest in it
     (the lowest sole ``clearance_m`` above the floor, as the spec pose's); the robot itself
-    when all three are 0."""
+    when all three are 0. A stance that widens a robot with feet ``left`` and ``right`` but
+    brings its soles closer (``[gait]`` listing the right leg first) is one line."""
     pose = stance_pose(robot, width_rad, stagger_rad, crouch_rad, where)
     if np.array_equal(pose, robot.pose):
         return robot
-    return dataclasses.replace(robot, pose=pose, state0=robot.state_at(pose))
+    state0 = robot.state_at(pose)
+    if width_rad > 0 and {"left", "right"} <= set(robot.feet) and \
+            _feet_apart_m(robot, state0) <= _feet_apart_m(robot, robot.state0):
+        raise InputError(f"{where}: the stance moves robot {robot.name!r}'s feet together, "
+                         "not apart: its [gait] roles must list the left leg's channel "
+                         "first, then the right's")
+    return dataclasses.replace(robot, pose=pose, state0=state0)
+
+
+def _feet_apart_m(robot: Robot, state: np.ndarray) -> float:
+    """How far the left sole lies to the left of the right one (m, along the torso's y axis)
+    with the robot in ``state``."""
+    import mujoco
+
+    m = robot.model
+    d = mujoco.MjData(m)
+    mujoco.mj_setState(m, d, state, mujoco.mjtState.mjSTATE_FULLPHYSICS)
+    mujoco.mj_kinematics(m, d)
+    left, right = (d.site(robot.sole_site(f)).xpos for f in ("left", "right"))
+    y_axis = d.xmat[torso_id(m)].reshape(3, 3)[:, 1]
+    return float((left - right) @ y_axis)
