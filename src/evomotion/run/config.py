@@ -442,15 +442,12 @@ def saved_as_now(study: ConfiguredStudy, raw: dict[str, Any]) -> dict[str, Any]:
             name, problem if isinstance(problem, dict) else ()) != study.name:
         return raw
     classes = {"run": RunSection, "problem": study.problem_config}
-    out = raw
     for section, keys in ADDED_KEYS.get(study.name, {}).items():
         table = raw.get(section)
-        if not isinstance(table, dict) or all(k in table for k in keys):
-            continue
         older = {f.name for f in dataclasses.fields(classes[section])} - set(keys)
-        if older <= set(table):
-            out = {**out, section: {**keys, **table}}
-    return out
+        if isinstance(table, dict) and not older <= set(table):
+            return raw  # a partial (hand-written) file: its missing keys take the defaults
+    return as_now(raw)
 
 
 def config_from_run_dir(run_dir: Path) -> tuple[str, dict[str, Any]]:

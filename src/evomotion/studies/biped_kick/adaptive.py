@@ -42,12 +42,29 @@ def reachable_shift(keys_of: Callable[[np.ndarray, np.ndarray], np.ndarray],
     for lam in np.linspace(1.0, 0.0, FRACTIONS + 1)[:-1]:
         if not todo.size:
             break
-        range_x, speed_x, _ = limit_excess(keys_of(todo, lam * shift[todo]), speed_margin,
-                                           limits)
-        ok = (range_x <= 0) & (speed_x <= 0)
+        ok = keys_within_limits(keys_of(todo, lam * shift[todo]), speed_margin, limits)
         frac[todo[ok]] = lam
         todo = todo[~ok]
     return shift * frac[:, None], frac
+
+
+def keys_within_limits(keys: np.ndarray, speed_margin: float, limits: tuple | None
+                       ) -> np.ndarray:
+    """Per kick of key poses ``keys[n, K, nu]``: within every joint range and ``speed_margin``
+    x its motor's no-load speed (:func:`.motion.limit_excess` zero)."""
+    range_x, speed_x, _ = limit_excess(keys, speed_margin, limits)
+    return (range_x <= 0) & (speed_x <= 0)
+
+
+def played_keys(kicker: Any, g: np.ndarray, kt: np.ndarray, aims_k: np.ndarray,
+                shift: np.ndarray | None, left: np.ndarray) -> np.ndarray:
+    """The key poses ``[n, K, nu]`` of the right-foot kicks of genomes ``g`` at aims
+    ``aims_k`` on the key times ``kt`` (``shift``: the kicking foot's, or None), as played:
+    mirrored where ``left``."""
+    keys, _ = kicker.joint_targets(g, kt, aims_k, shift)
+    if left.any():
+        keys[left] = kicker.mirror(keys[left])
+    return keys
 
 
 def left_flags(left_foot: Any, n: int, mirror: Any, robot: str) -> np.ndarray:
@@ -72,10 +89,6 @@ def followed_shift(problem: Any, g: np.ndarray, aims_k: np.ndarray, shift: np.nd
     kt = key_times(g)  # the batch's key times: every kick's poses on the same grid
 
     def keys_of(rows: np.ndarray, s: np.ndarray) -> np.ndarray:
-        keys, _ = kicker.joint_targets(g[rows], kt, aims_k[rows], s)
-        mirrored = left[rows]
-        if mirrored.any():
-            keys[mirrored] = kicker.mirror(keys[mirrored])
-        return keys
+        return played_keys(kicker, g[rows], kt, aims_k[rows], s, left[rows])
 
     return reachable_shift(keys_of, shift, problem.cfg.speed_margin, kicker.limits)

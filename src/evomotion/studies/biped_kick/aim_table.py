@@ -92,14 +92,13 @@ def within_limits(problem: Any, genome: np.ndarray, aims_deg: np.ndarray,
     """Per commanded aim (right-foot frame), whether the kick as evolved keeps its key poses
     within every joint range and ``speed_margin`` x no-load speed (as played: mirrored for
     the left foot)."""
-    from evomotion.studies.biped_kick.motion import limit_excess
+    from evomotion.studies.biped_kick.adaptive import keys_within_limits, played_keys
+    from evomotion.studies.biped_kick.motion import key_times
 
     g = np.repeat(np.atleast_2d(genome), len(aims_deg), axis=0)
-    keys, _, _, _ = problem.controls(g, np.radians(aims_deg))
-    if left:
-        keys = problem.kicker.mirror(keys)
-    range_x, speed_x, _ = limit_excess(keys, problem.cfg.speed_margin, problem.kicker.limits)
-    return (range_x <= 0) & (speed_x <= 0)
+    keys = played_keys(problem.kicker, g, key_times(g), np.radians(aims_deg), None,
+                       np.full(len(g), left))
+    return keys_within_limits(keys, problem.cfg.speed_margin, problem.kicker.limits)
 
 
 def command(table: AimTable, problem: Any, genome: np.ndarray, target_deg: float,

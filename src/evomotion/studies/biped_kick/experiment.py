@@ -31,8 +31,7 @@ from evomotion.studies.biped_kick.aim_table import AimTable
 from evomotion.studies.biped_kick.aim_table import command as aim_command
 from evomotion.studies.biped_kick.keyframe import keyframe_kicks
 from evomotion.studies.biped_kick.motion import SETTLE_S, execution_time_s, named
-from evomotion.studies.biped_kick.planning import wrap
-from evomotion.studies.biped_kick.problem import KickConfig, KickProblem
+from evomotion.studies.biped_kick.problem import KickConfig, KickProblem, against_aim
 
 
 class ExperimentInterruptedError(InputError):
@@ -124,11 +123,8 @@ def perturbed_kicks(problem: KickProblem, genome: np.ndarray, offsets: np.ndarra
                                            left_foot))
     k = problem.kicks(g, commanded, ball + offsets, worlds=worlds, adapt=adapt,
                       left_foot=left_foot)
-    u = np.stack([np.cos(aims), np.sin(aims)], axis=1)  # against the aim, not the command
-    travel = k["travel"]
-    return {"distance_m": (travel * u).sum(1),
-            "lateral_m": u[:, 0] * travel[:, 1] - u[:, 1] * travel[:, 0],
-            "angle_error_deg": np.degrees(wrap(np.arctan2(travel[:, 1], travel[:, 0]) - aims)),
+    along, lateral, error = against_aim(k["travel"], aims)  # the aim's, not the command's
+    return {"distance_m": along, "lateral_m": lateral, "angle_error_deg": np.degrees(error),
             "command_deg": np.degrees(commanded), "fell": k["fell"].astype(float),
             "min_margin_m": k["min_margin_m"], "exec_time_s": k["exec_time_s"],
             "range_excess_rad": k["range_excess_rad"], "speed_excess_s": k["speed_excess_s"],

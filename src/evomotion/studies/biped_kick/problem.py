@@ -322,10 +322,7 @@ class KickProblem:
                 self.cfg.nthread, sensors=True, feedback=fb, control_steps=self.control_steps)
         rest, roll_s = self.ball_rest(states[np.arange(len(g)), end - 1])
         travel = rest - ball0
-        u = np.stack([np.cos(aims), np.sin(aims)], axis=1)
-        along = (travel * u).sum(1)
-        lateral = u[:, 0] * travel[:, 1] - u[:, 1] * travel[:, 0]
-        angle_err = wrap(np.arctan2(travel[:, 1], travel[:, 0]) - aims)
+        along, lateral, angle_err = against_aim(travel, aims)
         fell = fall_step(torso_track(states), self.fall_height_m, self.fall_tilt_rad) < end
         margin = support_margin_batch(sensors, self.sl, self.kicker.sole_half)
         times = self.dt * np.arange(1, nstep + 1)
@@ -375,6 +372,15 @@ class KickProblem:
             "min_margin_m": per("min_margin_m").min(1), "speed_ratio": per("speed_ratio").max(1),
             "exec_time_s": exec_t,
             **({"ik_error_m": per("ik_error_m").max(1)} if "ik_error_m" in k else {})})
+
+
+def against_aim(travel: np.ndarray, aims_rad: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(along, lateral (m, + left), angle error (rad, wrapped)) of balls' ``travel[n, 2]``
+    against the aims ``aims_rad[n]``."""
+    u = np.stack([np.cos(aims_rad), np.sin(aims_rad)], axis=1)
+    return ((travel * u).sum(1), u[:, 0] * travel[:, 1] - u[:, 1] * travel[:, 0],
+            wrap(np.arctan2(travel[:, 1], travel[:, 0]) - aims_rad))
 
 
 def make_problem(cfg: KickConfig) -> KickProblem:
