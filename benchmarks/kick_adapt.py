@@ -18,7 +18,11 @@ the approach must place the ball.
 A third column, **calibrated**: the adaptive kick whose commanded aim is chosen from the ball's
 place with the kick's aim table (``studies/biped_kick/aim_table.py``: measured in the nominal
 world on its own grid of offsets, not the test's; 4 125 kicks, about 5 min). ``--table FILE``:
-read the table from FILE if it exists, else measure it and write it there.
+read the table from FILE if it exists, else measure it and write it there. ``--draw N``: other
+offsets and worlds (drawn from seeds N and N + 1 instead of 12345 and 2026), to check the
+figures on kicks nothing was chosen on. ``--max-stretch S``: ``problem.adapt_max_stretch``
+(how much longer the following kick may take its swing; 1: its evolved timing only, the
+default before 2026-12-05's third session).
 """
 
 from __future__ import annotations
@@ -49,9 +53,12 @@ def main() -> None:
     ap.add_argument("--json", action="store_true")
     ap.add_argument("--spread", type=float, default=0.02, help="offsets U(+-M) (m)")
     ap.add_argument("--table", type=Path, default=None, help="the aim table (read or written)")
+    ap.add_argument("--draw", type=int, default=None, help="offsets and worlds from N, N + 1")
+    ap.add_argument("--max-stretch", type=float, default=KickConfig.adapt_max_stretch,
+                    help="problem.adapt_max_stretch (1: the evolved timing only)")
     args = ap.parse_args()
     genome, source = read_kick(args.run)
-    problem = KickProblem(KickConfig())
+    problem = KickProblem(KickConfig(adapt_max_stretch=args.max_stretch))
     t0 = time.perf_counter()
     if args.table is not None and args.table.exists():
         table = aim_table.read(args.table)
@@ -60,9 +67,12 @@ def main() -> None:
         if args.table is not None:
             aim_table.write(args.table, table, str(source))
     table_s = time.perf_counter() - t0
-    offsets = np.random.default_rng(12345).uniform(-0.02, 0.02, (100, 2)) * (args.spread / 0.02)
-    worlds = kick_worlds(problem, len(offsets), np.random.default_rng(2026))
-    out: dict = {"kick": str(source), "spread_m": args.spread, "table_s": table_s, "aims": {}}
+    seeds = (12345, 2026) if args.draw is None else (args.draw, args.draw + 1)
+    offsets = np.random.default_rng(seeds[0]).uniform(-0.02, 0.02, (100, 2)) * (args.spread
+                                                                                / 0.02)
+    worlds = kick_worlds(problem, len(offsets), np.random.default_rng(seeds[1]))
+    out: dict = {"kick": str(source), "spread_m": args.spread, "draw_seeds": seeds,
+                 "table_s": table_s, "aims": {}}
     t0 = time.perf_counter()
     for a in AIMS_DEG:
         centre = tolerant_offset(problem, genome, a)
@@ -81,7 +91,7 @@ def main() -> None:
         print(json.dumps(out, indent=2))
         return
     print(f"kick: {source}; 100 kicks per aim, +-{100 * args.spread:g} cm, perturbed worlds "
-          f"({out['wall_s']:.0f} s; the aim table {table_s:.0f} s)")
+          f"(draws {seeds[0]}, {seeds[1]}; {out['wall_s']:.0f} s; the aim table {table_s:.0f} s)")
     print("| aim (deg) | blind: median error (deg) | within +-10 deg | adaptive: median error "
           "(deg) | within +-10 deg | offset followed (mean) | over the limits (blind / "
           "adaptive) | falls (blind / adaptive) | distance (m, blind / adaptive) |\n"

@@ -32,7 +32,8 @@ def synthetic(slope_deg_per_m: float = 500.0) -> aim_table.AimTable:
     aims, dx, dy = np.arange(-40.0, 40.1, 2.5), np.array([-0.02, 0.02]), np.linspace(-0.06,
                                                                                     0.06, 25)
     a, _, y = np.meshgrid(aims, dx, dy, indexing="ij")
-    return aim_table.AimTable(aims, dx, dy, a + slope_deg_per_m * y, np.full(a.shape, 2.0))
+    return aim_table.AimTable(aims, dx, dy, a + slope_deg_per_m * y, np.full(a.shape, 2.0),
+                              KickConfig().adapt_max_stretch)
 
 
 def test_command_inverts_the_table(kick):
@@ -59,12 +60,20 @@ def test_command_inverts_the_table(kick):
 def test_commands_stay_within_the_limits(kick):
     p, g = kick
     cands = np.arange(-40.0, 40.01, 0.25)
-    ok = aim_table.within_limits(p, g, cands, False)
-    assert ok.any() and not ok.all()  # the shipped kick: about -34 ... +31 deg
+    evolved = KickProblem(dataclasses.replace(p.cfg, adapt_max_stretch=1.0))
+    ok1 = aim_table.within_limits(evolved, g, cands, False)
+    assert ok1.any() and not ok1.all()  # the shipped kick's own timing: about -34 ... +31 deg
+    assert cands[ok1].max() < 32.0 and cands[ok1].min() > -35.0
+    ok = aim_table.within_limits(p, g, cands, False)  # its swing up to 1.25x longer: more
+    assert np.all(ok[ok1]) and ok[cands == 36.0].all() and ok[cands == -38.0].all()
     table = synthetic(slope_deg_per_m=2000.0)
     want = p.wanted_ball_xy(g[None], np.radians([-30.0]))[0]
     cmd = aim_table.command(table, p, g, -30.0, want[None] + [0.0, 0.03])[0]
     assert cmd >= cands[ok].min()  # it would want -90 deg: the last command within them
+    with pytest.raises(InputError, match="adapt_max_stretch = 1, the kick follows the ball "
+                                         "with 1.25") as e:  # a table of another timing
+        aim_table.command(dataclasses.replace(table, max_stretch=1.0), p, g, -30.0, want[None])
+    assert "\n" not in str(e.value)
 
 
 def test_the_table_calibrates_the_real_kick(kick):
@@ -96,12 +105,17 @@ def test_the_file_round_trips_and_bad_files_are_one_line(tmp_path):
                         ({"dy_m": [0.0]}, "at least 2"),
                         ({"angle_deg": [[[1.0]]]}, r"grid \(aims x dx x dy\)"),
                         ({"distance_m": "x"}, "nested list of numbers"),
-                        ({"aims_deg": [0.0, None]}, "all finite")):
+                        ({"aims_deg": [0.0, None]}, "all finite"),
+                        ({"adapt_max_stretch": 0.5}, "adapt_max_stretch"),
+                        ({"adapt_max_stretch": "1"}, "adapt_max_stretch")):
         bad = tmp_path / "bad.json"
         bad.write_text(json.dumps({**rec, **change}))
         with pytest.raises(InputError, match=msg) as e:
             aim_table.read(bad)
         assert str(bad) in str(e.value) and "\n" not in str(e.value)
+    del rec["adapt_max_stretch"]  # a file from before the key: measured at the evolved timing
+    f.write_text(json.dumps(rec))
+    assert aim_table.read(f).max_stretch == 1.0 and table.max_stretch == 1.25
 
 
 JSONISH = st.recursive(st.none() | st.booleans() | st.floats(allow_nan=False) | st.text(max_size=5),
@@ -113,7 +127,8 @@ JSONISH = st.recursive(st.none() | st.booleans() | st.floats(allow_nan=False) | 
 @settings(max_examples=150, deadline=None)
 @given(data=st.binary(max_size=200) | st.builds(
     lambda d: json.dumps({"format": aim_table.FORMAT, **d}).encode(),
-    st.dictionaries(st.sampled_from(["aims_deg", "dx_m", "dy_m", "angle_deg", "distance_m"]),
+    st.dictionaries(st.sampled_from(["aims_deg", "dx_m", "dy_m", "angle_deg", "distance_m",
+                                     "adapt_max_stretch"]),
                     JSONISH, max_size=5)))
 def test_any_file_reads_or_is_one_line(tmp_path_factory, data):
     f = tmp_path_factory.mktemp("fuzz") / "t.json"

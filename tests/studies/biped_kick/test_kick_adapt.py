@@ -6,12 +6,15 @@ bad flags and another robot's kicker are one line."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 from evomotion.errors import InputError
-from evomotion.studies.biped_kick.adaptive import FRACTIONS, reachable_shift
+from evomotion.studies.biped_kick.adaptive import FRACTIONS, SWING, reachable_shift, retimed
 from evomotion.studies.biped_kick.experiment import accuracy, perturbed_kicks
+from evomotion.studies.biped_kick.motion import GENE_INDEX, GENES, execution_time_s
 from evomotion.studies.biped_kick.play import read_kick
 from evomotion.studies.biped_kick.problem import KickConfig, KickProblem
 
@@ -42,17 +45,69 @@ def test_the_adaptive_kick_follows_the_ball_within_the_limits(kick):
 
 def test_reachable_shift_takes_the_largest_fraction_within_the_limits():
     """A fake kick whose ankle leaves its range (0.5 rad) beyond 1 cm of shift: each kick gets
-    the largest tried fraction (tenths) of its shift within 1 cm."""
-    def keys_of(rows, s):
+    the largest tried fraction (tenths) of its shift within 1 cm, at its own timing."""
+    def keys_of(rows, s, stretch):
         q = np.zeros((len(rows), 3, 22))
         q[:, 1, 0] = 0.5 * np.hypot(s[:, 0], s[:, 1]) / 0.01  # joint 0: range +-0.5 rad
         return q
 
     lim = (np.full(22, -0.5), np.full(22, 0.5), np.full(22, 1e9))
     shift = np.array([[0.005, 0.0], [0.02, 0.0], [0.0, -0.04]])
-    used, frac = reachable_shift(keys_of, shift, 1.0, lim)
-    assert np.allclose(frac, [1.0, 0.5, 0.2]) and np.allclose(used, shift * frac[:, None])
+    for most in (1.0, 1.25):  # a joint out of range: no stretch helps
+        used, frac, stretch = reachable_shift(keys_of, shift, 1.0, lim, most)
+        assert np.allclose(frac, [1.0, 0.5, 0.2]) and np.allclose(used, shift * frac[:, None])
+        assert np.all(stretch == 1.0)
     assert FRACTIONS == 10
+
+
+def test_a_swing_too_fast_for_its_motor_is_slowed_down_not_cut():
+    """A fake kick whose joint 0 turns 0.5 rad per 20 ms per cm of shift, divided by the
+    stretch, its motor 25 rad/s (0.5 rad per 20 ms): 1.2 cm needs the swing 1.2x longer; the
+    evolved timing alone (max_stretch 1) takes 0.8 of it; 2 cm needs 2x, more than 1.25 allows,
+    so it is cut to the largest fraction that 1.25 reaches (0.6: 1.2x)."""
+    def keys_of(rows, s, stretch):
+        q = np.zeros((len(rows), 3, 22))
+        q[:, 1, 0] = 0.5 * np.hypot(s[:, 0], s[:, 1]) / 0.01 / stretch
+        return q
+
+    lim = (np.full(22, -10.0), np.full(22, 10.0), np.full(22, 25.0))
+    shift = np.array([[0.012, 0.0], [0.02, 0.0], [0.005, 0.0]])
+    _, frac, stretch = reachable_shift(keys_of, shift, 1.0, lim, 1.0)
+    assert np.allclose(frac, [0.8, 0.5, 1.0]) and np.all(stretch == 1.0)
+    _, frac, stretch = reachable_shift(keys_of, shift, 1.0, lim, 1.25)
+    assert np.allclose(frac, [1.0, 0.6, 1.0])
+    assert 1.2 <= stretch[0] <= 1.21 and 1.2 <= stretch[1] <= 1.21 and stretch[2] == 1.0
+    g = np.tile(np.arange(1.0, len(GENES) + 1), (2, 1))
+    out = retimed(g, np.array([1.0, 1.5]))
+    assert np.array_equal(out[0], g[0])
+    swing = [GENE_INDEX[name] for name in SWING]
+    assert np.allclose(out[1, swing], 1.5 * g[1, swing])
+    assert np.array_equal(np.delete(out[1], swing), np.delete(g[1], swing))
+
+
+def test_the_following_kick_slows_its_swing_where_its_motors_need_it(kick):
+    """The shipped kick runs its kicking hip at 0.99 of the motor's speed at 30 deg: commanded
+    at 36 deg it is within the speeds only slowed down, and it is (no excess); with
+    adapt_max_stretch 1 it keeps its evolved timing and, too fast there, falls back to the
+    kick as evolved; a ball in its place at 0 deg needs no stretch (the kick bit for bit)."""
+    p, g = kick
+    evolved = KickProblem(dataclasses.replace(p.cfg, adapt_max_stretch=1.0))
+    a = np.radians([36.0, 0.0])
+    gg = np.repeat(g[None], 2, 0)
+    ball = p.wanted_ball_xy(gg, a)
+    k = p.kicks(gg, a, ball, adapt=True)
+    assert 1.0 < k["stretch"][0] <= 1.25 and k["stretch"][1] == 1.0
+    assert not k["range_excess_rad"].any() and not k["speed_excess_s"].any()
+    assert k["exec_time_s"][0] > execution_time_s(g[None])[0]
+    k1 = evolved.kicks(gg, a, ball, adapt=True)
+    assert np.all(k1["stretch"] == 1.0) and k1["speed_excess_s"][0] > 0
+    assert k["travel"][1].tolist() == k1["travel"][1].tolist()
+    blind = p.kicks(gg[1:], a[1:], ball[1:])
+    assert k["travel"][1].tolist() == blind["travel"][0].tolist()
+    for bad in (0.9, 2.5, float("nan")):
+        with pytest.raises(InputError, match="problem.adapt_max_stretch") as e:
+            KickConfig(adapt_max_stretch=bad).validate()
+        assert "\n" not in str(e.value)
 
 
 def test_the_left_foot_kick_is_the_right_one_in_mirror_image(kick):

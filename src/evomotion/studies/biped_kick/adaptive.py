@@ -12,6 +12,17 @@ of the offset whose 20 ms key poses keep every joint within its range and ``spee
 its motor's no-load speed (:func:`.motion.limit_excess` zero, the problem's own constraint), and
 ``λ = 0`` (the kick as evolved) when none does. Only the key poses are computed for this (the IK,
 no simulation).
+
+**Slowing down instead** (``max_stretch`` > 1): a kick engine that must not outrun its motors
+takes a swing longer rather than shorter. The swing's three phases (lift, kick, retract: the
+genes :data:`SWING`) are a path in space played on a clock; lengthening them by ``s`` leaves
+the path, so the joint ranges, and divides every swing joint's speed by about ``s``. So a
+fraction ``λ`` is also taken when its poses keep the ranges and stay within the motor speeds
+once the swing is lengthened by the smallest ``s ≤ max_stretch`` that does
+(:func:`fitting_stretch`: ``s`` = the largest speed ratio, checked on the 20 ms poses and
+raised until they pass). The evolved kick runs near its motors' speeds (the shipped one at 0.99
+of the kicking hip's at ±30°), so a few percent longer swing reaches commands and ball offsets
+the evolved timing cannot. ``s = 1``: the kick's own timing, bit for bit.
 """
 
 from __future__ import annotations
@@ -22,30 +33,74 @@ from typing import Any
 import numpy as np
 
 from evomotion.errors import InputError
-from evomotion.studies.biped_kick.motion import key_times, limit_excess
+from evomotion.studies.biped_kick.motion import GENE_INDEX, key_times, limit_excess
 
 #: the offset's fractions tried, from the whole offset down (S + 1 values)
 FRACTIONS = 10
+#: the swing's phase durations (genes) a stretch lengthens
+SWING = ("t_lift_s", "t_kick_s", "t_retract_s")
+#: the longest swing a following kick may be set to take (x its own; problem.adapt_max_stretch)
+MAX_STRETCH = 2.0
+#: tries of :func:`fitting_stretch` (each raises ``s`` by the speed ratio still left)
+STRETCH_TRIES = 8
+
+KeysOf = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 
 
-def reachable_shift(keys_of: Callable[[np.ndarray, np.ndarray], np.ndarray],
-                    shift: np.ndarray, speed_margin: float, limits: tuple | None
-                    ) -> tuple[np.ndarray, np.ndarray]:
-    """(the shift each kick uses ``[n, 2]``, its fraction λ ``[n]``) of the wanted ``shift``
-    ``[n, 2]`` (m); ``keys_of(rows, shift_rows)`` gives those kicks' key poses ``[r, K, nu]``
-    as played (mirrored for a left-foot kick), ``limits`` the robot's
-    (:func:`.motion.limit_excess`)."""
+def retimed(genomes: np.ndarray, stretch: np.ndarray) -> np.ndarray:
+    """``genomes[n, d]`` with the swing's phases (:data:`SWING`) ``stretch[n]`` times longer."""
+    out = np.array(genomes, dtype=float, copy=True)
+    cols = [GENE_INDEX[name] for name in SWING]
+    out[:, cols] *= np.asarray(stretch, dtype=float)[:, None]
+    return out
+
+
+def fitting_stretch(keys_of: KeysOf, rows: np.ndarray, shift: np.ndarray, speed_margin: float,
+                    limits: tuple | None, max_stretch: float) -> np.ndarray:
+    """Per kick ``rows[i]`` with ``shift[i]``: the smallest tried swing stretch ``s`` in ``[1,
+    max_stretch]`` whose key poses (``keys_of(rows, shift, s)``) are within the limits, nan
+    where none is (a joint out of range, or more than ``max_stretch`` needed)."""
+    s = np.ones(len(rows))
+    out = np.full(len(rows), np.nan)
+    todo = np.arange(len(rows))
+    for _ in range(STRETCH_TRIES):
+        if not todo.size:
+            break
+        range_x, speed_x, ratio = limit_excess(keys_of(rows[todo], shift[todo], s[todo]),
+                                               speed_margin, limits)
+        ok = (range_x <= 0) & (speed_x <= 0)
+        out[todo[ok]] = s[todo[ok]]
+        # raise s by the ratio left (and a little: the 20 ms poses sample the path anew)
+        s[todo] = s[todo] * np.maximum(ratio, 1.0) * (1.0 + 1e-3)
+        keep = ~ok & (range_x <= 0) & (s[todo] <= max_stretch)
+        todo = todo[keep]
+    return out
+
+
+def reachable_shift(keys_of: KeysOf, shift: np.ndarray, speed_margin: float,
+                    limits: tuple | None, max_stretch: float = 1.0
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(the shift each kick uses ``[n, 2]``, its fraction λ ``[n]``, its swing stretch ``[n]``)
+    of the wanted ``shift`` ``[n, 2]`` (m); ``keys_of(rows, shift_rows, stretch_rows)`` gives
+    those kicks' key poses ``[r, K, nu]`` as played (mirrored for a left-foot kick), ``limits``
+    the robot's (:func:`.motion.limit_excess`); ``max_stretch``: the longest swing allowed
+    (module doc; 1: the evolved timing only). A kick within the limits at no fraction keeps
+    λ = 0 and its own timing (the kick as evolved)."""
     shift = np.asarray(shift, dtype=float)
     n = len(shift)
     frac = np.zeros(n)
+    stretch = np.ones(n)
     todo = np.arange(n)
     for lam in np.linspace(1.0, 0.0, FRACTIONS + 1)[:-1]:
         if not todo.size:
             break
-        ok = keys_within_limits(keys_of(todo, lam * shift[todo]), speed_margin, limits)
+        s = fitting_stretch(keys_of, todo, lam * shift[todo], speed_margin, limits,
+                            max_stretch)
+        ok = np.isfinite(s)
         frac[todo[ok]] = lam
+        stretch[todo[ok]] = s[ok]
         todo = todo[~ok]
-    return shift * frac[:, None], frac
+    return shift * frac[:, None], frac, stretch
 
 
 def keys_within_limits(keys: np.ndarray, speed_margin: float, limits: tuple | None
@@ -82,13 +137,17 @@ def left_flags(left_foot: Any, n: int, mirror: Any, robot: str) -> np.ndarray:
 
 
 def followed_shift(problem: Any, g: np.ndarray, aims_k: np.ndarray, shift: np.ndarray,
-                   left: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+                   left: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`reachable_shift` for a :class:`.problem.KickProblem`'s kicks of genomes ``g``
-    at the right-foot aims ``aims_k`` (mirrored where ``left``)."""
+    at the right-foot aims ``aims_k`` (mirrored where ``left``), with its
+    ``problem.cfg.adapt_max_stretch``."""
     kicker = problem.kicker
-    kt = key_times(g)  # the batch's key times: every kick's poses on the same grid
+    most = float(problem.cfg.adapt_max_stretch)
+    # the batch's key times, long enough for its longest swing: every kick on the same grid
+    kt = key_times(retimed(g, np.full(len(g), most * (1.0 + 1e-3) ** STRETCH_TRIES)))
 
-    def keys_of(rows: np.ndarray, s: np.ndarray) -> np.ndarray:
-        return played_keys(kicker, g[rows], kt, aims_k[rows], s, left[rows])
+    def keys_of(rows: np.ndarray, s: np.ndarray, stretch: np.ndarray) -> np.ndarray:
+        return played_keys(kicker, retimed(g[rows], stretch), kt, aims_k[rows], s,
+                           left[rows])
 
-    return reachable_shift(keys_of, shift, problem.cfg.speed_margin, kicker.limits)
+    return reachable_shift(keys_of, shift, problem.cfg.speed_margin, kicker.limits, most)

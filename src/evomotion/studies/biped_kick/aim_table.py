@@ -11,16 +11,16 @@ simulation and inverts it:
   wants the ball): the direction (deg) and distance (m) the ball goes, an :class:`AimTable`.
 - :func:`command` inverts it for kicks whose ball the robot sees: over the commands ``c`` from
   the table's range, 0.25 deg apart, whose evolved key poses keep every joint within its range
-  and ``speed_margin`` x its no-load speed (so the swing that follows the ball keeps them too:
-  :mod:`.adaptive` falls back to the kick as evolved), with the ball's offset from where ``c``'s
-  kick wants it inside the table, the one of least cost ``max(|d - target| - TOLERANCE_DEG, 0)
-  + SHIFT_COST |c - target|``, ``d`` the direction interpolated (trilinear): the nearest
-  command predicted within ``TOLERANCE_DEG`` of the target, else the best trade of error and
-  change (a command far from the target places the foot further from the ball's side, which
-  can cost the robot its balance in a perturbed world); commands whose interpolated distance
-  is under ``MIN_DISTANCE_M`` are excluded. None left: the target itself (the
-  adaptive kick as before). A left-foot kick is the right one mirrored: its ball's y and its
-  aims negated.
+  and ``speed_margin`` x its no-load speed, the swing lengthened as far as the kick that follows
+  the ball may (:mod:`.adaptive`, ``problem.adapt_max_stretch``), with the ball's offset from
+  where ``c``'s kick wants it inside the table, the one of least cost ``max(|d - target| -
+  TOLERANCE_DEG, 0) + SHIFT_COST |c - target|``, ``d`` the direction interpolated (trilinear):
+  the nearest command predicted within ``TOLERANCE_DEG`` of the target, else the best trade of
+  error and change (a command far from the target places the foot further from the ball's side,
+  which can cost the robot its balance in a perturbed world); commands whose interpolated
+  distance is under ``MIN_DISTANCE_M`` are excluded. None left: the target itself (the adaptive
+  kick as before). A left-foot kick is the right one mirrored: its ball's y and its aims
+  negated.
 - :func:`write` / :func:`read`: the table as JSON (plain lists: a robot-side runner reads it
   without numpy).
 """
@@ -33,7 +33,8 @@ from typing import Any
 
 import numpy as np
 
-from evomotion.errors import FileFormatError
+from evomotion.errors import FileFormatError, InputError
+from evomotion.studies.biped_kick.adaptive import MAX_STRETCH
 
 FORMAT = "evomotion-kick-aim-table/1"
 #: the default grid: commanded aims (deg), ball offsets dx, dy (m)
@@ -50,13 +51,16 @@ MIN_DISTANCE_M = 1.0
 class AimTable:
     """Where the adaptive right-foot kick sends the ball: ``angle_deg[a, i, j]`` (direction
     from +x) and ``distance_m[a, i, j]`` (travel) for the commanded aim ``aims_deg[a]`` and the
-    ball ``(dx_m[i], dy_m[j])`` from where that kick wants it (nominal world)."""
+    ball ``(dx_m[i], dy_m[j])`` from where that kick wants it (nominal world);
+    ``max_stretch``: the ``problem.adapt_max_stretch`` it was measured with (the longest swing
+    the following kick took, :mod:`.adaptive`; 1 in files written before that key)."""
 
     aims_deg: np.ndarray
     dx_m: np.ndarray
     dy_m: np.ndarray
     angle_deg: np.ndarray
     distance_m: np.ndarray
+    max_stretch: float = 1.0
 
     def interpolate(self, pts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(direction, distance) at ``pts[n, 3]`` = (aim deg, dx m, dy m) inside the grid."""
@@ -84,21 +88,23 @@ def measure(problem: Any, genome: np.ndarray, aims_deg: np.ndarray = AIMS_DEG,
         travel = k["travel"]
         angle[a] = np.degrees(np.arctan2(travel[:, 1], travel[:, 0])).reshape(dx.shape)
         dist[a] = np.hypot(travel[:, 0], travel[:, 1]).reshape(dx.shape)
-    return AimTable(aims, np.asarray(dx_m, float), np.asarray(dy_m, float), angle, dist)
+    return AimTable(aims, np.asarray(dx_m, float), np.asarray(dy_m, float), angle, dist,
+                    float(problem.cfg.adapt_max_stretch))
 
 
 def within_limits(problem: Any, genome: np.ndarray, aims_deg: np.ndarray,
                   left: bool) -> np.ndarray:
-    """Per commanded aim (right-foot frame), whether the kick as evolved keeps its key poses
-    within every joint range and ``speed_margin`` x no-load speed (as played: mirrored for
-    the left foot)."""
-    from evomotion.studies.biped_kick.adaptive import keys_within_limits, played_keys
-    from evomotion.studies.biped_kick.motion import key_times
+    """Per commanded aim (right-foot frame), whether the kick as evolved, its swing lengthened
+    by at most ``problem.cfg.adapt_max_stretch`` as a following kick may (:mod:`.adaptive`),
+    keeps its key poses within every joint range and ``speed_margin`` x no-load speed (as
+    played: mirrored for the left foot)."""
+    from evomotion.studies.biped_kick.adaptive import followed_shift
 
-    g = np.repeat(np.atleast_2d(genome), len(aims_deg), axis=0)
-    keys = played_keys(problem.kicker, g, key_times(g), np.radians(aims_deg), None,
-                       np.full(len(g), left))
-    return keys_within_limits(keys, problem.cfg.speed_margin, problem.kicker.limits)
+    aims = np.asarray(aims_deg, dtype=float)
+    g = np.repeat(np.atleast_2d(genome), len(aims), axis=0)
+    _, frac, _ = followed_shift(problem, g, np.radians(aims), np.zeros((len(aims), 2)),
+                                np.full(len(aims), bool(left)))
+    return frac == 1.0
 
 
 def command(table: AimTable, problem: Any, genome: np.ndarray, target_deg: float,
@@ -106,6 +112,11 @@ def command(table: AimTable, problem: Any, genome: np.ndarray, target_deg: float
     """The commanded aim (deg, world: as :meth:`.problem.KickProblem.kicks` takes it) of each
     kick of ``genome`` at ``target_deg`` with its ball at ``ball_xy[n, 2]`` (world; the robot
     at the origin facing +x), by the module doc's rule."""
+    if table.max_stretch != problem.cfg.adapt_max_stretch:
+        raise InputError(f"kick aim table: measured with problem.adapt_max_stretch = "
+                         f"{table.max_stretch:g}, the kick follows the ball with "
+                         f"{problem.cfg.adapt_max_stretch:g}: set that, or measure the table "
+                         "anew (evomotion biped-kick calibrate)")
     flip = -1.0 if left_foot else 1.0
     target = float(target_deg) * flip
     ball = np.asarray(ball_xy, dtype=float).reshape(-1, 2) * [1.0, flip]
@@ -137,7 +148,8 @@ def write(path: str | Path, table: AimTable, source: str = "") -> Path:
     return write_json(path, {"format": FORMAT, "kick": source,
                              "aims_deg": table.aims_deg, "dx_m": table.dx_m,
                              "dy_m": table.dy_m, "angle_deg": table.angle_deg,
-                             "distance_m": table.distance_m}, "kick aim table")
+                             "distance_m": table.distance_m,
+                             "adapt_max_stretch": table.max_stretch}, "kick aim table")
 
 
 def read(path: str | Path) -> AimTable:
@@ -159,7 +171,12 @@ def read(path: str | Path) -> AimTable:
         if v.shape != shape:
             raise FileFormatError(path, None, f"key {key!r}: a {shape[0]} x {shape[1]} x "
                                               f"{shape[2]} grid (aims x dx x dy)")
-    return AimTable(*axes, *grids)
+    stretch = rec.get("adapt_max_stretch", 1.0)  # files before the key: the evolved timing
+    if isinstance(stretch, bool) or not isinstance(stretch, int | float) or not (
+            1.0 <= stretch <= MAX_STRETCH):
+        raise FileFormatError(path, None, "key 'adapt_max_stretch': a number from 1 to "
+                                          f"{MAX_STRETCH:g}")
+    return AimTable(*axes, *grids, float(stretch))
 
 
 def _array(path: str | Path, rec: dict, key: str, ndim: int) -> np.ndarray:

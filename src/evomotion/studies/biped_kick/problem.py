@@ -44,7 +44,12 @@ from evomotion.sim.robots import nao
 from evomotion.sim.rollout import BatchSimulator, fall_step, interpolate_controls, torso_track
 from evomotion.sim.worlds import World, simulate_worlds
 from evomotion.studies.biped_kick import scene
-from evomotion.studies.biped_kick.adaptive import followed_shift, left_flags
+from evomotion.studies.biped_kick.adaptive import (
+    MAX_STRETCH,
+    followed_shift,
+    left_flags,
+    retimed,
+)
 from evomotion.studies.biped_kick.balance import MAX_GAIN_S, BalanceFeedback, control_steps
 from evomotion.studies.biped_kick.kickers import kicker_for
 from evomotion.studies.biped_kick.motion import (
@@ -112,6 +117,9 @@ class KickConfig:
     #: every control_period_s (s); (0, 0): the open-loop kick (the NAO's kick only)
     balance_gains: tuple[float, float] = (0.0, 0.0)
     control_period_s: float = 0.012
+    #: a kick that follows the ball (kicks(adapt=True), adaptive.py) may lengthen its swing
+    #: up to this factor to stay within the motors' speeds (1: its evolved timing only)
+    adapt_max_stretch: float = 1.25
 
     def for_worker(self) -> KickConfig:
         """The config of a one-core evaluator worker: ``nthread`` 0 (all cores) becomes 1."""
@@ -134,6 +142,8 @@ class KickConfig:
                         ("roll_after_s", MAX_ROLL_AFTER_S), ("zmp_margin_m", MAX_ZMP_MARGIN_M)):
             check_number(f"problem.{key}", getattr(self, key), lo=0.0, hi=hi)
         check_number("problem.speed_margin", self.speed_margin, lo=0.0, hi=1.0, lo_open=True)
+        check_number("problem.adapt_max_stretch", self.adapt_max_stretch, lo=1.0,
+                     hi=MAX_STRETCH)
 
         check_number("problem.fall_height_m", self.fall_height_m, lo=0.0,
                      hi=MAX_FALL_HEIGHT_M, lo_open=True)
@@ -294,15 +304,16 @@ class KickProblem:
         g = np.atleast_2d(np.asarray(genomes, dtype=float))
         aims = np.broadcast_to(np.asarray(aims_rad, dtype=float), (len(g),))
         ball0 = np.asarray(ball_xy, dtype=float).reshape(len(g), 2)
-        exec_t = execution_time_s(g)
         left = left_flags(left_foot, len(g), self.kicker.mirror, self.robot.name)
         flip = np.where(left, -1.0, 1.0)
         aims_k = aims * flip  # the right-foot kick's aim and ball, mirrored where left
         ball_k = ball0 * np.stack([np.ones(len(g)), flip], axis=1)
-        shift, frac = None, np.zeros(len(g))
+        shift, frac, stretch = None, np.zeros(len(g)), np.ones(len(g))
         if adapt:
-            shift, frac = followed_shift(self, g, aims_k,
-                                         ball_k - self.wanted_ball_xy(g, aims_k), left)
+            shift, frac, stretch = followed_shift(self, g, aims_k,
+                                                  ball_k - self.wanted_ball_xy(g, aims_k), left)
+            g = retimed(g, stretch)  # slower where the motors need it (adaptive.py)
+        exec_t = execution_time_s(g)
         keys, ctrl, end, ik_error = self.controls(g, aims_k, shift)
         if left.any():
             keys[left], ctrl[left] = self.kicker.mirror(keys[left]), self.kicker.mirror(
@@ -334,6 +345,7 @@ class KickProblem:
         range_x, speed_x, speed_ratio = limit_excess(keys, self.cfg.speed_margin,
                                                      self.kicker.limits)
         out = {"travel": travel, "along_m": along, "lateral_m": lateral, "adapt_fraction": frac,
+               "stretch": stretch,
                "angle_error_rad": angle_err, "fell": fell, "zmp_deficit_m_s": deficit,
                "min_margin_m": np.min(np.where(in_kick, margin, np.inf), axis=1),
                "range_excess_rad": range_x, "speed_excess_s": speed_x,
