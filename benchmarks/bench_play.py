@@ -12,6 +12,13 @@ rests. Pass (the issue's test): line error <= 0.5 m, share >= 80 %, no fall, tim
 <= 15 s.
 
     python benchmarks/bench_play.py [--walk RUN|model] [--kick KICK_RUN] [--videos DIR]
+                                    [--blind] [--table TABLE.json]
+
+By default the kick sees the ball where the robot stopped and follows it (``play``'s default:
+no tolerance centre, the swing slowed where the motors need it); ``--blind``: the kick as
+evolved, the ball planned at its tolerance centre (``play``'s default before 2026-12-05's
+third session); ``--table``: the commanded aim from that aim table (``evomotion biped-kick
+calibrate``).
 """
 
 from __future__ import annotations
@@ -47,10 +54,18 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=34)
     ap.add_argument("--videos", type=Path, default=None)
     ap.add_argument("--json", action="store_true")
+    ap.add_argument("--blind", action="store_true",
+                    help="the kick as evolved (play(follow=False)), as before 2026-12-05")
+    ap.add_argument("--table", type=Path, default=None, help="an aim table for the kick")
     args = ap.parse_args()
     walk = None if args.walk == "model" else Path(args.walk) if args.walk else DEFAULT_WALK
     genome, source = read_kick(args.kick)
     problem = KickProblem(KickConfig())
+    table = None
+    if args.table is not None:
+        from evomotion.studies.biped_kick.aim_table import read
+
+        table = read(args.table)
     rows = []
     for i, (ball, target) in enumerate(pairs(args.seed)):
         video = None
@@ -58,7 +73,8 @@ def main() -> None:
             args.videos.mkdir(parents=True, exist_ok=True)
             video = args.videos / f"play_{i}.mp4"
         t0 = time.perf_counter()
-        r = play(problem, genome, np.zeros(3), ball, target, video, repertoire=walk)
+        r = play(problem, genome, np.zeros(3), ball, target, video, repertoire=walk,
+                 follow=not args.blind, table=table)
         rest = np.asarray(r["ball_rest_m"])
         share = float(np.dot(rest - ball, target - ball) / np.sum((target - ball) ** 2))
         ok = (r["kicked"] and not r["fell"] and r["target_error_m"] <= 0.5 and share >= 0.8
@@ -68,7 +84,9 @@ def main() -> None:
                      "aim_deg": r.get("aim_deg"), "time_to_kick_s": r["time_to_kick_s"],
                      "time_s": r["time_s"], "walk_s": r["walk_time_s"],
                      "placement_cm": 100 * r.get("ball_placement_error_m", np.nan),
-                     "pass": bool(ok), "wall_s": time.perf_counter() - t0})
+                     "pass": bool(ok), "wall_s": time.perf_counter() - t0,
+                     **{k: r[k] for k in ("command_deg", "followed_fraction", "swing_stretch",
+                                          "ball_offset_m") if k in r}})
     if args.json:
         print(json.dumps(rows, indent=2))
         return
@@ -84,6 +102,13 @@ def main() -> None:
               f"{'yes' if r['fell'] else 'no'} | {r['walk_s']:.1f} | "
               f"{r['time_to_kick_s'] or float('nan'):.1f} | {r['time_s']:.1f} | "
               f"{r['placement_cm']:.1f} | {'yes' if r['pass'] else 'no'} |")
+    if any("followed_fraction" in r for r in rows):
+        print("\nthe kick that sees the ball: | ball's offset from its place (cm) | command (deg) "
+              "| offset followed | swing stretch |\n|---|---|---|---|")
+        for r in rows:
+            off = 100 * np.asarray(r["ball_offset_m"])
+            print(f"| ({off[0]:+.1f}, {off[1]:+.1f}) | {r['command_deg']:+.1f} | "
+                  f"{r['followed_fraction']:.0%} | {r['swing_stretch']:.3f} |")
     print(f"passed {sum(r['pass'] for r in rows)} of {len(rows)}")
 
 

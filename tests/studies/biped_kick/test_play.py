@@ -74,6 +74,48 @@ def test_play_reports_the_whole_chain(tmp_path):
     assert np.linalg.norm(np.subtract(res["ball_rest_m"], [1.0, 0.3])) > 0.1  # it was kicked
 
 
+def test_the_kick_that_sees_the_ball_follows_it_and_takes_the_tables_command():
+    """``seen_kick``: a ball in its place is kicked as evolved (no shift, no stretch, the aim);
+    a ball 1 cm outboard (right) is followed towards it within the limits; with a table the
+    command is the table's (a synthetic one: the ball goes aim + 500 deg/m x dy)."""
+    from evomotion.studies.biped_kick.aim_table import AimTable, command
+    from evomotion.studies.biped_kick.play import seen_kick
+
+    p = KickProblem(KickConfig(nthread=2))
+    g, _ = read_kick(None)
+    aim = np.radians(-10.0)
+    want = p.wanted_ball_xy(g[None], np.array([aim]))[0]
+    a, g1, shift, rep = seen_kick(p, g, aim, want)
+    assert a == aim and np.array_equal(g1, g) and not shift.any()
+    assert rep["followed_fraction"] == 1.0 and rep["swing_stretch"] == 1.0
+    a, g2, shift, rep = seen_kick(p, g, aim, want + [0.0, -0.01])
+    assert rep["ball_offset_m"] == pytest.approx([0.0, -0.01])
+    assert rep["followed_fraction"] > 0 and shift[1] < 0
+    assert np.allclose(shift, rep["followed_fraction"] * np.array([0.0, -0.01]))
+    aims, dx, dy = np.arange(-40.0, 40.1, 2.5), np.array([-0.02, 0.02]), np.linspace(-0.06,
+                                                                                    0.06, 25)
+    A, _, Y = np.meshgrid(aims, dx, dy, indexing="ij")
+    table = AimTable(aims, dx, dy, A + 500.0 * Y, np.full(A.shape, 2.0),
+                     p.cfg.adapt_max_stretch)
+    ball = want + [0.0, -0.01]
+    a, _, _, rep = seen_kick(p, g, aim, ball, table)
+    assert a == pytest.approx(np.radians(command(table, p, g, -10.0, ball[None])[0]))
+    assert rep["command_deg"] > -8.0  # a ball to the right: aimed further left
+
+
+def test_play_with_a_kick_that_sees_the_ball():
+    """``play(follow=True)``: no tolerance centre (the plan puts the ball where the kick wants
+    it); placed by the walking model, the ball lies in its place, is followed whole and kicked
+    as evolved."""
+    p = KickProblem(KickConfig(nthread=2))
+    g, _ = read_kick(None)
+    res = play(p, g, np.zeros(3), np.array([1.0, 0.3]), np.array([3.0, 0.0]), follow=True)
+    assert res["ball_tolerant_offset_m"] == 0.0 and res["kicked"] and not res["fell"]
+    assert np.hypot(*res["ball_offset_m"]) < 1e-3 and res["followed_fraction"] == 1.0
+    assert res["swing_stretch"] == 1.0 and res["command_deg"] == pytest.approx(res["aim_deg"])
+    assert res["target_error_m"] < 0.5
+
+
 def _cli(*args, cwd):
     import subprocess
     import sys
@@ -90,6 +132,8 @@ def _cli(*args, cwd):
     (["--walk", "missing"], "--walk missing"),
     (["--robot", "1.4", "0.45", "0"], "at least 0.3 m from the ball"),
     (["--video", "nofolder/out.mp4"], "does not exist"),
+    (["--table", "missing.json"], "missing.json"),
+    (["--blind", "--table", "missing.json"], "drop --blind or --table"),
 ])
 def test_play_bad_input_is_one_line(tmp_path, args, msg):
     r = _cli(*args, cwd=tmp_path)
@@ -110,6 +154,30 @@ def test_play_json(tmp_path):
              cwd=tmp_path)
     assert r.returncode == 0, r.stderr
     assert "walking model" in json.loads(r.stdout)["walk"]
+
+
+def test_play_takes_an_aim_table_of_the_same_timing(tmp_path):
+    """``--table``: the kick's command from that table (a synthetic one here); a table measured
+    with another ``adapt_max_stretch`` is one line before anything is simulated."""
+    import dataclasses
+
+    from evomotion.studies.biped_kick import aim_table
+
+    aims, dx, dy = np.arange(-40.0, 40.1, 2.5), np.array([-0.02, 0.02]), np.linspace(-0.06,
+                                                                                    0.06, 25)
+    A, _, Y = np.meshgrid(aims, dx, dy, indexing="ij")
+    table = aim_table.AimTable(aims, dx, dy, A + 300.0 * Y, np.full(A.shape, 2.0),
+                               KickConfig().adapt_max_stretch)
+    aim_table.write(tmp_path / "t.json", table)
+    r = _cli("--ball", "1.2", "0.4", "--target", "3", "0", "--walk", "model", "--table",
+             "t.json", "--json", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    res = json.loads(r.stdout)
+    assert res["kicked"] and "command_deg" in res and res["followed_fraction"] > 0
+    aim_table.write(tmp_path / "old.json", dataclasses.replace(table, max_stretch=1.0))
+    r = _cli("--table", "old.json", cwd=tmp_path)
+    lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
+    assert r.returncode == 2 and len(lines) == 1 and "adapt_max_stretch = 1" in lines[0]
 
 
 def test_the_shipped_kick_alone_stays_up():

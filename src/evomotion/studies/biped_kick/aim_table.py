@@ -112,11 +112,7 @@ def command(table: AimTable, problem: Any, genome: np.ndarray, target_deg: float
     """The commanded aim (deg, world: as :meth:`.problem.KickProblem.kicks` takes it) of each
     kick of ``genome`` at ``target_deg`` with its ball at ``ball_xy[n, 2]`` (world; the robot
     at the origin facing +x), by the module doc's rule."""
-    if table.max_stretch != problem.cfg.adapt_max_stretch:
-        raise InputError(f"kick aim table: measured with problem.adapt_max_stretch = "
-                         f"{table.max_stretch:g}, the kick follows the ball with "
-                         f"{problem.cfg.adapt_max_stretch:g}: set that, or measure the table "
-                         "anew (evomotion biped-kick calibrate)")
+    check_timing(table, problem.cfg)
     flip = -1.0 if left_foot else 1.0
     target = float(target_deg) * flip
     ball = np.asarray(ball_xy, dtype=float).reshape(-1, 2) * [1.0, flip]
@@ -140,6 +136,16 @@ def command(table: AimTable, problem: Any, genome: np.ndarray, target_deg: float
     found = np.isfinite(cost[np.arange(len(ball)), best])
     out[found] = cands[best[found]]
     return out * flip
+
+
+def check_timing(table: AimTable, cfg: Any, what: str = "kick aim table") -> None:
+    """One line unless ``table`` was measured with the kick config ``cfg``'s
+    ``adapt_max_stretch`` (the following kick's timing decides where it sends the ball)."""
+    if table.max_stretch != cfg.adapt_max_stretch:
+        raise InputError(f"{what}: measured with problem.adapt_max_stretch = "
+                         f"{table.max_stretch:g}, the kick follows the ball with "
+                         f"{cfg.adapt_max_stretch:g}: set that, or measure the table anew "
+                         "(evomotion biped-kick calibrate)")
 
 
 def write(path: str | Path, table: AimTable, source: str = "") -> Path:

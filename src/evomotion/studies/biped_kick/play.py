@@ -15,10 +15,16 @@ it rests (paper 002's whole chain for one ball and target, field frame, metres, 
    time while the robot is placed at the stand pose (the approach is not simulated). The
    output's ``walk`` key says which.
 3. **Kick** from where the robot really stands: the aim is recomputed from its heading (within
-   +-30 deg; +-10 deg after a controller's walk, whose plan turns the robot to face the target
+   +-30 deg; +-5 deg after a controller's walk, whose plan turns the robot to face the target
    within that: :data:`CONTROLLER_MAX_AIM_DEG`), the kick's motion for that aim is played
    (:func:`motion.joint_targets`), then the ball rolls on; the roll left after the rollout is
-   ``v |v| / (2 a_roll)`` and lasts ``|v| / a_roll``.
+   ``v |v| / (2 a_roll)`` and lasts ``|v| / a_roll``. By default (``follow``) the kick **sees
+   the ball**: the plan puts the ball where the kick wants it (no tolerance centre), and the
+   kick's swing follows the ball's offset from there as far as the joint ranges and motor
+   speeds allow, slowed where the motors need it (:mod:`.adaptive`, :func:`seen_kick`); with an
+   aim table (``table``, ``--table``: :mod:`.aim_table`) its commanded aim is chosen from the
+   ball's place too. ``follow=False`` (``--blind``): the kick as evolved, the ball planned at
+   the tolerance centre (the behaviour before 2026-12-05's third session).
 
 Reported: where the ball rests, its distance to the target and to the ball->target line
 (``target_error_m``), the times, and whether the robot fell.
@@ -127,8 +133,11 @@ def field_state(problem: Any, pose: np.ndarray, ball: np.ndarray) -> np.ndarray:
 
 def play(problem: Any, genome: np.ndarray, robot: np.ndarray, ball: np.ndarray,
          target: np.ndarray, video: Path | None = None,
-         repertoire: Path | None = None) -> dict[str, Any]:
-    """Plan, walk, kick and roll; the report (and ``video`` of the whole simulation)."""
+         repertoire: Path | None = None, follow: bool = True,
+         table: Any = None) -> dict[str, Any]:
+    """Plan, walk, kick and roll; the report (and ``video`` of the whole simulation).
+    ``follow``: the kick sees the ball (module doc, step 3); ``table``: and its commanded aim
+    comes from that :class:`.aim_table.AimTable` (with ``follow``)."""
     from evomotion.sim.robots import nao
     from evomotion.studies.biped_kick import scene
     from evomotion.studies.biped_kick.walk_play import SceneRun, walk
@@ -139,7 +148,8 @@ def play(problem: Any, genome: np.ndarray, robot: np.ndarray, ball: np.ndarray,
 
     from evomotion.studies.biped_kick.experiment import tolerant_offset
 
-    tolerant = tolerant_offset(problem, g)  # the ball where a placement error costs least
+    # the ball where a placement error costs least; a kick that sees the ball wants it in place
+    tolerant = 0.0 if follow else tolerant_offset(problem, g)
 
     def ball_local(aims: np.ndarray) -> np.ndarray:
         rows = np.repeat(g[None], len(np.atleast_1d(aims)), axis=0)
@@ -187,7 +197,12 @@ def play(problem: Any, genome: np.ndarray, robot: np.ndarray, ball: np.ndarray,
     d = ball_now - pose[:2]
     local = np.array([c * d[0] + s * d[1], -s * d[0] + c * d[1]])
     placement = float(np.linalg.norm(local - ball_local(np.array([aim]))[0]))
-    _, ctrl, end, _ = problem.controls(g[None], np.array([aim]))
+    seen: dict[str, Any] = {}
+    if follow:
+        command, g_kick, shift, seen = seen_kick(problem, g, aim, local + root0, table)
+        _, ctrl, end, _ = problem.controls(g_kick[None], np.array([command]), shift[None])
+    else:
+        _, ctrl, end, _ = problem.controls(g[None], np.array([aim]))
     nstep = int(end[0])
     states = run.play(ctrl[0])
     rest, roll = problem.ball_rest(states[-1])
@@ -208,9 +223,31 @@ def play(problem: Any, genome: np.ndarray, robot: np.ndarray, ball: np.ndarray,
         "kick_time_s": float(nstep * problem.dt), "roll_time_s": roll_s,
         "time_to_kick_s": float(walk_s + contact_s(states, problem)),
         "kick_distance_m": float(np.linalg.norm(r)),
+        **seen,
     })
     report["kicked"] = True
     return _with_video(report, run, problem, video)
+
+
+def seen_kick(problem: Any, g: np.ndarray, aim: float, ball_xy: np.ndarray, table: Any = None
+              ) -> tuple[float, np.ndarray, np.ndarray, dict[str, Any]]:
+    """The kick of genome ``g`` at ``aim`` (rad) that sees its ball at ``ball_xy`` (the kick
+    problem's frame: the robot's root at rest at its origin, facing +x): its commanded aim (from
+    ``table`` if given), its genome with the swing slowed where its motors need it, the swing's
+    shift towards the ball (:mod:`.adaptive`) and what to report."""
+    from evomotion.studies.biped_kick.adaptive import followed_shift, retimed
+
+    if table is not None:
+        from evomotion.studies.biped_kick.aim_table import command
+
+        aim = float(np.radians(command(table, problem, g, float(np.degrees(aim)),
+                                       ball_xy[None])[0]))
+    rows, aims = g[None], np.array([aim])
+    want = ball_xy - problem.wanted_ball_xy(rows, aims)[0]
+    shift, frac, stretch = followed_shift(problem, rows, aims, want[None], np.zeros(1, bool))
+    return aim, retimed(rows, stretch)[0], shift[0], {
+        "command_deg": float(np.degrees(aim)), "ball_offset_m": [float(v) for v in want],
+        "followed_fraction": float(frac[0]), "swing_stretch": float(stretch[0])}
 
 
 def _with_video(report: dict[str, Any], run: Any, problem: Any, video: Path | None

@@ -89,6 +89,12 @@ def play_cmd(
              "controller")] = None,
     video: Annotated[Path | None, typer.Option(help="MP4 of the simulation")] = None,
     json_out: Annotated[bool, typer.Option("--json", help="JSON on stdout")] = False,
+    follow: Annotated[bool, typer.Option(
+        "--follow/--blind", help="the kick sees the ball where the robot stopped and follows "
+                                 "it (default), or is played as evolved")] = True,
+    table: Annotated[Path | None, typer.Option(
+        help="an aim table (biped-kick calibrate) of the kick: its command chosen from the "
+             "ball's place (with --follow)")] = None,
 ) -> None:
     """Plan the kick point and approach, walk, kick, and report where the ball rests."""
     import json
@@ -118,9 +124,18 @@ def play_cmd(
             from evomotion.studies.biped_kick.walk_play import load_index
 
             load_index(walk_dir, "--walk")
+    aims = None
+    if table is not None:
+        if not follow:
+            raise InputError("--table: the aim table is for the kick that sees the ball; drop "
+                             "--blind or --table")
+        from evomotion.studies.biped_kick.aim_table import check_timing, read
+
+        aims = read(table)
+        check_timing(aims, KickConfig(), f"--table {table}")
     genome, source = read_kick(kick)
     res = play(make_problem(KickConfig()), genome, np.array(robot), np.array(ball),
-               np.array(target), video, repertoire=walk_dir)
+               np.array(target), video, repertoire=walk_dir, follow=follow, table=aims)
     res["kick"] = source
     if json_out:
         typer.echo(json.dumps(res, indent=2))
@@ -134,6 +149,7 @@ def play_cmd(
                f"{res['walk_time_s']:.1f} s, to ({res['stand_pose'][0]:.2f}, "
                f"{res['stand_pose'][1]:.2f}) facing {math.degrees(res['stand_pose'][2]):.0f} deg"
                f"\nkick: aim {res['aim_deg']:+.1f} deg, {'FELL' if res['fell'] else 'stayed up'}"
+               f"{_seen(res)}"
                f"\nball rests at ({res['ball_rest_m'][0]:.2f}, {res['ball_rest_m'][1]:.2f}) "
                f"after {res['kick_distance_m']:.2f} m; {res['target_error_m']:.2f} m off the "
                f"target line, {res['target_distance_m']:.2f} m from the target; foot on the "
@@ -142,6 +158,15 @@ def play_cmd(
                + (f"\nvideo: {video}" if res.get("video") else "")
                + (f"\nvideo skipped: {res['video_skipped']}" if res.get("video_skipped")
                   else ""))
+
+
+def _seen(res: dict) -> str:
+    """What the kick that saw the ball did, for ``play``'s text output ("" for a blind one)."""
+    if "command_deg" not in res:
+        return ""
+    return (f" (saw the ball {100 * math.hypot(*res['ball_offset_m']):.1f} cm from its place: "
+            f"command {res['command_deg']:+.1f} deg, {100 * res['followed_fraction']:.0f} % of "
+            f"the offset followed, swing x{res['swing_stretch']:.2f})")
 
 
 @cli.command("study")
