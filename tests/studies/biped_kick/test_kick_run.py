@@ -35,8 +35,15 @@ def test_run_writes_the_kick(kick_run):
     assert len(m.joints) == 22
     np.testing.assert_allclose(m.values, kick_motion(np.array(best["genome"])).values,
                                atol=1e-5)
+    from evomotion.sim.robots.nao.mirror import mirror_targets
+
     for a in AIMS_DEG:
-        assert (kick_run / "kicks" / f"aim_{a:+d}.motion").exists()
+        right = read_motion(kick_run / "kicks" / f"aim_{a:+d}.motion")
+        # the left foot's kick at +a: the right one's at -a in mirror image
+        left = read_motion(kick_run / "kicks" / f"left_aim_{-a:+d}.motion")
+        assert left.joints == right.joints and np.array_equal(left.times_ms, right.times_ms)
+        np.testing.assert_allclose(left.values, mirror_targets(right.values), atol=1e-12)
+        assert not np.allclose(left.values, right.values)
     rows = json.loads((kick_run / "best_kicks.json").read_text())
     assert [r["aim_deg"] for r in rows] == list(AIMS_DEG)
     for name in ("kick_foot.png", "kick_zmp.png", "fitness.png"):

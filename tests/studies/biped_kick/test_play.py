@@ -181,14 +181,20 @@ def test_play_takes_an_aim_table_of_the_same_timing(tmp_path):
 
 
 def test_the_shipped_kick_alone_stays_up():
-    """``evomotion replay`` of the shipped kick's motion (no ball): the robot does not fall."""
+    """``evomotion replay`` of the shipped kick's motion (no ball): the robot does not fall;
+    nor with the left-foot kick the run exports."""
+    from evomotion.sim.robots.nao.mirror import mirror_targets
     from evomotion.sim.robots.nao.replay import simulate_motion
+    from evomotion.studies.biped_kick.artifacts import left_foot
     from evomotion.studies.biped_kick.motion import kick_motion
 
     g, _ = read_kick(None)
     for aim in (-30, 0, 30):
         assert simulate_motion(kick_motion(g, np.radians(aim)), hold_s=1.0)["summary"][
             "fell"] is False
+    # the exported left-foot kick (kicks/left_aim_+30.motion) too
+    left = left_foot(kick_motion(g, np.radians(-30)), mirror_targets)
+    assert simulate_motion(left, hold_s=1.0)["summary"]["fell"] is False
 
 
 def test_play_walks_with_a_repertoire_in_the_same_simulation(tmp_path):

@@ -3,6 +3,9 @@
 - ``best.motion``: the whole straight kick (stand, shift, lift, kick, retract, shift back), 22
   joints, 20 ms poses, exactly the key poses that were simulated; ``kicks/aim_+20.motion`` and
   the rest: the same kick aimed from -30 to +30 degrees (ball placed as ``best_kicks.json`` says);
+  on a robot whose kicker has a mirror image (the NAO), ``kicks/left_aim_+20.motion`` and the
+  rest: the left-foot kicks, each the right-foot kick at the opposite aim in mirror image (the
+  ball mirrored too: ``ball_offset_y_m`` negated, left of the left sole's centre line negative);
 - ``best_naoqi.py`` / ``best_keyframes.json``: exports for a real NAO when the kick passes the
   joint-range and motor-speed checks;
 - ``best.mp4``: the straight kick with the ball, camera on robot and ball;
@@ -44,10 +47,20 @@ def write_motions(ctx: RunContext) -> None:
         return
     kick_motion = ctx.problem.kicker.kick_motion  # the robot's joints
     atomic_write_text(ctx.out_dir / "best.motion", format_motion(kick_motion(ctx.best_genome)))
+    mirror = getattr(ctx.problem.kicker, "mirror", None)
     for a in AIMS_DEG:  # kicks/ is the run's own folder
         motion = kick_motion(ctx.best_genome, np.radians(a))
         atomic_write_text(ctx.out_dir / "kicks" / f"aim_{a:+d}.motion", format_motion(motion),
                           "aimed kick", mkdir=True)
+        if mirror is not None:
+            atomic_write_text(ctx.out_dir / "kicks" / f"left_aim_{-a:+d}.motion",
+                              format_motion(left_foot(motion, mirror)), "aimed kick")
+
+
+def left_foot(right: Motion, mirror: Any) -> Motion:
+    """The right-foot kick ``right`` played by the left foot: its poses in mirror image."""
+    return Motion(right.joints, right.times_ms.copy(), mirror(right.values),
+                  list(right.pose_names))
 
 
 def genome_motion(problem: Any, genome: np.ndarray) -> Motion:
