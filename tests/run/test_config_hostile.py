@@ -34,6 +34,7 @@ from evomotion.run.config import (
     load_toml,
     resolve_config,
     study_algorithms,
+    study_of_run,
 )
 from evomotion.run.limits import check_memory
 from evomotion.studies import STUDIES, get_study
@@ -131,6 +132,16 @@ def test_run_folder_with_a_non_string_study(tmp_path):
     (tmp_path / "config.toml").write_text("study = [1]\n")
     with pytest.raises(InputError, match="'study' key"):
         config_from_run_dir(tmp_path)
+    with pytest.raises(InputError, match="'study' key"):
+        study_of_run(tmp_path)
+
+
+def test_study_of_run_names_the_study_or_none(tmp_path):
+    assert study_of_run(tmp_path) is None and study_of_run(tmp_path / "missing") is None
+    (tmp_path / "f").write_text("x")
+    assert study_of_run(tmp_path / "f") is None
+    (tmp_path / "config.toml").write_text('study = "humanoid-walk"\n')
+    assert study_of_run(tmp_path) == "humanoid-walk"
 
 
 # --- the cases of the issue ----------------------------------------------------------------

@@ -471,6 +471,15 @@ def configured_robot(raw: dict[str, Any]) -> Any:
     return problem.get("robot", "") if isinstance(problem, dict) else ""
 
 
+def study_of_run(path: str | Path) -> str | None:
+    """The study a run folder's ``config.toml`` names; None where ``path`` is no folder with a
+    ``config.toml`` (a bad one is one :class:`InputError` line)."""
+    p = Path(path)
+    if not (p.is_dir() and (p / "config.toml").is_file()):
+        return None
+    return config_from_run_dir(p)[0]
+
+
 def run_of_study(path: str | Path, study: str, option: str = "RUN",
                  subfolder: str | None = None) -> Path:
     """The run folder ``path`` if its ``config.toml`` names ``study`` (``path`` may also be

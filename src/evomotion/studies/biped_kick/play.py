@@ -97,11 +97,11 @@ def walk_kind(path: Path, option: str = "--walk") -> str:
     """``"controller"`` for a humanoid-walk run folder, else ``"repertoire"`` (a
     humanoid-repertoire run or its ``repertoire/``, checked when it is read); a run of any
     other study is one :class:`InputError` line."""
-    from evomotion.run.config import config_from_run_dir
+    from evomotion.run.config import study_of_run
 
     p = Path(path)
-    if p.is_dir() and (p / "config.toml").is_file():
-        name, _ = config_from_run_dir(p)
+    name = study_of_run(p)
+    if name is not None:
         if name == "humanoid-walk":
             return "controller"
         if name != "humanoid-repertoire":

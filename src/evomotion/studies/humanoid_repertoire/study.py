@@ -97,10 +97,9 @@ def walk_to_cmd(run: Path = typer.Argument(..., help="a humanoid-repertoire run 
 
 
 def _is_controller_run(run: Path) -> bool:
-    from evomotion.run.config import config_from_run_dir
+    from evomotion.run.config import study_of_run
 
-    return (run.is_dir() and (run / "config.toml").is_file()
-            and config_from_run_dir(run)[0] == "humanoid-walk")
+    return study_of_run(run) == "humanoid-walk"
 
 
 def _controller_walk_to(run: Path, x: float, y: float, theta: float, video: Path | None,
