@@ -63,9 +63,12 @@ def main() -> None:
     problem = KickProblem(KickConfig())
     table = None
     if args.table is not None:
-        from evomotion.studies.biped_kick.aim_table import read
+        from evomotion.studies.biped_kick.aim_table import check_timing, read
 
+        if args.blind:
+            ap.error("--table is for the kick that sees the ball: drop --blind or --table")
         table = read(args.table)
+        check_timing(table, problem.cfg, f"--table {args.table}")
     rows = []
     for i, (ball, target) in enumerate(pairs(args.seed)):
         video = None
@@ -113,4 +116,9 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    from evomotion.errors import InputError
+
+    try:
+        main()
+    except InputError as e:  # a bad table or setting: one line
+        raise SystemExit(f"error: {e}") from None

@@ -58,10 +58,13 @@ def main() -> None:
                     help="problem.adapt_max_stretch (1: the evolved timing only)")
     args = ap.parse_args()
     genome, source = read_kick(args.run)
-    problem = KickProblem(KickConfig(adapt_max_stretch=args.max_stretch))
+    cfg = KickConfig(adapt_max_stretch=args.max_stretch)
+    cfg.validate()
+    problem = KickProblem(cfg)
     t0 = time.perf_counter()
     if args.table is not None and args.table.exists():
         table = aim_table.read(args.table)
+        aim_table.check_timing(table, cfg, f"--table {args.table}")
     else:
         table = aim_table.measure(problem, genome)
         if args.table is not None:
@@ -116,4 +119,9 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    from evomotion.errors import InputError
+
+    try:
+        main()
+    except InputError as e:  # a bad table or setting: one line
+        raise SystemExit(f"error: {e}") from None

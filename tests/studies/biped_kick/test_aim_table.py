@@ -66,10 +66,14 @@ def test_commands_stay_within_the_limits(kick):
     assert cands[ok1].max() < 32.0 and cands[ok1].min() > -35.0
     ok = aim_table.within_limits(p, g, cands, False)  # its swing up to 1.25x longer: more
     assert np.all(ok[ok1]) and ok[cands == 36.0].all() and ok[cands == -38.0].all()
-    table = synthetic(slope_deg_per_m=2000.0)
-    want = p.wanted_ball_xy(g[None], np.radians([-30.0]))[0]
-    cmd = aim_table.command(table, p, g, -30.0, want[None] + [0.0, 0.03])[0]
-    assert cmd >= cands[ok].min()  # it would want -90 deg: the last command within them
+    # a table where the ball goes where the command says: at +36 deg the command is 36 (slowed
+    # down); at the evolved timing the nearest within its limits
+    table = synthetic(slope_deg_per_m=0.0)
+    want = p.wanted_ball_xy(g[None], np.radians([36.0]))[0]
+    assert aim_table.command(table, p, g, 36.0, want[None])[0] == 36.0
+    cmd1 = aim_table.command(dataclasses.replace(table, max_stretch=1.0), evolved, g, 36.0,
+                             want[None])[0]
+    assert cmd1 == cands[ok1].max() < 32.0
     with pytest.raises(InputError, match="adapt_max_stretch = 1, the kick follows the ball "
                                          "with 1.25") as e:  # a table of another timing
         aim_table.command(dataclasses.replace(table, max_stretch=1.0), p, g, -30.0, want[None])
@@ -107,6 +111,8 @@ def test_the_file_round_trips_and_bad_files_are_one_line(tmp_path):
                         ({"distance_m": "x"}, "nested list of numbers"),
                         ({"aims_deg": [0.0, None]}, "all finite"),
                         ({"adapt_max_stretch": 0.5}, "adapt_max_stretch"),
+                        ({"aims_deg": [-1e6, 1e6]}, "within"),
+                        ({"dy_m": list(np.linspace(-0.1, 0.1, 2000))}, "at most 1000"),
                         ({"adapt_max_stretch": "1"}, "adapt_max_stretch")):
         bad = tmp_path / "bad.json"
         bad.write_text(json.dumps({**rec, **change}))

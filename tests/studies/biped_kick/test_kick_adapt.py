@@ -77,6 +77,23 @@ def test_a_swing_too_fast_for_its_motor_is_slowed_down_not_cut():
     _, frac, stretch = reachable_shift(keys_of, shift, 1.0, lim, 1.25)
     assert np.allclose(frac, [1.0, 0.6, 1.0])
     assert 1.2 <= stretch[0] <= 1.21 and 1.2 <= stretch[1] <= 1.21 and stretch[2] == 1.0
+    # a kick too fast even at no fraction (joint 1 at 1.1x its motor's speed whatever the
+    # shift) is slowed down, never played too fast; with max_stretch 1 it keeps lambda = 0
+    # and its own timing (the kick as evolved)
+    def too_fast(rows, s, stretch):
+        q = keys_of(rows, s, stretch)
+        q[:, 1, 1] = 0.55 / stretch
+        return q
+
+    used, frac, stretch = reachable_shift(too_fast, shift, 1.0, lim, 1.25)
+    assert np.allclose(frac, [1.0, 0.6, 1.0]) and np.all(stretch >= 1.1)
+    _, frac, stretch = reachable_shift(too_fast, np.array([[0.2, 0.0]]), 1.0, lim, 1.25)
+    assert frac[0] == 0.0 and 1.1 <= stretch[0] <= 1.25  # lambda = 0, slowed down
+    _, frac, stretch = reachable_shift(too_fast, shift, 1.0, lim, 1.0)
+    assert np.all(frac == 0.0) and np.all(stretch == 1.0)
+    # a stretch needed just under the cap is found (the last try is at the cap itself)
+    _, frac, stretch = reachable_shift(too_fast, np.zeros((1, 2)), 1.0, lim, 1.1005)
+    assert frac[0] == 1.0 and 1.1 <= stretch[0] <= 1.1005
     g = np.tile(np.arange(1.0, len(GENES) + 1), (2, 1))
     out = retimed(g, np.array([1.0, 1.5]))
     assert np.array_equal(out[0], g[0])

@@ -174,6 +174,9 @@ def test_play_takes_an_aim_table_of_the_same_timing(tmp_path):
     assert r.returncode == 0, r.stderr
     res = json.loads(r.stdout)
     assert res["kicked"] and "command_deg" in res and res["followed_fraction"] > 0
+    with pytest.raises(InputError, match="follow=True"):
+        play(KickProblem(KickConfig(nthread=1)), read_kick(None)[0], np.zeros(3),
+             np.array([1.2, 0.4]), np.array([3.0, 0.0]), follow=False, table=table)
     aim_table.write(tmp_path / "old.json", dataclasses.replace(table, max_stretch=1.0))
     r = _cli("--table", "old.json", cwd=tmp_path)
     lines = [ln for ln in r.stderr.splitlines() if ln.strip()]

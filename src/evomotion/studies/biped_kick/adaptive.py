@@ -18,11 +18,12 @@ takes a swing longer rather than shorter. The swing's three phases (lift, kick, 
 genes :data:`SWING`) are a path in space played on a clock; lengthening them by ``s`` leaves
 the path, so the joint ranges, and divides every swing joint's speed by about ``s``. So a
 fraction ``λ`` is also taken when its poses keep the ranges and stay within the motor speeds
-once the swing is lengthened by the smallest ``s ≤ max_stretch`` that does
-(:func:`fitting_stretch`: ``s`` = the largest speed ratio, checked on the 20 ms poses and
-raised until they pass). The evolved kick runs near its motors' speeds (the shipped one at 0.99
-of the kicking hip's at ±30°), so a few percent longer swing reaches commands and ball offsets
-the evolved timing cannot. ``s = 1``: the kick's own timing, bit for bit.
+once the swing is lengthened by an ``s ≤ max_stretch`` that does (:func:`fitting_stretch`:
+``s`` raised from 1 by the largest speed ratio left, checked on the 20 ms poses, until they
+pass), down to ``λ = 0``, the kick as evolved, which may need slowing down too. The evolved
+kick runs near its motors' speeds (the shipped one at 0.99 of the kicking hip's at ±30°), so a
+few percent longer swing reaches commands and ball offsets the evolved timing cannot. ``s =
+1``: the kick's own timing, bit for bit.
 """
 
 from __future__ import annotations
@@ -57,9 +58,12 @@ def retimed(genomes: np.ndarray, stretch: np.ndarray) -> np.ndarray:
 
 def fitting_stretch(keys_of: KeysOf, rows: np.ndarray, shift: np.ndarray, speed_margin: float,
                     limits: tuple | None, max_stretch: float) -> np.ndarray:
-    """Per kick ``rows[i]`` with ``shift[i]``: the smallest tried swing stretch ``s`` in ``[1,
-    max_stretch]`` whose key poses (``keys_of(rows, shift, s)``) are within the limits, nan
-    where none is (a joint out of range, or more than ``max_stretch`` needed)."""
+    """Per kick ``rows[i]`` with ``shift[i]``: a swing stretch ``s`` in ``[1, max_stretch]``
+    whose key poses (``keys_of(rows, shift, s)``) are within the limits, found by raising ``s``
+    from 1 by the speed ratio left (the 20 ms poses sample the path anew at each ``s``, so the
+    ratio does not fall exactly as 1 / s: not always the smallest such ``s``), the last try at
+    ``max_stretch`` itself; nan where none is found (a joint out of range, or more than
+    ``max_stretch`` needed)."""
     s = np.ones(len(rows))
     out = np.full(len(rows), np.nan)
     todo = np.arange(len(rows))
@@ -70,10 +74,10 @@ def fitting_stretch(keys_of: KeysOf, rows: np.ndarray, shift: np.ndarray, speed_
                                                speed_margin, limits)
         ok = (range_x <= 0) & (speed_x <= 0)
         out[todo[ok]] = s[todo[ok]]
-        # raise s by the ratio left (and a little: the 20 ms poses sample the path anew)
-        s[todo] = s[todo] * np.maximum(ratio, 1.0) * (1.0 + 1e-3)
-        keep = ~ok & (range_x <= 0) & (s[todo] <= max_stretch)
-        todo = todo[keep]
+        at_most = s[todo] >= max_stretch  # tried at the cap: no further
+        # raise s by the ratio left (and a little: the poses sample the path anew)
+        s[todo] = np.minimum(s[todo] * np.maximum(ratio, 1.0) * (1.0 + 1e-3), max_stretch)
+        todo = todo[~ok & (range_x <= 0) & ~at_most]
     return out
 
 
@@ -91,7 +95,9 @@ def reachable_shift(keys_of: KeysOf, shift: np.ndarray, speed_margin: float,
     frac = np.zeros(n)
     stretch = np.ones(n)
     todo = np.arange(n)
-    for lam in np.linspace(1.0, 0.0, FRACTIONS + 1)[:-1]:
+    # down to λ = 0, the kick as evolved, which may need slowing down too (a command the
+    # evolved timing is too fast for); a kick within the limits nowhere keeps λ = 0, s = 1
+    for lam in np.linspace(1.0, 0.0, FRACTIONS + 1):
         if not todo.size:
             break
         s = fitting_stretch(keys_of, todo, lam * shift[todo], speed_margin, limits,
@@ -136,18 +142,38 @@ def left_flags(left_foot: Any, n: int, mirror: Any, robot: str) -> np.ndarray:
     return left
 
 
-def followed_shift(problem: Any, g: np.ndarray, aims_k: np.ndarray, shift: np.ndarray,
-                   left: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`reachable_shift` for a :class:`.problem.KickProblem`'s kicks of genomes ``g``
-    at the right-foot aims ``aims_k`` (mirrored where ``left``), with its
-    ``problem.cfg.adapt_max_stretch``."""
+def _keys_of(problem: Any, g: np.ndarray, aims_k: np.ndarray, left: np.ndarray
+             ) -> tuple[KeysOf, float]:
+    """(``keys_of`` of :func:`reachable_shift` for a :class:`.problem.KickProblem`'s kicks,
+    its ``problem.cfg.adapt_max_stretch``)."""
     kicker = problem.kicker
     most = float(problem.cfg.adapt_max_stretch)
     # the batch's key times, long enough for its longest swing: every kick on the same grid
-    kt = key_times(retimed(g, np.full(len(g), most * (1.0 + 1e-3) ** STRETCH_TRIES)))
+    kt = key_times(retimed(g, np.full(len(g), max(most, 1.0))))
 
     def keys_of(rows: np.ndarray, s: np.ndarray, stretch: np.ndarray) -> np.ndarray:
         return played_keys(kicker, retimed(g[rows], stretch), kt, aims_k[rows], s,
                            left[rows])
 
-    return reachable_shift(keys_of, shift, problem.cfg.speed_margin, kicker.limits, most)
+    return keys_of, most
+
+
+def followed_shift(problem: Any, g: np.ndarray, aims_k: np.ndarray, shift: np.ndarray,
+                   left: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`reachable_shift` for a :class:`.problem.KickProblem`'s kicks of genomes ``g``
+    at the right-foot aims ``aims_k`` (mirrored where ``left``), with its
+    ``problem.cfg.adapt_max_stretch``."""
+    keys_of, most = _keys_of(problem, g, aims_k, left)
+    return reachable_shift(keys_of, shift, problem.cfg.speed_margin, problem.kicker.limits,
+                           most)
+
+
+def evolved_stretch(problem: Any, g: np.ndarray, aims_k: np.ndarray, left: np.ndarray
+                    ) -> np.ndarray:
+    """Per kick of genomes ``g`` at the right-foot aims ``aims_k`` with the ball in its place:
+    the swing stretch (:func:`fitting_stretch`, at most ``problem.cfg.adapt_max_stretch``)
+    within every joint range and motor speed, nan where none is."""
+    keys_of, most = _keys_of(problem, g, aims_k, left)
+    rows = np.arange(len(g))
+    return fitting_stretch(keys_of, rows, np.zeros((len(g), 2)), problem.cfg.speed_margin,
+                           problem.kicker.limits, most)

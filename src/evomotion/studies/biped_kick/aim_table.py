@@ -45,6 +45,10 @@ COMMAND_STEP_DEG = 0.25
 TOLERANCE_DEG = 2.0  # a predicted error within this costs nothing
 SHIFT_COST = 0.1  # deg of predicted error per deg of command away from the target
 MIN_DISTANCE_M = 1.0
+#: a table file's bounds: commanded aims (deg), ball offsets (m), points per axis
+MAX_TABLE_AIM_DEG = 90.0
+MAX_TABLE_OFFSET_M = 0.2
+MAX_TABLE_POINTS = 1000
 
 
 @dataclass(frozen=True)
@@ -98,13 +102,12 @@ def within_limits(problem: Any, genome: np.ndarray, aims_deg: np.ndarray,
     by at most ``problem.cfg.adapt_max_stretch`` as a following kick may (:mod:`.adaptive`),
     keeps its key poses within every joint range and ``speed_margin`` x no-load speed (as
     played: mirrored for the left foot)."""
-    from evomotion.studies.biped_kick.adaptive import followed_shift
+    from evomotion.studies.biped_kick.adaptive import evolved_stretch
 
     aims = np.asarray(aims_deg, dtype=float)
     g = np.repeat(np.atleast_2d(genome), len(aims), axis=0)
-    _, frac, _ = followed_shift(problem, g, np.radians(aims), np.zeros((len(aims), 2)),
-                                np.full(len(aims), bool(left)))
-    return frac == 1.0
+    return np.isfinite(evolved_stretch(problem, g, np.radians(aims),
+                                       np.full(len(aims), bool(left))))
 
 
 def command(table: AimTable, problem: Any, genome: np.ndarray, target_deg: float,
@@ -144,8 +147,8 @@ def check_timing(table: AimTable, cfg: Any, what: str = "kick aim table") -> Non
     if table.max_stretch != cfg.adapt_max_stretch:
         raise InputError(f"{what}: measured with problem.adapt_max_stretch = "
                          f"{table.max_stretch:g}, the kick follows the ball with "
-                         f"{cfg.adapt_max_stretch:g}: set that, or measure the table anew "
-                         "(evomotion biped-kick calibrate)")
+                         f"{cfg.adapt_max_stretch:g}: measure the table anew (evomotion "
+                         "biped-kick calibrate)")
 
 
 def write(path: str | Path, table: AimTable, source: str = "") -> Path:
@@ -166,10 +169,14 @@ def read(path: str | Path) -> AimTable:
     if not isinstance(rec, dict) or rec.get("format") != FORMAT:
         raise FileFormatError(path, None, f"expected a kick aim table (format {FORMAT!r})")
     axes = []
-    for key in ("aims_deg", "dx_m", "dy_m"):
+    for key, bound in (("aims_deg", MAX_TABLE_AIM_DEG), ("dx_m", MAX_TABLE_OFFSET_M),
+                       ("dy_m", MAX_TABLE_OFFSET_M)):
         v = _array(path, rec, key, 1)
         if v.size < 2 or np.any(np.diff(v) <= 0):
             raise FileFormatError(path, None, f"key {key!r}: at least 2 increasing numbers")
+        if v.size > MAX_TABLE_POINTS or np.abs(v).max() > bound:
+            raise FileFormatError(path, None, f"key {key!r}: at most {MAX_TABLE_POINTS} "
+                                              f"numbers within +-{bound:g}")
         axes.append(v)
     shape = tuple(v.size for v in axes)
     grids = [_array(path, rec, key, 3) for key in ("angle_deg", "distance_m")]

@@ -5,7 +5,8 @@
   the rest: the same kick aimed from -30 to +30 degrees (ball placed as ``best_kicks.json`` says);
   on a robot whose kicker has a mirror image (the NAO), ``kicks/left_aim_+20.motion`` and the
   rest: the left-foot kicks, each the right-foot kick at the opposite aim in mirror image (the
-  ball mirrored too: ``ball_offset_y_m`` negated, left of the left sole's centre line negative);
+  ball mirrored too: the opposite aim's row of ``best_kicks.json``, its ``ball_offset_y_m``
+  negated, measured from the left sole's centre line);
 - ``best_naoqi.py`` / ``best_keyframes.json``: exports for a real NAO when the kick passes the
   joint-range and motor-speed checks;
 - ``best.mp4``: the straight kick with the ball, camera on robot and ball;

@@ -142,6 +142,13 @@ def play(problem: Any, genome: np.ndarray, robot: np.ndarray, ball: np.ndarray,
     from evomotion.studies.biped_kick import scene
     from evomotion.studies.biped_kick.walk_play import SceneRun, walk
 
+    if table is not None:
+        if not follow:
+            raise InputError("play: an aim table is for the kick that sees the ball "
+                             "(follow=True)")
+        from evomotion.studies.biped_kick.aim_table import check_timing
+
+        check_timing(table, problem.cfg)
     g = np.asarray(genome, dtype=float)
     robot, ball, target = (np.asarray(v, dtype=float) for v in (robot, ball, target))
     root0 = nao.state_qpos(problem.model, nao.initial_state(problem.model), nao.ROOT_JOINT, 2)
