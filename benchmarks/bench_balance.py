@@ -3,6 +3,9 @@ exported policy and the open-loop stand-still in the run's stance, and the stand
 robot's spec pose (the stance before ``problem.stance_*``), on the same 100 unseen perturbed
 worlds as ``evomotion humanoid-balance compare RUN --worlds 100 --push P`` (seed 0): survival
 overall and by the push's direction (the NAO faces +x; forward = within 45 deg of +x).
+Then the policy's survival by the world's draw: the worlds split at the median of friction
+scale, servo latency and the torso's CoM offset along x (+ forward), overall and for the pushes
+from the front (the "backward" sector: they push the robot backward).
 
     python benchmarks/bench_balance.py RUN [RUN ...] [--push 4 3 2] [--worlds 100] [--json]
 """
@@ -37,6 +40,25 @@ def by_direction(survived: np.ndarray, angle_deg: np.ndarray) -> dict[str, float
     return out
 
 
+def by_world(survived: np.ndarray, worlds: list, backward: np.ndarray) -> dict[str, dict]:
+    """Survival in the worlds below / above the median of each drawn quantity, overall and
+    among the backward pushes."""
+    values = {
+        "friction_scale": [w.params.get("friction_scale", np.nan) for w in worlds],
+        "latency_ms": [4.0 * w.latency_steps for w in worlds],
+        "torso_com_x_m": [np.ravel(w.params.get("com_offset_m", [np.nan]))[0] for w in worlds],
+    }
+    out = {}
+    for name, v in values.items():
+        v = np.asarray(v, dtype=float)
+        low = v <= np.median(v)
+        out[name] = {"median": float(np.median(v)),
+                     "low": float(survived[low].mean()), "high": float(survived[~low].mean()),
+                     "backward_low": float(survived[low & backward].mean()),
+                     "backward_high": float(survived[~low & backward].mean())}
+    return out
+
+
 def measure(run: Path, push: float, worlds: int) -> dict:
     from evomotion.sim.closed_loop import ClosedLoopSimulator
 
@@ -47,9 +69,13 @@ def measure(run: Path, push: float, worlds: int) -> dict:
     angle = np.degrees(np.arctan2(vec[:, 1], vec[:, 0]))
     out = {"push_ns": push, "worlds": worlds,
            "count": {k: int(m.sum()) for k, m in sectors(angle).items()}}
+    worlds = problem.worlds(seeds, scaled)
     for key, zero in (("policy", False), ("stand_still", True)):
         ep = play_policy(problem, policy, seeds, scaled, zero=zero)
         out[key] = by_direction(ep.survived.astype(bool), angle)
+        if not zero:
+            out["policy_by_world"] = by_world(ep.survived.astype(bool), worlds,
+                                              sectors(angle)["backward"])
     # the stand-still in the robot's spec pose, in the same worlds
     from evomotion.sim.robots import load_robot
 
@@ -93,6 +119,14 @@ def main() -> None:
                   f"{s['forward']:.0%} of {c['forward']} | {s['backward']:.0%} of "
                   f"{c['backward']} | {s['left']:.0%} of {c['left']} | {s['right']:.0%} of "
                   f"{c['right']} |")
+    print("\npolicy survival by the world's draw (below / above the median):\n"
+          "| run | push (N s) | quantity | median | all: below / above | backward pushes: "
+          "below / above |\n|---|---|---|---|---|---|")
+    for r in res:
+        for name, q in r["policy_by_world"].items():
+            print(f"| {r['run']} | {r['push_ns']:g} | {name} | {q['median']:.3g} | "
+                  f"{q['low']:.0%} / {q['high']:.0%} | {q['backward_low']:.0%} / "
+                  f"{q['backward_high']:.0%} |")
 
 
 if __name__ == "__main__":
