@@ -109,14 +109,6 @@ def reachable_shift(keys_of: KeysOf, shift: np.ndarray, speed_margin: float,
     return shift * frac[:, None], frac, stretch
 
 
-def keys_within_limits(keys: np.ndarray, speed_margin: float, limits: tuple | None
-                       ) -> np.ndarray:
-    """Per kick of key poses ``keys[n, K, nu]``: within every joint range and ``speed_margin``
-    x its motor's no-load speed (:func:`.motion.limit_excess` zero)."""
-    range_x, speed_x, _ = limit_excess(keys, speed_margin, limits)
-    return (range_x <= 0) & (speed_x <= 0)
-
-
 def played_keys(kicker: Any, g: np.ndarray, kt: np.ndarray, aims_k: np.ndarray,
                 shift: np.ndarray | None, left: np.ndarray) -> np.ndarray:
     """The key poses ``[n, K, nu]`` of the right-foot kicks of genomes ``g`` at aims
@@ -166,6 +158,16 @@ def followed_shift(problem: Any, g: np.ndarray, aims_k: np.ndarray, shift: np.nd
     keys_of, most = _keys_of(problem, g, aims_k, left)
     return reachable_shift(keys_of, shift, problem.cfg.speed_margin, problem.kicker.limits,
                            most)
+
+
+def following(problem: Any, g: np.ndarray, aims_k: np.ndarray, ball_k: np.ndarray,
+              left: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The kicks of genomes ``g`` at the right-foot aims ``aims_k`` that see their balls at
+    ``ball_k[n, 2]`` (right-foot frame): (their genomes, the swing slowed where the motors need
+    it; the shift each swing follows; its fraction of the ball's offset; the stretch)."""
+    offset = ball_k - problem.wanted_ball_xy(g, aims_k)
+    shift, frac, stretch = followed_shift(problem, g, aims_k, offset, left)
+    return retimed(g, stretch), shift, frac, stretch
 
 
 def evolved_stretch(problem: Any, g: np.ndarray, aims_k: np.ndarray, left: np.ndarray

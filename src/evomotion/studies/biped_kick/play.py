@@ -242,7 +242,7 @@ def seen_kick(problem: Any, g: np.ndarray, aim: float, ball_xy: np.ndarray, tabl
     problem's frame: the robot's root at rest at its origin, facing +x): its commanded aim (from
     ``table`` if given), its genome with the swing slowed where its motors need it, the swing's
     shift towards the ball (:mod:`.adaptive`) and what to report."""
-    from evomotion.studies.biped_kick.adaptive import followed_shift, retimed
+    from evomotion.studies.biped_kick.adaptive import following
 
     if table is not None:
         from evomotion.studies.biped_kick.aim_table import command
@@ -250,9 +250,10 @@ def seen_kick(problem: Any, g: np.ndarray, aim: float, ball_xy: np.ndarray, tabl
         aim = float(np.radians(command(table, problem, g, float(np.degrees(aim)),
                                        ball_xy[None])[0]))
     rows, aims = g[None], np.array([aim])
+    g_kick, shift, frac, stretch = following(problem, rows, aims, ball_xy[None],
+                                             np.zeros(1, bool))
     want = ball_xy - problem.wanted_ball_xy(rows, aims)[0]
-    shift, frac, stretch = followed_shift(problem, rows, aims, want[None], np.zeros(1, bool))
-    return aim, retimed(rows, stretch)[0], shift[0], {
+    return aim, g_kick[0], shift[0], {
         "command_deg": float(np.degrees(aim)), "ball_offset_m": [float(v) for v in want],
         "followed_fraction": float(frac[0]), "swing_stretch": float(stretch[0])}
 

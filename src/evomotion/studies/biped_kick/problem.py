@@ -44,12 +44,7 @@ from evomotion.sim.robots import nao
 from evomotion.sim.rollout import BatchSimulator, fall_step, interpolate_controls, torso_track
 from evomotion.sim.worlds import World, simulate_worlds
 from evomotion.studies.biped_kick import scene
-from evomotion.studies.biped_kick.adaptive import (
-    MAX_STRETCH,
-    followed_shift,
-    left_flags,
-    retimed,
-)
+from evomotion.studies.biped_kick.adaptive import MAX_STRETCH, following, left_flags
 from evomotion.studies.biped_kick.balance import MAX_GAIN_S, BalanceFeedback, control_steps
 from evomotion.studies.biped_kick.kickers import kicker_for
 from evomotion.studies.biped_kick.motion import (
@@ -310,9 +305,7 @@ class KickProblem:
         ball_k = ball0 * np.stack([np.ones(len(g)), flip], axis=1)
         shift, frac, stretch = None, np.zeros(len(g)), np.ones(len(g))
         if adapt:
-            shift, frac, stretch = followed_shift(self, g, aims_k,
-                                                  ball_k - self.wanted_ball_xy(g, aims_k), left)
-            g = retimed(g, stretch)  # slower where the motors need it (adaptive.py)
+            g, shift, frac, stretch = following(self, g, aims_k, ball_k, left)
         exec_t = execution_time_s(g)
         keys, ctrl, end, ik_error = self.controls(g, aims_k, shift)
         if left.any():
