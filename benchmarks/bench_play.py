@@ -63,12 +63,12 @@ def main() -> None:
     problem = KickProblem(KickConfig())
     table = None
     if args.table is not None:
-        from evomotion.studies.biped_kick.aim_table import check_timing, read
+        from evomotion.studies.biped_kick.aim_table import check_following, read
 
         if args.blind:
             ap.error("--table is for the kick that sees the ball: drop --blind or --table")
         table = read(args.table)
-        check_timing(table, problem.cfg, f"--table {args.table}")
+        check_following(table, problem.cfg, f"--table {args.table}")
     rows = []
     for i, (ball, target) in enumerate(pairs(args.seed)):
         video = None

@@ -22,7 +22,9 @@ read the table from FILE if it exists, else measure it and write it there. ``--d
 offsets and worlds (drawn from seeds N and N + 1 instead of 12345 and 2026), to check the
 figures on kicks nothing was chosen on. ``--max-stretch S``: ``problem.adapt_max_stretch``
 (how much longer the following kick may take its swing; 1: its evolved timing only, the
-default before 2026-12-05's third session).
+default before 2026-12-05's third session). ``--foot-roll R``: ``problem.adapt_foot_roll_rad``
+(how far the following kick's foot may roll in the air where its ankle would leave its range
+to keep the sole level; 0: level, the default before 2026-12-05's fourth session).
 """
 
 from __future__ import annotations
@@ -56,15 +58,17 @@ def main() -> None:
     ap.add_argument("--draw", type=int, default=None, help="offsets and worlds from N, N + 1")
     ap.add_argument("--max-stretch", type=float, default=KickConfig.adapt_max_stretch,
                     help="problem.adapt_max_stretch (1: the evolved timing only)")
+    ap.add_argument("--foot-roll", type=float, default=KickConfig.adapt_foot_roll_rad,
+                    help="problem.adapt_foot_roll_rad (0: the sole kept level)")
     args = ap.parse_args()
     genome, source = read_kick(args.run)
-    cfg = KickConfig(adapt_max_stretch=args.max_stretch)
+    cfg = KickConfig(adapt_max_stretch=args.max_stretch, adapt_foot_roll_rad=args.foot_roll)
     cfg.validate()
     problem = KickProblem(cfg)
     t0 = time.perf_counter()
     if args.table is not None and args.table.exists():
         table = aim_table.read(args.table)
-        aim_table.check_timing(table, cfg, f"--table {args.table}")
+        aim_table.check_following(table, cfg, f"--table {args.table}")
     else:
         table = aim_table.measure(problem, genome)
         if args.table is not None:

@@ -36,7 +36,7 @@ def main() -> None:
     problem = KickProblem(KickConfig())
     if args.table.exists():
         table = aim_table.read(args.table)
-        aim_table.check_timing(table, problem.cfg, f"--table {args.table}")
+        aim_table.check_following(table, problem.cfg, f"--table {args.table}")
     else:
         table = aim_table.measure(problem, genome)
         aim_table.write(args.table, table, str(source))

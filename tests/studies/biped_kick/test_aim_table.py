@@ -33,7 +33,7 @@ def synthetic(slope_deg_per_m: float = 500.0) -> aim_table.AimTable:
                                                                                     0.06, 25)
     a, _, y = np.meshgrid(aims, dx, dy, indexing="ij")
     return aim_table.AimTable(aims, dx, dy, a + slope_deg_per_m * y, np.full(a.shape, 2.0),
-                              KickConfig().adapt_max_stretch)
+                              KickConfig().adapt_max_stretch, KickConfig().adapt_foot_roll_rad)
 
 
 def test_command_inverts_the_table(kick):
@@ -78,10 +78,18 @@ def test_commands_stay_within_the_limits(kick):
                                          "with 1.25") as e:  # a table of another timing
         aim_table.command(dataclasses.replace(table, max_stretch=1.0), p, g, -30.0, want[None])
     assert "\n" not in str(e.value)
+    with pytest.raises(InputError, match="adapt_foot_roll_rad = 0, the kick follows the ball "
+                                         "with 0.1") as e:  # a table of a level sole
+        aim_table.command(dataclasses.replace(table, foot_roll_rad=0.0), p, g, -30.0,
+                          want[None])
+    assert "\n" not in str(e.value)
 
 
 def test_the_table_calibrates_the_real_kick(kick):
+    """With the sole kept level (``adapt_foot_roll_rad`` 0) the swing follows an outboard ball
+    only in part: the table's command makes up for the rest."""
     p, g = kick
+    p = KickProblem(dataclasses.replace(p.cfg, adapt_foot_roll_rad=0.0))
     table = aim_table.measure(p, g, np.arange(-20.0, -7.4, 2.5), np.array([-0.005, 0.005]),
                               np.linspace(-0.03, 0.0, 7))
     # a grid point is what the kick does there
@@ -113,15 +121,20 @@ def test_the_file_round_trips_and_bad_files_are_one_line(tmp_path):
                         ({"adapt_max_stretch": 0.5}, "adapt_max_stretch"),
                         ({"aims_deg": [-1e6, 1e6]}, "within"),
                         ({"dy_m": list(np.linspace(-0.1, 0.1, 2000))}, "at most 1000"),
-                        ({"adapt_max_stretch": "1"}, "adapt_max_stretch")):
+                        ({"adapt_max_stretch": "1"}, "adapt_max_stretch"),
+                        ({"adapt_foot_roll_rad": 0.9}, "adapt_foot_roll_rad"),
+                        ({"adapt_foot_roll_rad": True}, "adapt_foot_roll_rad")):
         bad = tmp_path / "bad.json"
         bad.write_text(json.dumps({**rec, **change}))
         with pytest.raises(InputError, match=msg) as e:
             aim_table.read(bad)
         assert str(bad) in str(e.value) and "\n" not in str(e.value)
-    del rec["adapt_max_stretch"]  # a file from before the key: measured at the evolved timing
+    del rec["adapt_max_stretch"]  # a file from before the keys: the evolved timing, level sole
+    del rec["adapt_foot_roll_rad"]
     f.write_text(json.dumps(rec))
-    assert aim_table.read(f).max_stretch == 1.0 and table.max_stretch == 1.25
+    old = aim_table.read(f)
+    assert old.max_stretch == 1.0 and table.max_stretch == 1.25
+    assert old.foot_roll_rad == 0.0 and table.foot_roll_rad == 0.1
 
 
 JSONISH = st.recursive(st.none() | st.booleans() | st.floats(allow_nan=False) | st.text(max_size=5),
@@ -134,7 +147,7 @@ JSONISH = st.recursive(st.none() | st.booleans() | st.floats(allow_nan=False) | 
 @given(data=st.binary(max_size=200) | st.builds(
     lambda d: json.dumps({"format": aim_table.FORMAT, **d}).encode(),
     st.dictionaries(st.sampled_from(["aims_deg", "dx_m", "dy_m", "angle_deg", "distance_m",
-                                     "adapt_max_stretch"]),
+                                     "adapt_max_stretch", "adapt_foot_roll_rad"]),
                     JSONISH, max_size=5)))
 def test_any_file_reads_or_is_one_line(tmp_path_factory, data):
     f = tmp_path_factory.mktemp("fuzz") / "t.json"

@@ -12,9 +12,23 @@ import numpy as np
 import pytest
 
 from evomotion.errors import InputError
-from evomotion.studies.biped_kick.adaptive import FRACTIONS, SWING, reachable_shift, retimed
+from evomotion.studies.biped_kick.adaptive import (
+    FRACTIONS,
+    SWING,
+    reachable_shift,
+    retimed,
+    rolled_in_air,
+)
 from evomotion.studies.biped_kick.experiment import accuracy, perturbed_kicks
-from evomotion.studies.biped_kick.motion import GENE_INDEX, GENES, execution_time_s
+from evomotion.studies.biped_kick.motion import (
+    GENE_INDEX,
+    GENES,
+    SETTLE_S,
+    START,
+    execution_time_s,
+    gene,
+    key_times,
+)
 from evomotion.studies.biped_kick.play import read_kick
 from evomotion.studies.biped_kick.problem import KickConfig, KickProblem
 
@@ -26,7 +40,10 @@ def kick():
 
 
 def test_the_adaptive_kick_follows_the_ball_within_the_limits(kick):
+    """With the sole kept level (``adapt_foot_roll_rad`` 0) the outboard balls are followed in
+    part: the kicking ankle's roll reaches its range."""
     p, g = kick
+    p = KickProblem(dataclasses.replace(p.cfg, adapt_foot_roll_rad=0.0))
     offsets = np.array([[0.0, 0.0], [0.0, -0.015], [0.01, -0.01], [0.0, 0.01]])
     blind = perturbed_kicks(p, g, offsets)
     seen = perturbed_kicks(p, g, offsets, adapt=True)
@@ -41,6 +58,70 @@ def test_the_adaptive_kick_follows_the_ball_within_the_limits(kick):
                   - 4.0)
     assert not seen["fell"].any()
     assert accuracy(seen)["over_limits"] == 0.0
+
+
+def test_the_foot_rolled_in_the_air_follows_an_outboard_ball_whole(kick):
+    """Balls 1.5-2 cm outboard of the kicking foot, which a level sole follows only in part (its
+    ankle roll at its range: 0.1-0.2 of the offset, over 10 deg off the aim), are followed
+    wholly or nearly (0.8 of 2 cm outboard and 1 cm ahead) when the foot may roll 0.1 rad in
+    the air, within 6 deg of the aim: every played pose within every joint's range and motor's
+    speed, the sole rolled by at most 0.1 rad and only while the foot is off the ground; a ball
+    in its place kicks bit for bit as with the level sole."""
+    p, g = kick
+    level = KickProblem(dataclasses.replace(p.cfg, adapt_foot_roll_rad=0.0))
+    off = np.array([[0.0, -0.015], [0.01, -0.02], [0.0, 0.0]])
+    a = -20.0
+    rolled, flat = (perturbed_kicks(q, g, off, a, adapt=True) for q in (p, level))
+    assert np.all(flat["adapt_fraction"][:2] < 0.5)
+    assert rolled["adapt_fraction"][0] == rolled["adapt_fraction"][2] == 1.0
+    assert rolled["adapt_fraction"][1] >= 0.8
+    assert not rolled["range_excess_rad"].any() and not rolled["speed_excess_s"].any()
+    assert np.all(np.abs(rolled["angle_error_deg"][:2]) < 6.0)
+    assert np.all(np.abs(flat["angle_error_deg"][:2]) > 10.0) and not rolled["fell"].any()
+    assert rolled["distance_m"][2] == flat["distance_m"][2]
+    assert rolled["angle_error_deg"][2] == flat["angle_error_deg"][2]
+    # the played poses: only the kicking ankle's roll differs from the level sole's, by at
+    # most 0.1 rad, and only between the lift's start and the retract's end
+    gg = np.repeat(g[None], 2, 0)
+    aims = np.radians([a, a])
+    shift = p.ball_xy(gg, aims) + off[:2] - p.wanted_ball_xy(gg, aims)
+    keys_r = p.controls(gg, aims, shift)[0]
+    keys_l = level.controls(gg, aims, shift)[0]
+    col = p.kicker.swing_roll[0]
+    diff = np.abs(keys_r - keys_l)
+    assert np.all(np.delete(diff, col, axis=2) == 0.0) and 0.0 < diff[..., col].max() <= 0.1
+    t = key_times(gg) - SETTLE_S
+    lift = gene(gg, "t_shift_s")[:, None]
+    down = lift + sum(gene(gg, n)[:, None] for n in SWING)
+    assert np.all(diff[..., col][(t <= lift) | (t >= down)] == 0.0)
+
+
+def test_rolled_in_air_clips_only_within_its_allowance():
+    """A synthetic roll 0.05 and 0.3 rad beyond its range in the air and 0.05 on the ground:
+    only the first is clipped (allowance 0.1); an allowance of 0, or no swing roll, changes
+    nothing."""
+    g = np.array([[START[n] for n, *_ in GENES]])
+    t = key_times(g)
+    tt = t - SETTLE_S
+    lift = gene(g, "t_shift_s")[0]
+    down = lift + sum(gene(g, n)[0] for n in SWING)
+    air = (tt > lift) & (tt < down)
+    keys = np.zeros((1, len(t), 22))
+    col = 3
+    i_air, j_air = np.nonzero(air)[0][[1, 3]]
+    i_ground = np.nonzero(~air)[0][0]
+    keys[0, i_air, col], keys[0, j_air, col] = 0.45, 0.7
+    keys[0, i_ground, col] = -0.45
+    out = rolled_in_air(keys.copy(), g, t, (col, -0.4, 0.4), 0.1)
+    assert out[0, i_air, col] == 0.4 and out[0, j_air, col] == 0.7
+    assert out[0, i_ground, col] == -0.45
+    assert np.array_equal(np.delete(out, col, axis=2), np.delete(keys, col, axis=2))
+    assert np.array_equal(rolled_in_air(keys.copy(), g, t, (col, -0.4, 0.4), 0.0), keys)
+    assert np.array_equal(rolled_in_air(keys.copy(), g, t, None, 0.1), keys)
+    for bad in (-0.1, 0.6, float("nan")):
+        with pytest.raises(InputError, match="problem.adapt_foot_roll_rad") as e:
+            KickConfig(adapt_foot_roll_rad=bad).validate()
+        assert "\n" not in str(e.value)
 
 
 def test_reachable_shift_takes_the_largest_fraction_within_the_limits():

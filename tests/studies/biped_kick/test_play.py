@@ -96,7 +96,7 @@ def test_the_kick_that_sees_the_ball_follows_it_and_takes_the_tables_command():
                                                                                     0.06, 25)
     A, _, Y = np.meshgrid(aims, dx, dy, indexing="ij")
     table = AimTable(aims, dx, dy, A + 500.0 * Y, np.full(A.shape, 2.0),
-                     p.cfg.adapt_max_stretch)
+                     p.cfg.adapt_max_stretch, p.cfg.adapt_foot_roll_rad)
     ball = want + [0.0, -0.01]
     a, _, _, rep = seen_kick(p, g, aim, ball, table)
     assert a == pytest.approx(np.radians(command(table, p, g, -10.0, ball[None])[0]))
@@ -158,7 +158,8 @@ def test_play_json(tmp_path):
 
 def test_play_takes_an_aim_table_of_the_same_timing(tmp_path):
     """``--table``: the kick's command from that table (a synthetic one here); a table measured
-    with another ``adapt_max_stretch`` is one line before anything is simulated."""
+    with another ``adapt_max_stretch`` or ``adapt_foot_roll_rad`` is one line before anything
+    is simulated."""
     import dataclasses
 
     from evomotion.studies.biped_kick import aim_table
@@ -167,7 +168,8 @@ def test_play_takes_an_aim_table_of_the_same_timing(tmp_path):
                                                                                     0.06, 25)
     A, _, Y = np.meshgrid(aims, dx, dy, indexing="ij")
     table = aim_table.AimTable(aims, dx, dy, A + 300.0 * Y, np.full(A.shape, 2.0),
-                               KickConfig().adapt_max_stretch)
+                               KickConfig().adapt_max_stretch,
+                               KickConfig().adapt_foot_roll_rad)
     aim_table.write(tmp_path / "t.json", table)
     r = _cli("--ball", "1.2", "0.4", "--target", "3", "0", "--walk", "model", "--table",
              "t.json", "--json", cwd=tmp_path)
@@ -181,6 +183,10 @@ def test_play_takes_an_aim_table_of_the_same_timing(tmp_path):
     r = _cli("--table", "old.json", cwd=tmp_path)
     lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
     assert r.returncode == 2 and len(lines) == 1 and "adapt_max_stretch = 1" in lines[0]
+    aim_table.write(tmp_path / "level.json", dataclasses.replace(table, foot_roll_rad=0.0))
+    r = _cli("--table", "level.json", cwd=tmp_path)
+    lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
+    assert r.returncode == 2 and len(lines) == 1 and "adapt_foot_roll_rad = 0" in lines[0]
 
 
 def test_the_shipped_kick_alone_stays_up():

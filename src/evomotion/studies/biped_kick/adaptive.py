@@ -24,6 +24,16 @@ pass), down to ``λ = 0``, the kick as evolved, which may need slowing down too.
 kick runs near its motors' speeds (the shipped one at 0.99 of the kicking hip's at ±30°), so a
 few percent longer swing reaches commands and ball offsets the evolved timing cannot. ``s =
 1``: the kick's own timing, bit for bit.
+
+**The foot rolls in the air** (``max_roll`` > 0, ``problem.adapt_foot_roll_rad``): the kick
+keeps the kicking sole level, so a ball outboard of the foot asks the ankle to roll against
+the hip's roll beyond its range (the NAO's right ankle, 0.398 rad, is what cut the following
+of balls 1-2 cm outboard to a fraction and sent them 10-15 deg off a ±20-30 deg aim). In the
+air the sole need not be level: :func:`rolled_in_air` clips the kicking ankle's roll into its
+range where it leaves it by at most ``max_roll`` while the foot is off the ground (from the
+lift's start to the retract's end), and leaves it (so the fraction is refused) where it
+would leave it by more. The ankle is the leg's last joint, so the foot's path is unchanged;
+only the sole tilts, by at most ``max_roll``. ``max_roll = 0``: the level sole, bit for bit.
 """
 
 from __future__ import annotations
@@ -34,7 +44,7 @@ from typing import Any
 import numpy as np
 
 from evomotion.errors import InputError
-from evomotion.studies.biped_kick.motion import GENE_INDEX, key_times, limit_excess
+from evomotion.studies.biped_kick.motion import GENE_INDEX, SETTLE_S, gene, key_times, limit_excess
 
 #: the offset's fractions tried, from the whole offset down (S + 1 values)
 FRACTIONS = 10
@@ -44,6 +54,8 @@ SWING = ("t_lift_s", "t_kick_s", "t_retract_s")
 MAX_STRETCH = 2.0
 #: tries of :func:`fitting_stretch` (each raises ``s`` by the speed ratio still left)
 STRETCH_TRIES = 8
+#: the most a kicking foot may be set to roll in the air (rad; problem.adapt_foot_roll_rad)
+MAX_FOOT_ROLL_RAD = 0.5
 
 KeysOf = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 
@@ -109,12 +121,34 @@ def reachable_shift(keys_of: KeysOf, shift: np.ndarray, speed_margin: float,
     return shift * frac[:, None], frac, stretch
 
 
+def rolled_in_air(keys: np.ndarray, g: np.ndarray, times_s: np.ndarray,
+                  swing_roll: tuple[int, float, float] | None, max_roll: float) -> np.ndarray:
+    """``keys[n, T, nu]`` (right-foot kicks of genomes ``g`` on ``times_s``) with the kicking
+    ankle's roll (``swing_roll``: its column and range, or None: unchanged) clipped into its
+    range while the foot is in the air (after the lift's start, before the retract's end),
+    where it leaves the range by at most ``max_roll`` (rad; module doc). In place; returned."""
+    if swing_roll is None or max_roll <= 0.0:
+        return keys
+    col, lo, hi = swing_roll
+    t = np.asarray(times_s, dtype=float)[None, :] - SETTLE_S
+    lift = gene(g, "t_shift_s")[:, None]
+    down = lift + sum(gene(g, name)[:, None] for name in SWING)
+    roll = keys[..., col]
+    inside = np.clip(roll, lo, hi)
+    take = (t > lift) & (t < down) & (np.abs(roll - inside) <= max_roll)
+    keys[..., col] = np.where(take, inside, roll)
+    return keys
+
+
 def played_keys(kicker: Any, g: np.ndarray, kt: np.ndarray, aims_k: np.ndarray,
-                shift: np.ndarray | None, left: np.ndarray) -> np.ndarray:
+                shift: np.ndarray | None, left: np.ndarray, max_roll: float = 0.0
+                ) -> np.ndarray:
     """The key poses ``[n, K, nu]`` of the right-foot kicks of genomes ``g`` at aims
-    ``aims_k`` on the key times ``kt`` (``shift``: the kicking foot's, or None), as played:
-    mirrored where ``left``."""
+    ``aims_k`` on the key times ``kt`` (``shift``: the kicking foot's, or None; the foot
+    rolled in the air by at most ``max_roll``, :func:`rolled_in_air`), as played: mirrored
+    where ``left``."""
     keys, _ = kicker.joint_targets(g, kt, aims_k, shift)
+    rolled_in_air(keys, g, kt, getattr(kicker, "swing_roll", None), max_roll)
     if left.any():
         keys[left] = kicker.mirror(keys[left])
     return keys
@@ -140,12 +174,13 @@ def _keys_of(problem: Any, g: np.ndarray, aims_k: np.ndarray, left: np.ndarray
     its ``problem.cfg.adapt_max_stretch``)."""
     kicker = problem.kicker
     most = float(problem.cfg.adapt_max_stretch)
+    roll = float(problem.cfg.adapt_foot_roll_rad)
     # the batch's key times, long enough for its longest swing: every kick on the same grid
     kt = key_times(retimed(g, np.full(len(g), max(most, 1.0))))
 
     def keys_of(rows: np.ndarray, s: np.ndarray, stretch: np.ndarray) -> np.ndarray:
         return played_keys(kicker, retimed(g[rows], stretch), kt, aims_k[rows], s,
-                           left[rows])
+                           left[rows], roll)
 
     return keys_of, most
 

@@ -12,7 +12,8 @@ simulation and inverts it:
 - :func:`command` inverts it for kicks whose ball the robot sees: over the commands ``c`` from
   the table's range, 0.25 deg apart, whose evolved key poses keep every joint within its range
   and ``speed_margin`` x its no-load speed, the swing lengthened as far as the kick that follows
-  the ball may (:mod:`.adaptive`, ``problem.adapt_max_stretch``), with the ball's offset from
+  the ball may (:mod:`.adaptive`, ``problem.adapt_max_stretch``; its foot rolled in the air
+  as far as ``problem.adapt_foot_roll_rad`` allows), with the ball's offset from
   where ``c``'s kick wants it inside the table, the one of least cost ``max(|d - target| -
   TOLERANCE_DEG, 0) + SHIFT_COST |c - target|``, ``d`` the direction interpolated (trilinear):
   the nearest command predicted within ``TOLERANCE_DEG`` of the target, else the best trade of
@@ -34,7 +35,7 @@ from typing import Any
 import numpy as np
 
 from evomotion.errors import FileFormatError, InputError
-from evomotion.studies.biped_kick.adaptive import MAX_STRETCH
+from evomotion.studies.biped_kick.adaptive import MAX_FOOT_ROLL_RAD, MAX_STRETCH
 
 FORMAT = "evomotion-kick-aim-table/1"
 #: the default grid: commanded aims (deg), ball offsets dx, dy (m)
@@ -56,8 +57,10 @@ class AimTable:
     """Where the adaptive right-foot kick sends the ball: ``angle_deg[a, i, j]`` (direction
     from +x) and ``distance_m[a, i, j]`` (travel) for the commanded aim ``aims_deg[a]`` and the
     ball ``(dx_m[i], dy_m[j])`` from where that kick wants it (nominal world);
-    ``max_stretch``: the ``problem.adapt_max_stretch`` it was measured with (the longest swing
-    the following kick took, :mod:`.adaptive`; 1 in files written before that key)."""
+    ``max_stretch``, ``foot_roll_rad``: the ``problem.adapt_max_stretch`` and
+    ``adapt_foot_roll_rad`` it was measured with (how much longer the following kick's swing
+    and how far its foot's roll in the air might be, :mod:`.adaptive`; 1 and 0 in files
+    written before those keys)."""
 
     aims_deg: np.ndarray
     dx_m: np.ndarray
@@ -65,6 +68,7 @@ class AimTable:
     angle_deg: np.ndarray
     distance_m: np.ndarray
     max_stretch: float = 1.0
+    foot_roll_rad: float = 0.0
 
     def interpolate(self, pts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(direction, distance) at ``pts[n, 3]`` = (aim deg, dx m, dy m) inside the grid."""
@@ -93,13 +97,14 @@ def measure(problem: Any, genome: np.ndarray, aims_deg: np.ndarray = AIMS_DEG,
         angle[a] = np.degrees(np.arctan2(travel[:, 1], travel[:, 0])).reshape(dx.shape)
         dist[a] = np.hypot(travel[:, 0], travel[:, 1]).reshape(dx.shape)
     return AimTable(aims, np.asarray(dx_m, float), np.asarray(dy_m, float), angle, dist,
-                    float(problem.cfg.adapt_max_stretch))
+                    float(problem.cfg.adapt_max_stretch), float(problem.cfg.adapt_foot_roll_rad))
 
 
 def within_limits(problem: Any, genome: np.ndarray, aims_deg: np.ndarray,
                   left: bool) -> np.ndarray:
     """Per commanded aim (right-foot frame), whether the kick as evolved, its swing lengthened
-    by at most ``problem.cfg.adapt_max_stretch`` as a following kick may (:mod:`.adaptive`),
+    by at most ``problem.cfg.adapt_max_stretch`` and its foot rolled in the air by at most
+    ``problem.cfg.adapt_foot_roll_rad`` as a following kick may (:mod:`.adaptive`),
     keeps its key poses within every joint range and ``speed_margin`` x no-load speed (as
     played: mirrored for the left foot)."""
     from evomotion.studies.biped_kick.adaptive import evolved_stretch
@@ -115,7 +120,7 @@ def command(table: AimTable, problem: Any, genome: np.ndarray, target_deg: float
     """The commanded aim (deg, world: as :meth:`.problem.KickProblem.kicks` takes it) of each
     kick of ``genome`` at ``target_deg`` with its ball at ``ball_xy[n, 2]`` (world; the robot
     at the origin facing +x), by the module doc's rule."""
-    check_timing(table, problem.cfg)
+    check_following(table, problem.cfg)
     flip = -1.0 if left_foot else 1.0
     target = float(target_deg) * flip
     ball = np.asarray(ball_xy, dtype=float).reshape(-1, 2) * [1.0, flip]
@@ -141,14 +146,16 @@ def command(table: AimTable, problem: Any, genome: np.ndarray, target_deg: float
     return out * flip
 
 
-def check_timing(table: AimTable, cfg: Any, what: str = "kick aim table") -> None:
+def check_following(table: AimTable, cfg: Any, what: str = "kick aim table") -> None:
     """One line unless ``table`` was measured with the kick config ``cfg``'s
-    ``adapt_max_stretch`` (the following kick's timing decides where it sends the ball)."""
-    if table.max_stretch != cfg.adapt_max_stretch:
-        raise InputError(f"{what}: measured with problem.adapt_max_stretch = "
-                         f"{table.max_stretch:g}, the kick follows the ball with "
-                         f"{cfg.adapt_max_stretch:g}: measure the table anew (evomotion "
-                         "biped-kick calibrate)")
+    ``adapt_max_stretch`` and ``adapt_foot_roll_rad`` (how the kick follows the ball decides
+    where it sends it)."""
+    for key, had in (("adapt_max_stretch", table.max_stretch),
+                     ("adapt_foot_roll_rad", table.foot_roll_rad)):
+        if had != getattr(cfg, key):
+            raise InputError(f"{what}: measured with problem.{key} = {had:g}, the kick "
+                             f"follows the ball with {getattr(cfg, key):g}: measure the table "
+                             "anew (evomotion biped-kick calibrate)")
 
 
 def write(path: str | Path, table: AimTable, source: str = "") -> Path:
@@ -158,7 +165,8 @@ def write(path: str | Path, table: AimTable, source: str = "") -> Path:
                              "aims_deg": table.aims_deg, "dx_m": table.dx_m,
                              "dy_m": table.dy_m, "angle_deg": table.angle_deg,
                              "distance_m": table.distance_m,
-                             "adapt_max_stretch": table.max_stretch}, "kick aim table")
+                             "adapt_max_stretch": table.max_stretch,
+                             "adapt_foot_roll_rad": table.foot_roll_rad}, "kick aim table")
 
 
 def read(path: str | Path) -> AimTable:
@@ -189,7 +197,12 @@ def read(path: str | Path) -> AimTable:
             1.0 <= stretch <= MAX_STRETCH):
         raise FileFormatError(path, None, "key 'adapt_max_stretch': a number from 1 to "
                                           f"{MAX_STRETCH:g}")
-    return AimTable(*axes, *grids, float(stretch))
+    roll = rec.get("adapt_foot_roll_rad", 0.0)  # files before the key: a level sole
+    if isinstance(roll, bool) or not isinstance(roll, int | float) or not (
+            0.0 <= roll <= MAX_FOOT_ROLL_RAD):
+        raise FileFormatError(path, None, "key 'adapt_foot_roll_rad': a number from 0 to "
+                                          f"{MAX_FOOT_ROLL_RAD:g}")
+    return AimTable(*axes, *grids, float(stretch), float(roll))
 
 
 def _array(path: str | Path, rec: dict, key: str, ndim: int) -> np.ndarray:

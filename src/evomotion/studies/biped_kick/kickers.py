@@ -22,6 +22,8 @@ from __future__ import annotations
 import numpy as np
 
 from evomotion.sim.motion import Motion
+from evomotion.sim.robots import nao
+from evomotion.sim.robots.nao.joint_limits import JOINT_RANGES
 from evomotion.sim.robots.nao.mirror import mirror_targets
 from evomotion.studies.biped_kick import scene
 from evomotion.studies.biped_kick.motion import (
@@ -46,6 +48,12 @@ class ClosedFormKick:
     sole_half = scene.SOLE_HALF_M
     #: targets in mirror image: the left-foot kick (the NAO is symmetric)
     mirror = staticmethod(mirror_targets)
+    #: the kicking (right) ankle's roll: its column and the range a foot in the air may be
+    #: rolled into (:func:`.adaptive.rolled_in_air`): its own range and the left ankle's in
+    #: mirror image, so that the mirrored left-foot kick stays within its range too
+    swing_roll = (nao.JOINTS.index("RAnkleRoll"),
+                  max(JOINT_RANGES["RAnkleRoll"][0], -JOINT_RANGES["LAnkleRoll"][1]),
+                  min(JOINT_RANGES["RAnkleRoll"][1], -JOINT_RANGES["LAnkleRoll"][0]))
 
     def __init__(self, robot, cfg) -> None:
         for cap in CLOSED_FORM_CAPABILITIES:

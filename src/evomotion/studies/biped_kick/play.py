@@ -21,7 +21,8 @@ it rests (paper 002's whole chain for one ball and target, field frame, metres, 
    ``v |v| / (2 a_roll)`` and lasts ``|v| / a_roll``. By default (``follow``) the kick **sees
    the ball**: the plan puts the ball where the kick wants it (no tolerance centre), and the
    kick's swing follows the ball's offset from there as far as the joint ranges and motor
-   speeds allow, slowed where the motors need it (:mod:`.adaptive`, :func:`seen_kick`); with an
+   speeds allow, slowed where the motors need it, its foot rolled in the air where its ankle needs
+   it (:mod:`.adaptive`, :func:`seen_kick`); with an
    aim table (``table``, ``--table``: :mod:`.aim_table`) its commanded aim is chosen from the
    ball's place too. ``follow=False`` (``--blind``): the kick as evolved, the ball planned at
    the tolerance centre (the behaviour before 2026-12-05's third session).
@@ -146,9 +147,9 @@ def play(problem: Any, genome: np.ndarray, robot: np.ndarray, ball: np.ndarray,
         if not follow:
             raise InputError("play: an aim table is for the kick that sees the ball "
                              "(follow=True)")
-        from evomotion.studies.biped_kick.aim_table import check_timing
+        from evomotion.studies.biped_kick.aim_table import check_following
 
-        check_timing(table, problem.cfg)
+        check_following(table, problem.cfg)
     g = np.asarray(genome, dtype=float)
     robot, ball, target = (np.asarray(v, dtype=float) for v in (robot, ball, target))
     root0 = nao.state_qpos(problem.model, nao.initial_state(problem.model), nao.ROOT_JOINT, 2)

@@ -44,7 +44,13 @@ from evomotion.sim.robots import nao
 from evomotion.sim.rollout import BatchSimulator, fall_step, interpolate_controls, torso_track
 from evomotion.sim.worlds import World, simulate_worlds
 from evomotion.studies.biped_kick import scene
-from evomotion.studies.biped_kick.adaptive import MAX_STRETCH, following, left_flags
+from evomotion.studies.biped_kick.adaptive import (
+    MAX_FOOT_ROLL_RAD,
+    MAX_STRETCH,
+    following,
+    left_flags,
+    rolled_in_air,
+)
 from evomotion.studies.biped_kick.balance import MAX_GAIN_S, BalanceFeedback, control_steps
 from evomotion.studies.biped_kick.kickers import kicker_for
 from evomotion.studies.biped_kick.motion import (
@@ -115,6 +121,9 @@ class KickConfig:
     #: a kick that follows the ball (kicks(adapt=True), adaptive.py) may lengthen its swing
     #: up to this factor to stay within the motors' speeds (1: its evolved timing only)
     adapt_max_stretch: float = 1.25
+    #: and its foot, in the air, may roll up to this far (rad) where its ankle's roll would
+    #: leave the joint's range to keep the sole level (adaptive.rolled_in_air; 0: level)
+    adapt_foot_roll_rad: float = 0.1
 
     def for_worker(self) -> KickConfig:
         """The config of a one-core evaluator worker: ``nthread`` 0 (all cores) becomes 1."""
@@ -139,6 +148,8 @@ class KickConfig:
         check_number("problem.speed_margin", self.speed_margin, lo=0.0, hi=1.0, lo_open=True)
         check_number("problem.adapt_max_stretch", self.adapt_max_stretch, lo=1.0,
                      hi=MAX_STRETCH)
+        check_number("problem.adapt_foot_roll_rad", self.adapt_foot_roll_rad, lo=0.0,
+                     hi=MAX_FOOT_ROLL_RAD)
 
         check_number("problem.fall_height_m", self.fall_height_m, lo=0.0,
                      hi=MAX_FALL_HEIGHT_M, lo_open=True)
@@ -263,13 +274,18 @@ class KickProblem:
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
         """(20 ms key poses ``[n, K, nu]``, physics-step targets ``[n, nstep, nu]``, each
         kick's end step ``[n]``: the motion plus ``roll_after_s``, each kick's IK error ``[n]``
-        (m; ``None`` for the closed-form IK)). Each kick is measured at its own end step, so
+        (m; ``None`` for the closed-form IK)); with a ``ball_shift`` (a kick that follows the
+        ball) the kicking foot may roll in the air (:func:`.adaptive.rolled_in_air`, by at
+        most ``problem.adapt_foot_roll_rad``). Each kick is measured at its own end step, so
         its result does not depend on the other members of the batch (which only set how long
         the batch runs)."""
         end = np.ceil((SETTLE_S + execution_time_s(genomes) + self.cfg.roll_after_s)
                       / self.dt).astype(int)
         kt = key_times(genomes)
         keys, ik_error = self.kicker.joint_targets(genomes, kt, aims_rad, ball_shift)
+        if ball_shift is not None:  # a kick that follows the ball: its foot may roll in the air
+            rolled_in_air(keys, np.atleast_2d(genomes), kt, self.kicker.swing_roll,
+                          self.cfg.adapt_foot_roll_rad)
         return keys, interpolate_controls(kt, keys, self.dt, int(end.max())), end, ik_error
 
     def ball_rest(self, states: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -72,6 +72,9 @@ class NumericalKick:
     name = "numerical"
 
     mirror = None  # no left-foot kick: the robot's symmetry is not known
+    #: no foot roll in the air (:func:`.adaptive.rolled_in_air`): the numerical IK keeps every
+    #: joint within its range and reports how far it missed the foot's place instead
+    swing_roll = None
 
     def __init__(self, robot, rolling_m: float) -> None:
         self.robot = robot
