@@ -96,6 +96,26 @@ def test_the_foot_rolled_in_the_air_follows_an_outboard_ball_whole(kick):
     assert np.all(diff[..., col][(t <= lift) | (t >= down)] == 0.0)
 
 
+def test_the_left_foot_rolls_within_its_own_range(kick):
+    """The clip range is inside the right ankle's range and, in mirror image, the left
+    ankle's: a left-foot kick at +20 deg of a ball 1.5 cm outboard (to its left) is followed
+    wholly (the level sole: in part) within every range, as the right foot's at -20 deg."""
+    from evomotion.sim.robots.nao.joint_limits import JOINT_RANGES
+
+    p, g = kick
+    col, lo, hi = p.kicker.swing_roll
+    (rlo, rhi), (llo, lhi) = JOINT_RANGES["RAnkleRoll"], JOINT_RANGES["LAnkleRoll"]
+    assert rlo <= lo < hi <= rhi and llo <= -hi < -lo <= lhi
+    level = KickProblem(dataclasses.replace(p.cfg, adapt_foot_roll_rad=0.0))
+    off = np.array([[0.0, 0.015], [0.0, 0.0]])
+    rolled, flat = (perturbed_kicks(q, g, off, 20.0, adapt=True, left_foot=True)
+                    for q in (p, level))
+    assert flat["adapt_fraction"][0] < 0.5 and rolled["adapt_fraction"][0] == 1.0
+    assert not rolled["range_excess_rad"].any() and not rolled["speed_excess_s"].any()
+    assert abs(rolled["angle_error_deg"][0]) < 6.0 < abs(flat["angle_error_deg"][0])
+    assert rolled["distance_m"][1] == flat["distance_m"][1] and not rolled["fell"].any()
+
+
 def test_rolled_in_air_clips_only_within_its_allowance():
     """A synthetic roll 0.05 and 0.3 rad beyond its range in the air and 0.05 on the ground:
     only the first is clipped (allowance 0.1); an allowance of 0, or no swing roll, changes

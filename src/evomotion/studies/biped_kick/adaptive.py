@@ -32,8 +32,12 @@ of balls 1-2 cm outboard to a fraction and sent them 10-15 deg off a ±20-30 deg
 air the sole need not be level: :func:`rolled_in_air` clips the kicking ankle's roll into its
 range where it leaves it by at most ``max_roll`` while the foot is off the ground (from the
 lift's start to the retract's end), and leaves it (so the fraction is refused) where it
-would leave it by more. The ankle is the leg's last joint, so the foot's path is unchanged;
-only the sole tilts, by at most ``max_roll``. ``max_roll = 0``: the level sole, bit for bit.
+would leave it by more. The ankle roll is the leg's last joint, so the ankle's path is
+unchanged; the sole tilts about it by at most ``max_roll``, its outer edge up (its contact
+points move by a few millimetres). ``max_roll = 0``: the level sole, bit for bit. A kick whose
+ankle stays within its range is unchanged too; one whose evolved (λ = 0) poses leave it by
+at most ``max_roll`` in the air is rolled, where it used to be played over the limit (not the
+shipped kick: its kicking ankle's roll stays at 0.33-0.38 of 0.398 rad from −40 to +40°).
 """
 
 from __future__ import annotations
@@ -101,7 +105,8 @@ def reachable_shift(keys_of: KeysOf, shift: np.ndarray, speed_margin: float,
     those kicks' key poses ``[r, K, nu]`` as played (mirrored for a left-foot kick), ``limits``
     the robot's (:func:`.motion.limit_excess`); ``max_stretch``: the longest swing allowed
     (module doc; 1: the evolved timing only). A kick within the limits at no fraction keeps
-    λ = 0 and its own timing (the kick as evolved)."""
+    λ = 0 and its own timing: the kick as evolved, its foot rolled in the air where
+    ``keys_of`` rolls it (:func:`rolled_in_air`)."""
     shift = np.asarray(shift, dtype=float)
     n = len(shift)
     frac = np.zeros(n)
@@ -141,14 +146,16 @@ def rolled_in_air(keys: np.ndarray, g: np.ndarray, times_s: np.ndarray,
 
 
 def played_keys(kicker: Any, g: np.ndarray, kt: np.ndarray, aims_k: np.ndarray,
-                shift: np.ndarray | None, left: np.ndarray, max_roll: float = 0.0
+                shift: np.ndarray | None, left: np.ndarray, *, max_roll: float
                 ) -> np.ndarray:
     """The key poses ``[n, K, nu]`` of the right-foot kicks of genomes ``g`` at aims
-    ``aims_k`` on the key times ``kt`` (``shift``: the kicking foot's, or None; the foot
-    rolled in the air by at most ``max_roll``, :func:`rolled_in_air`), as played: mirrored
-    where ``left``."""
+    ``aims_k`` on the key times ``kt``, as played: with a ``shift`` (the kicking foot's: a
+    kick that follows the ball) the foot rolled in the air by at most ``max_roll``
+    (:func:`rolled_in_air`, as :meth:`.problem.KickProblem.controls` plays it), without one
+    (None) as evolved; mirrored where ``left``."""
     keys, _ = kicker.joint_targets(g, kt, aims_k, shift)
-    rolled_in_air(keys, g, kt, getattr(kicker, "swing_roll", None), max_roll)
+    if shift is not None:
+        rolled_in_air(keys, g, kt, getattr(kicker, "swing_roll", None), max_roll)
     if left.any():
         keys[left] = kicker.mirror(keys[left])
     return keys
@@ -180,7 +187,7 @@ def _keys_of(problem: Any, g: np.ndarray, aims_k: np.ndarray, left: np.ndarray
 
     def keys_of(rows: np.ndarray, s: np.ndarray, stretch: np.ndarray) -> np.ndarray:
         return played_keys(kicker, retimed(g[rows], stretch), kt, aims_k[rows], s,
-                           left[rows], roll)
+                           left[rows], max_roll=roll)
 
     return keys_of, most
 
