@@ -66,13 +66,7 @@ def main() -> None:
     cfg.validate()
     problem = KickProblem(cfg)
     t0 = time.perf_counter()
-    if args.table is not None and args.table.exists():
-        table = aim_table.read(args.table)
-        aim_table.check_following(table, cfg, f"--table {args.table}")
-    else:
-        table = aim_table.measure(problem, genome)
-        if args.table is not None:
-            aim_table.write(args.table, table, str(source))
+    table = aim_table.read_or_measure(args.table, problem, genome, str(source))
     table_s = time.perf_counter() - t0
     seeds = (12345, 2026) if args.draw is None else (args.draw, args.draw + 1)
     offsets = np.random.default_rng(seeds[0]).uniform(-0.02, 0.02, (100, 2)) * (args.spread

@@ -1,5 +1,6 @@
 """Which foot should kick at which aim (issue 34)? The calibrated kick (the adaptive kick, its
-slowed swing and its commanded aim from the aim table, as ``kick_adapt.py``'s third column)
+swing slowed and its foot rolled in the air where needed, and its commanded aim from the aim
+table, as ``kick_adapt.py``'s third column)
 with the right foot and with the left one (the right kick in mirror image) at each aim, on
 kick_adapt's two draws of 100 ball offsets U(+-2 cm) and perturbed worlds (seeds 12345 / 2026
 and 7 / 8): share within +-10 deg, falls, mean distance along the aim.
@@ -34,12 +35,7 @@ def main() -> None:
     args = ap.parse_args()
     genome, source = read_kick(None)
     problem = KickProblem(KickConfig())
-    if args.table.exists():
-        table = aim_table.read(args.table)
-        aim_table.check_following(table, problem.cfg, f"--table {args.table}")
-    else:
-        table = aim_table.measure(problem, genome)
-        aim_table.write(args.table, table, str(source))
+    table = aim_table.read_or_measure(args.table, problem, genome, str(source))
     t0 = time.perf_counter()
     print(f"kick: {source}\n| aim (deg) | draw | right: within +-10 deg | falls | distance (m) "
           "| left: within +-10 deg | falls | distance (m) |\n|---|---|---|---|---|---|---|---|")

@@ -135,6 +135,14 @@ def test_the_file_round_trips_and_bad_files_are_one_line(tmp_path):
     old = aim_table.read(f)
     assert old.max_stretch == 1.0 and table.max_stretch == 1.25
     assert old.foot_roll_rad == 0.0 and table.foot_roll_rad == 0.1
+    # read_or_measure reads an existing file, refusing one of another following in one line
+    p = KickProblem(KickConfig(nthread=1))
+    f2 = aim_table.write(tmp_path / "t2.json", table)
+    back = aim_table.read_or_measure(f2, p, read_kick(None)[0])
+    assert np.array_equal(back.angle_deg, table.angle_deg)
+    with pytest.raises(InputError, match=r"--table .*adapt_max_stretch = 1, the kick") as e:
+        aim_table.read_or_measure(f, p, read_kick(None)[0])
+    assert "\n" not in str(e.value)
 
 
 JSONISH = st.recursive(st.none() | st.booleans() | st.floats(allow_nan=False) | st.text(max_size=5),

@@ -145,17 +145,25 @@ def rolled_in_air(keys: np.ndarray, g: np.ndarray, times_s: np.ndarray,
     return keys
 
 
+def following_keys(kicker: Any, g: np.ndarray, kt: np.ndarray, aims_k: np.ndarray,
+                   shift: np.ndarray | None, max_roll: float
+                   ) -> tuple[np.ndarray, np.ndarray | None]:
+    """The right-foot kicks of genomes ``g`` at aims ``aims_k`` on the key times ``kt`` as
+    played (``kicker.joint_targets``' key poses ``[n, K, nu]`` and IK error): with a ``shift``
+    (the kicking foot's: a kick that follows the ball) the foot rolled in the air by at most
+    ``max_roll`` (:func:`rolled_in_air`), without one (None) as evolved. What the limit check
+    (:func:`played_keys`) and the rollout (:meth:`.problem.KickProblem.controls`) both see."""
+    keys, ik_error = kicker.joint_targets(g, kt, aims_k, shift)
+    if shift is not None:
+        rolled_in_air(keys, g, kt, kicker.swing_roll, max_roll)
+    return keys, ik_error
+
+
 def played_keys(kicker: Any, g: np.ndarray, kt: np.ndarray, aims_k: np.ndarray,
                 shift: np.ndarray | None, left: np.ndarray, *, max_roll: float
                 ) -> np.ndarray:
-    """The key poses ``[n, K, nu]`` of the right-foot kicks of genomes ``g`` at aims
-    ``aims_k`` on the key times ``kt``, as played: with a ``shift`` (the kicking foot's: a
-    kick that follows the ball) the foot rolled in the air by at most ``max_roll``
-    (:func:`rolled_in_air`, as :meth:`.problem.KickProblem.controls` plays it), without one
-    (None) as evolved; mirrored where ``left``."""
-    keys, _ = kicker.joint_targets(g, kt, aims_k, shift)
-    if shift is not None:
-        rolled_in_air(keys, g, kt, getattr(kicker, "swing_roll", None), max_roll)
+    """The key poses ``[n, K, nu]`` of :func:`following_keys`, mirrored where ``left``."""
+    keys, _ = following_keys(kicker, g, kt, aims_k, shift, max_roll)
     if left.any():
         keys[left] = kicker.mirror(keys[left])
     return keys

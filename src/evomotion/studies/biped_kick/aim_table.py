@@ -158,6 +158,21 @@ def check_following(table: AimTable, cfg: Any, what: str = "kick aim table") -> 
                              "anew (evomotion biped-kick calibrate)")
 
 
+def read_or_measure(path: Path | None, problem: Any, genome: np.ndarray, source: str = ""
+                    ) -> AimTable:
+    """The table in the file ``path`` if it exists (measured with ``problem``'s following, one
+    line otherwise: :func:`check_following`), else measured (:func:`measure`) and written
+    there (``path`` None: measured only)."""
+    if path is not None and Path(path).exists():
+        table = read(path)
+        check_following(table, problem.cfg, f"--table {path}")
+        return table
+    table = measure(problem, genome)
+    if path is not None:
+        write(path, table, source)
+    return table
+
+
 def write(path: str | Path, table: AimTable, source: str = "") -> Path:
     from evomotion.outfile import write_json
 
@@ -192,17 +207,20 @@ def read(path: str | Path) -> AimTable:
         if v.shape != shape:
             raise FileFormatError(path, None, f"key {key!r}: a {shape[0]} x {shape[1]} x "
                                               f"{shape[2]} grid (aims x dx x dy)")
-    stretch = rec.get("adapt_max_stretch", 1.0)  # files before the key: the evolved timing
-    if isinstance(stretch, bool) or not isinstance(stretch, int | float) or not (
-            1.0 <= stretch <= MAX_STRETCH):
-        raise FileFormatError(path, None, "key 'adapt_max_stretch': a number from 1 to "
-                                          f"{MAX_STRETCH:g}")
-    roll = rec.get("adapt_foot_roll_rad", 0.0)  # files before the key: a level sole
-    if isinstance(roll, bool) or not isinstance(roll, int | float) or not (
-            0.0 <= roll <= MAX_FOOT_ROLL_RAD):
-        raise FileFormatError(path, None, "key 'adapt_foot_roll_rad': a number from 0 to "
-                                          f"{MAX_FOOT_ROLL_RAD:g}")
-    return AimTable(*axes, *grids, float(stretch), float(roll))
+    # files before these keys: the evolved timing, a level sole
+    stretch = _bounded(path, rec, "adapt_max_stretch", 1.0, 1.0, MAX_STRETCH)
+    roll = _bounded(path, rec, "adapt_foot_roll_rad", 0.0, 0.0, MAX_FOOT_ROLL_RAD)
+    return AimTable(*axes, *grids, stretch, roll)
+
+
+def _bounded(path: str | Path, rec: dict, key: str, default: float, lo: float, hi: float
+             ) -> float:
+    """``rec[key]`` (``default`` when absent): a number from ``lo`` to ``hi``, else one
+    :class:`FileFormatError`."""
+    v = rec.get(key, default)
+    if isinstance(v, bool) or not isinstance(v, int | float) or not lo <= v <= hi:
+        raise FileFormatError(path, None, f"key {key!r}: a number from {lo:g} to {hi:g}")
+    return float(v)
 
 
 def _array(path: str | Path, rec: dict, key: str, ndim: int) -> np.ndarray:

@@ -48,8 +48,8 @@ from evomotion.studies.biped_kick.adaptive import (
     MAX_FOOT_ROLL_RAD,
     MAX_STRETCH,
     following,
+    following_keys,
     left_flags,
-    rolled_in_air,
 )
 from evomotion.studies.biped_kick.balance import MAX_GAIN_S, BalanceFeedback, control_steps
 from evomotion.studies.biped_kick.kickers import kicker_for
@@ -282,10 +282,8 @@ class KickProblem:
         end = np.ceil((SETTLE_S + execution_time_s(genomes) + self.cfg.roll_after_s)
                       / self.dt).astype(int)
         kt = key_times(genomes)
-        keys, ik_error = self.kicker.joint_targets(genomes, kt, aims_rad, ball_shift)
-        if ball_shift is not None:  # a kick that follows the ball: its foot may roll in the air
-            rolled_in_air(keys, np.atleast_2d(genomes), kt, self.kicker.swing_roll,
-                          self.cfg.adapt_foot_roll_rad)
+        keys, ik_error = following_keys(self.kicker, np.atleast_2d(genomes), kt, aims_rad,
+                                        ball_shift, self.cfg.adapt_foot_roll_rad)
         return keys, interpolate_controls(kt, keys, self.dt, int(end.max())), end, ik_error
 
     def ball_rest(self, states: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
