@@ -101,8 +101,9 @@ def test_live_run_grows_then_stop_and_resume_from_the_page(page, studio):
         _wait(lambda: _rows(page) >= first + 3, what="the curve to grow without a reload")
         assert "running" in page.locator(".run-status").inner_text()
         page.locator(".stop-button").click()
-        _wait(lambda: "interrupted" in page.locator(".run-status").inner_text(), 60,
-              "the stop")
+        _wait(lambda: "interrupted" in page.locator(".run-status").inner_text(), 120,
+              lambda: f"the stop (status {page.locator('.run-status').inner_text()!r}, "
+                      f"message {page.locator('.action-message').inner_text()!r})")
         assert proc.wait(30) == 130
         assert "stopped: interrupted" in (out / "log.txt").read_text()
         stopped_at = _rows(page)
@@ -110,8 +111,9 @@ def test_live_run_grows_then_stop_and_resume_from_the_page(page, studio):
         _wait(lambda: "running" in page.locator(".run-status").inner_text(), 60, "resume")
         _wait(lambda: _rows(page) > stopped_at, 60, "the resumed run to go on")
         page.locator(".stop-button").click()
-        _wait(lambda: "interrupted" in page.locator(".run-status").inner_text(), 60,
-              "the second stop")
+        _wait(lambda: "interrupted" in page.locator(".run-status").inner_text(), 120,
+              lambda: f"the second stop (status {page.locator('.run-status').inner_text()!r}, "
+                      f"message {page.locator('.action-message').inner_text()!r})")
     finally:
         if proc.poll() is None:
             proc.kill()
