@@ -34,12 +34,10 @@ import json
 import time
 from pathlib import Path
 
-import numpy as np
-
 from evomotion.studies.biped_kick import aim_table
 from evomotion.studies.biped_kick.experiment import (
     accuracy,
-    kick_worlds,
+    kick_draw,
     perturbed_kicks,
     tolerant_offset,
 )
@@ -69,9 +67,7 @@ def main() -> None:
     table = aim_table.read_or_measure(args.table, problem, genome, str(source))
     table_s = time.perf_counter() - t0
     seeds = (12345, 2026) if args.draw is None else (args.draw, args.draw + 1)
-    offsets = np.random.default_rng(seeds[0]).uniform(-0.02, 0.02, (100, 2)) * (args.spread
-                                                                                / 0.02)
-    worlds = kick_worlds(problem, len(offsets), np.random.default_rng(seeds[1]))
+    offsets, worlds = kick_draw(problem, 100, seeds, args.spread)
     out: dict = {"kick": str(source), "spread_m": args.spread, "draw_seeds": seeds,
                  "table_s": table_s, "aims": {}}
     t0 = time.perf_counter()

@@ -20,7 +20,7 @@ import numpy as np
 
 from evomotion.studies.biped_kick.experiment import (
     accuracy,
-    kick_worlds,
+    kick_draw,
     perturbed_kicks,
     tolerant_offset,
 )
@@ -40,12 +40,11 @@ def main() -> None:
     genome, source = read_kick(args.run)
     gains = [tuple(float(v) for v in g.split(":")) for g in args.gains.split(",")]
     base = KickProblem(KickConfig(nthread=1))
-    offsets = np.random.default_rng(12345).uniform(-0.02, 0.02, (args.worlds, 2))
     centre = tolerant_offset(base, genome, 0.0)
     out: dict = {"kick": str(source), "rows": []}
     t0 = time.perf_counter()
     for push in args.push:
-        worlds = kick_worlds(base, args.worlds, np.random.default_rng(2026), (-push, push))
+        offsets, worlds = kick_draw(base, args.worlds, push_ns=(-push, push))
         for g in gains:
             p = KickProblem(dataclasses.replace(base.cfg, balance_gains=g))
             m = perturbed_kicks(p, genome, offsets + [0, centre], 0.0, worlds)

@@ -6,7 +6,7 @@
    nominal place is the centre of the kick's tolerance to lateral placement errors at that aim
    (``experiment.tolerant_offset``, printed).
 3. Aimed kicks: 100 kicks at each of -30, -20, -10, 0, +10, +20, +30 deg from ball positions
-   perturbed by U(+-2 cm), each in its own perturbed world (``experiment.kick_worlds``:
+   perturbed by U(+-2 cm), each in its own perturbed world (``experiment.kick_draw``:
    friction x0.5-1.4, masses +-10 %, torso CoM +-2 cm, motors +-10 %, latency 0-40 ms; the
    ball's carpet nominal): median absolute angle error, share within +-10 deg, fall rate,
    mean distance along the aim.
@@ -31,7 +31,7 @@ from evomotion.sim.motion import read_motion
 from evomotion.sim.robots.nao.replay import simulate_motion
 from evomotion.studies.biped_kick.experiment import (
     accuracy,
-    kick_worlds,
+    kick_draw,
     perturbed_kicks,
     summary,
     tolerant_offset,
@@ -56,11 +56,10 @@ def main() -> None:
     out["replay"] = {"fell": rep["fell"], "displacement_m": rep["displacement_m"]}
     genome, _ = read_kick(args.run)
     problem = KickProblem(KickConfig())
-    offsets = np.random.default_rng(12345).uniform(-0.02, 0.02, (100, 2))
+    offsets, worlds = kick_draw(problem)
     centre = {a: tolerant_offset(problem, genome, a) for a in (0, *AIMS_DEG)}
     out["tolerant_offset_m"] = {f"{a:+d}": v for a, v in centre.items()}
     out["straight"] = summary(perturbed_kicks(problem, genome, offsets + [0, centre[0]], 0.0))
-    worlds = kick_worlds(problem, len(offsets), np.random.default_rng(2026))
     out["aimed"] = {f"{a:+d}": accuracy(perturbed_kicks(problem, genome, offsets + [0, centre[a]],
                                                         a, worlds))
                     for a in AIMS_DEG}

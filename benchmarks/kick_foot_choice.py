@@ -17,10 +17,8 @@ import argparse
 import time
 from pathlib import Path
 
-import numpy as np
-
 from evomotion.studies.biped_kick import aim_table
-from evomotion.studies.biped_kick.experiment import accuracy, kick_worlds, perturbed_kicks
+from evomotion.studies.biped_kick.experiment import accuracy, kick_draw, perturbed_kicks
 from evomotion.studies.biped_kick.play import read_kick
 from evomotion.studies.biped_kick.problem import KickConfig, KickProblem
 
@@ -41,8 +39,7 @@ def main() -> None:
           "| left: within +-10 deg | falls | distance (m) |\n|---|---|---|---|---|---|---|---|")
     for a in args.aims:
         for seeds in DRAWS:
-            offsets = np.random.default_rng(seeds[0]).uniform(-0.02, 0.02, (100, 2))
-            worlds = kick_worlds(problem, len(offsets), np.random.default_rng(seeds[1]))
+            offsets, worlds = kick_draw(problem, 100, seeds)
             cells = []
             for left in (False, True):
                 r = accuracy(perturbed_kicks(problem, genome, offsets, a, worlds, adapt=True,

@@ -214,3 +214,16 @@ def test_tolerant_offset_is_the_centre_of_the_band_the_kick_tolerates():
     ok = err <= 3.0
     assert ok.any() and ok[np.argmin(np.abs(dy - c))]  # inside the band it names
     assert tolerant_offset(p, X0, max_error_deg=-1.0) == 0.0  # no band: no offset
+
+
+def test_the_checks_draw_scales_one_offset_draw_and_gives_a_world_per_offset():
+    from evomotion.studies.biped_kick.experiment import kick_draw
+
+    p = KickProblem(KickConfig(nthread=1, aims_deg=(0.0,)))
+    a, wa = kick_draw(p, 4, (3, 4))
+    b, wb = kick_draw(p, 4, (3, 4), spread_m=0.03)
+    assert a.shape == (4, 2) and np.abs(a).max() <= 0.02 and len(wa) == len(wb) == 4
+    assert np.allclose(b, a * 1.5) and not np.array_equal(a, kick_draw(p, 4, (5, 4))[0])
+    floor = p.model.geom("floor").id
+    assert [w.model.geom_friction[floor, 0] for w in wa] == \
+        [w.model.geom_friction[floor, 0] for w in wb]

@@ -91,6 +91,16 @@ def kick_worlds(problem: KickProblem, n: int, rng: np.random.Generator,
     return worlds
 
 
+def kick_draw(problem: KickProblem, n: int = 100, seeds: tuple[int, int] = (12345, 2026),
+              spread_m: float = 0.02, push_ns: tuple[float, float] = (0.0, 0.0)
+              ) -> tuple[np.ndarray, list]:
+    """The kick checks' draw: ``n`` ball offsets ``U(+-spread_m)`` ``[n, 2]`` (m; one
+    ``U(+-2 cm)`` draw from ``seeds[0]``, scaled) and ``n`` :func:`kick_worlds` from
+    ``seeds[1]``, one per offset."""
+    offsets = np.random.default_rng(seeds[0]).uniform(-0.02, 0.02, (n, 2)) * (spread_m / 0.02)
+    return offsets, kick_worlds(problem, n, np.random.default_rng(seeds[1]), push_ns)
+
+
 def perturbed_kicks(problem: KickProblem, genome: np.ndarray, offsets: np.ndarray,
                     aim_deg: float = 0.0, worlds: list | None = None,
                     adapt: bool = False, left_foot: bool = False,
