@@ -135,10 +135,11 @@ def field_state(problem: Any, pose: np.ndarray, ball: np.ndarray) -> np.ndarray:
 def play(problem: Any, genome: np.ndarray, robot: np.ndarray, ball: np.ndarray,
          target: np.ndarray, video: Path | None = None,
          repertoire: Path | None = None, follow: bool = True,
-         table: Any = None) -> dict[str, Any]:
+         table: Any = None, table_name: str = "kick aim table") -> dict[str, Any]:
     """Plan, walk, kick and roll; the report (and ``video`` of the whole simulation).
     ``follow``: the kick sees the ball (module doc, step 3); ``table``: and its commanded aim
-    comes from that :class:`.aim_table.AimTable` (with ``follow``)."""
+    comes from that :class:`.aim_table.AimTable` (with ``follow``; one line naming
+    ``table_name`` unless it was measured with ``problem``'s following)."""
     from evomotion.sim.robots import nao
     from evomotion.studies.biped_kick import scene
     from evomotion.studies.biped_kick.walk_play import SceneRun, walk
@@ -149,7 +150,7 @@ def play(problem: Any, genome: np.ndarray, robot: np.ndarray, ball: np.ndarray,
                              "(follow=True)")
         from evomotion.studies.biped_kick.aim_table import check_following
 
-        check_following(table, problem.cfg)
+        check_following(table, problem.cfg, table_name)
     g = np.asarray(genome, dtype=float)
     robot, ball, target = (np.asarray(v, dtype=float) for v in (robot, ball, target))
     root0 = nao.state_qpos(problem.model, nao.initial_state(problem.model), nao.ROOT_JOINT, 2)

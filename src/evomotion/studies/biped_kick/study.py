@@ -129,13 +129,13 @@ def play_cmd(
         if not follow:
             raise InputError("--table: the aim table is for the kick that sees the ball; drop "
                              "--blind or --table")
-        from evomotion.studies.biped_kick.aim_table import check_following, read
+        from evomotion.studies.biped_kick.aim_table import read
 
         aims = read(table)
-        check_following(aims, KickConfig(), f"--table {table}")
     genome, source = read_kick(kick)
     res = play(make_problem(KickConfig()), genome, np.array(robot), np.array(ball),
-               np.array(target), video, repertoire=walk_dir, follow=follow, table=aims)
+               np.array(target), video, repertoire=walk_dir, follow=follow, table=aims,
+               table_name=f"--table {table}")
     res["kick"] = source
     if json_out:
         typer.echo(json.dumps(res, indent=2))
