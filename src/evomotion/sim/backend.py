@@ -19,6 +19,7 @@ docs/gpu.md says which guarantees change.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import mujoco
@@ -95,6 +96,10 @@ class BatchedRollouts:
     and ``_evaluate_batch(genomes)``."""
 
     worlds: list | None = None
+    sim: Any
+    cfg: Any
+    segment_steps: int
+    _evaluate_batch: Callable[[Any], Any]
 
     def _rollouts_per_genome(self) -> int:
         return len(self.worlds) if self.worlds else 1

@@ -40,6 +40,7 @@ import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import mujoco
 import numpy as np
@@ -100,7 +101,23 @@ def total_moments(result: ClosedLoopResult) -> tuple[int, np.ndarray, np.ndarray
             np.add.reduce(result.obs_sumsq, axis=0))
 
 
-class ClosedLoopSimulator:
+class Configured:
+    """What :func:`configure` sets on a closed-loop simulator (this one and Warp's)."""
+
+    robot: Any
+    model: mujoco.MjModel
+    k: int
+    push_steps: int
+    observe: ObservationBuilder
+    columns: np.ndarray
+    nominal: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    fall_height_m: float
+    fall_tilt_rad: float
+
+
+class ClosedLoopSimulator(Configured):
     """Closed-loop rollouts of ``robot`` with ``nthread`` persistent ``mujoco.rollout``
     threads (see the module doc); use it as a context manager or :meth:`close` it."""
 
@@ -243,9 +260,9 @@ class ClosedLoopSimulator:
         return np.clip(self.nominal[self.columns] + a, self.lower, self.upper)
 
 
-def configure(sim, robot, observations: ObservationSpec, control_steps: int, nthread: int,
-              columns: Sequence[int] | None, nominal: np.ndarray | None, push_steps: int,
-              fall_height_m: float | None, fall_tilt_rad: float | None) -> None:
+def configure(sim: Configured, robot, observations: ObservationSpec, control_steps: int,
+              nthread: int, columns: Sequence[int] | None, nominal: np.ndarray | None,
+              push_steps: int, fall_height_m: float | None, fall_tilt_rad: float | None) -> None:
     """The settings every closed loop (CPU, MuJoCo Warp) checks and keeps on ``sim``: the robot
     and model, ``k`` physics steps per control step, the observation builder, the driven
     columns, their nominal targets and bounds, the push length and the fall thresholds."""

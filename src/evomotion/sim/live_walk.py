@@ -53,7 +53,8 @@ class LiveWalk:
         mujoco.mj_setState(m, d, self.robot.state_at(self.player.nominal), STATE_SPEC)
         mujoco.mj_forward(m, d)
         self.player.start(d)
-        self.fell, self._push = False, None
+        self.fell = False
+        self._push: np.ndarray | None = None
         self.start = torso_pose(d)
         #: the torso's height at the start (m): how big the robot is (a view frames it by it)
         self.height_m = float(d.xpos[self.torso][2])

@@ -150,7 +150,9 @@ def parse_motion(text: str, path: str | Path = "<motion>",
                                   f"robot's: {', '.join(known)}")
     if len(set(joints)) != len(joints):
         raise FileFormatError(path, first, "expected each joint name once")
-    times, names, rows = [], [], []
+    times: list[int] = []
+    names: list[str] = []
+    rows: list[np.ndarray] = []
     for lineno, line in enumerate(lines[first:], start=first + 1):
         if line.strip() == "":
             break  # an empty line ends the file (motion.c)
@@ -180,6 +182,8 @@ def parse_motion(text: str, path: str | Path = "<motion>",
                                                         "a finite number or '*'")
         times.append(t)
         names.append(tok[1])
+        if row is None:  # not reached: every value passed _value, so _ROW matched
+            raise FileFormatError(path, lineno, "expected numbers or '*' separated by commas")
         rows.append(row)
     if not rows:
         raise FileFormatError(path, first + 1, "expected at least one pose")

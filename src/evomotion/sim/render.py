@@ -21,6 +21,7 @@ import subprocess
 import sys
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -116,7 +117,7 @@ def render_video(qpos: np.ndarray, dt: float, out_path: str | Path, fps: int = 2
     stride = max(1, int(round(1.0 / (fps * dt))))
     xml = np.frombuffer((model_xml or "").encode(), dtype=np.uint8)
     names = np.frombuffer(json.dumps(list(assets)).encode(), dtype=np.uint8)
-    files = {f"asset_{i}": np.frombuffer(data, dtype=np.uint8)
+    files: dict[str, Any] = {f"asset_{i}": np.frombuffer(data, dtype=np.uint8)
              for i, data in enumerate(assets.values())}
     np.savez(buf, qpos=np.ascontiguousarray(qpos[::stride], dtype=np.float64), xml=xml,
              asset_names=names, **files)
@@ -249,7 +250,7 @@ def _frames(model, data, renderer, frames_q: np.ndarray, camera: str):
         for q in frames_q:
             data.qpos[:] = q
             mujoco.mj_kinematics(model, data)
-            torso = None if camera.startswith("follow=") else data.xpos[torso_id]
+            torso = data.xpos[torso_id]
             if camera == "kick":
                 ball = data.body("ball").xpos
                 mid = 0.5 * (torso[:2] + ball[:2])
@@ -294,7 +295,7 @@ def main(argv: list[str]) -> int:
 
     with iio.get_writer(out_path, format="FFMPEG", fps=int(fps), codec="libx264") as writer:
         for frame in frames:
-            writer.append_data(frame)
+            writer.append_data(frame)  # type: ignore[attr-defined]  # not in the stub
     return 0
 
 

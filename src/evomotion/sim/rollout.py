@@ -26,6 +26,8 @@ class SegmentedSimulator:
 
     model: mujoco.MjModel
     nstate: int
+    #: ``(states[batch, nstep, nstate], sensors[batch, nstep, nsensordata])`` (each subclass's)
+    run_with_sensors: Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
 
     def run(self, initial_state: np.ndarray, ctrl: np.ndarray) -> np.ndarray:
         """``states[batch, nstep, nstate]`` after each step for ``ctrl[batch, nstep, nu]``."""

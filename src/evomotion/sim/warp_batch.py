@@ -186,9 +186,14 @@ class ClosedLoopBatch:
 
     def control_on_device(self) -> None:
         """Observe, act (the device policy) and send the targets: one captured phase."""
+        layers = self.layers
+        if layers is None:
+            raise ValueError("control_on_device: this batch was laid out without a device "
+                             "policy")
+
         def phase() -> None:
             self._observe()
-            self.layers.launch(self.obs, self.actions)
+            layers.launch(self.obs, self.actions)
             self._targets()
         self._run(("control",), phase)
 

@@ -37,6 +37,7 @@ import numpy as np
 from evomotion.errors import InputError
 from evomotion.sim.closed_loop import (
     ClosedLoopResult,
+    Configured,
     Policy,
     _check_sizes,
     _rows,
@@ -75,7 +76,7 @@ class _Carry:
     obs_sumsq: np.ndarray
 
 
-class WarpClosedLoopSimulator:
+class WarpClosedLoopSimulator(Configured):
     """:class:`~evomotion.sim.closed_loop.ClosedLoopSimulator` on MuJoCo Warp (module doc).
     ``nthread`` is accepted and ignored (one device); ``device``, ``deterministic``,
     ``nconmax`` and ``njmax`` as :class:`~evomotion.sim.warp_rollout.WarpSimulator`."""
@@ -138,35 +139,35 @@ class WarpClosedLoopSimulator:
         nstep = int(nstep)
         if n < 1 or nstep < 1:
             raise InputError(f"closed loop: expected >= 1 individual and step, got {n}, {nstep}")
-        listed = isinstance(worlds, list)
+        listed = worlds if isinstance(worlds, list) else []
         models = np.empty(n, dtype=object)
-        models[:] = [w.model for w in worlds] if listed else [self.model] * n
+        models[:] = [w.model for w in listed] if listed else [self.model] * n
         _check_sizes(self.model, models)
-        latency = np.array([w.latency_steps for w in worlds] if listed else np.zeros(n),
+        latency = np.array([w.latency_steps for w in listed] if listed else np.zeros(n),
                            dtype=np.int64)
-        pushes = PushSchedule.of(worlds if listed else [], n, self.model, self.push_steps,
-                                 nstep)
+        pushes = PushSchedule.of(listed, n, self.model, self.push_steps, nstep)
         state = _rows(self.robot.state0 if initial_state is None else initial_state,
                       (n, self.nstate), "initial_state")
         cmd = None if commands is None else _rows(commands, (n, self.spec_command_size),
                                                   "commands")
-        device_policy = on_device(policy)
-        if device_policy and policy.params.shape[0] != n:
-            raise InputError(f"closed loop: the policy holds {policy.params.shape[0]} "
+        dev = policy if on_device(policy) else None
+        device_policy = dev is not None
+        if dev is not None and dev.params.shape[0] != n:
+            raise InputError(f"closed loop: the policy holds {dev.params.shape[0]} "
                              f"parameter rows for {n} individuals")
-        if device_policy and (policy.spec.obs_dim, policy.spec.act_dim) != (
+        if dev is not None and (dev.spec.obs_dim, dev.spec.act_dim) != (
                 self.observation_size, self.action_size):
-            raise InputError(f"closed loop: the policy maps {policy.spec.obs_dim} observations "
-                             f"to {policy.spec.act_dim} actions, the robot has "
+            raise InputError(f"closed loop: the policy maps {dev.spec.obs_dim} observations "
+                             f"to {dev.spec.act_dim} actions, the robot has "
                              f"{self.observation_size} and {self.action_size}")
         fields, index = self._fields(models)
         nctrl = math.ceil(nstep / self.k)
         layout = Layout(nctrl, math.ceil(int(latency.max(initial=0)) / self.k) + 1,
                         record_states, record_targets, tuple(sorted(fields)), pushes.any,
-                        policy.spec if device_policy else None)
+                        dev.spec if dev is not None else None)
         carry = self._start(state, layout.depth)
         rec = _HostRecords(n, nctrl, state, self.model.nq, self.action_size, layout)
-        per_row = _PerRow(latency, pushes, cmd, fields, index, policy if device_policy else None)
+        per_row = _PerRow(latency, pushes, cmd, fields, index, dev)
         alive, c, redo = np.arange(n), 0, False
         while alive.size and c < nctrl:
             b = self._batch(bucket_size(alive.size), layout)

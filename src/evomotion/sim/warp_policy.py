@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, TypeGuard
 
 import numpy as np
 
@@ -51,7 +51,7 @@ class PopulationPolicy:
         return self.spec.act(self.params[rows], obs, self.mean[rows], self.std[rows])
 
 
-def on_device(policy: Any) -> bool:
+def on_device(policy: Any) -> TypeGuard[PopulationPolicy]:
     """Whether ``policy``'s forward pass can run on the device (a :class:`PopulationPolicy`
     of a linear or MLP spec that does not override the shared forward pass)."""
     return (isinstance(policy, PopulationPolicy)

@@ -42,7 +42,8 @@ def import_warp() -> tuple[Any, Any]:
     try:
         import warp as wp
 
-        wp.config.quiet = True  # before MuJoCo Warp initialises Warp: no banner, ...
+        # before MuJoCo Warp initialises Warp: no banner, ...
+        wp.config.quiet = True  # type: ignore[attr-defined]  # (not in its stub)
         if hasattr(wp, "LOG_WARNING"):
             wp.config.log_level = max(wp.config.log_level, wp.LOG_WARNING)  # ... no timings
         import mujoco_warp as mjw

@@ -34,7 +34,7 @@ def differing_fields(models: list) -> tuple[dict[str, np.ndarray], np.ndarray]:
     import mujoco_warp as mjw
 
     distinct: dict[int, int] = {}
-    uniq = []
+    uniq: list = []
     index = np.empty(len(models), dtype=np.int64)
     for i, m in enumerate(models):
         if id(m) not in distinct:

@@ -158,8 +158,8 @@ def make_world(base: mujoco.MjModel, *, friction_scale: float = 1.0,
               "motor_scale_mean": float(ms.mean()), "latency_steps": int(latency_steps),
               "push_ns": [float(v) for v in np.asarray(push_ns)],
               "push_time_s": float(push_time_s)}
-    return World(m, int(latency_steps), tuple(float(v) for v in np.asarray(push_ns)),
-                 float(push_time_s), params)
+    px, py, pz = (float(v) for v in np.asarray(push_ns))
+    return World(m, int(latency_steps), (px, py, pz), float(push_time_s), params)
 
 
 def _latin(rng: np.random.Generator, lo: float, hi: float, k: int, cols: int = 0) -> np.ndarray:

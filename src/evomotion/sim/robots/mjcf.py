@@ -289,7 +289,7 @@ class _Reader:
                                                                 and key == "data"):
                 continue
             for token in value.split():
-                bad = _BAD_TOKEN.match(token)
+                bad = _BAD_TOKEN.match(token) is not None
                 if not bad and token[:1] in "+-.0123456789" and ("e" in token or "E" in token
                                                                   or len(token) > 12):
                     try:

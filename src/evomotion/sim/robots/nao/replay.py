@@ -28,6 +28,7 @@ import json
 import sys
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import mujoco
 import numpy as np
@@ -173,7 +174,8 @@ def stress_motion(motion: Motion, options: StressOptions, hold_s: float = 1.0,
     worlds = [make_world(model, friction_scale=friction, mass_scale=mass,
                          push_ns=(0.0, push, 0.0), push_time_s=mid)]
     if options.trials:
-        pin = {"friction_scale": (friction, friction)} if options.friction is not None else {}
+        pin: dict[str, Any] = ({"friction_scale": (friction, friction)}
+                               if options.friction is not None else {})
         if options.mass_scale is not None:
             pin["mass_scale"] = (mass, mass)
         if options.push_ns is not None:
@@ -184,6 +186,7 @@ def stress_motion(motion: Motion, options: StressOptions, hold_s: float = 1.0,
     parts, qpos = [], None
     for i in range(0, len(worlds), chunk):
         states = simulate_worlds(worlds[i:i + chunk], init, ctrl, nthread)
+        assert isinstance(states, np.ndarray)  # without sensors: the states alone
         parts.append(outcomes(model, states, lying=start != "standing"))
         if qpos is None:
             qpos = nao.state_qpos_all(model, states[0]).copy()
@@ -269,7 +272,7 @@ def replay_command(path: Path, json_out: bool = False, video: Path | None = None
         state = fell + end if lying else f"{state}, {end}"
     print(f"{Path(path).name}: moved dx={dx:+.3f} m dy={dy:+.3f} m, "
           f"turned {np.degrees(summary['heading_change_rad']):+.1f} deg, {state}")
-    if "trials" in summary:
+    if "trials" in summary and stress is not None:
         line = (f"{summary['trials']} perturbed trials (seed {stress.seed}): fall rate "
                 f"{100 * summary['fall_rate']:.0f}%, forward mean "
                 f"{summary['forward_mean_m']:+.3f} m, min {summary['forward_min_m']:+.3f} m")
