@@ -122,7 +122,7 @@ class ClosedLoopSimulator(Configured):
     threads (see the module doc); use it as a context manager or :meth:`close` it."""
 
     def __init__(self, robot, observations: ObservationSpec, control_steps: int,
-                 nthread: int = 1, columns: Sequence[int] | None = None,
+                 nthread: int = 1, columns: Sequence[int] | np.ndarray | None = None,
                  nominal: np.ndarray | None = None, push_steps: int = 1,
                  fall_height_m: float | None = None,
                  fall_tilt_rad: float | None = None,
@@ -261,7 +261,7 @@ class ClosedLoopSimulator(Configured):
 
 
 def configure(sim: Configured, robot, observations: ObservationSpec, control_steps: int,
-              nthread: int, columns: Sequence[int] | None, nominal: np.ndarray | None,
+              nthread: int, columns: Sequence[int] | np.ndarray | None, nominal: np.ndarray | None,
               push_steps: int, fall_height_m: float | None, fall_tilt_rad: float | None) -> None:
     """The settings every closed loop (CPU, MuJoCo Warp) checks and keeps on ``sim``: the robot
     and model, ``k`` physics steps per control step, the observation builder, the driven

@@ -28,7 +28,7 @@ import numpy as np
 from evomotion.core.optimizer import Optimizer
 from evomotion.core.policies import normalizer
 from evomotion.core.policies.normalizer import Moments, RunningStats, combine, mean_std
-from evomotion.core.problem import GenomeSpec
+from evomotion.core.problem import GenomeSpec, Sense
 from evomotion.core.state import state_from_arrays, state_to_arrays
 from evomotion.run.ask_tell import make_optimizer
 from evomotion.run.contracts import OwnInitialPopulation
@@ -41,7 +41,7 @@ EXTRA_COLUMNS = ("centre_return", "centre_steps", "train_episodes", "env_steps")
 
 class PolicyProblem(Protocol):
     genome: GenomeSpec
-    sense: str
+    sense: Sense
     metric_names: tuple[str, ...]
     obs_dim: int
     episodes: int  # training episodes per individual
@@ -110,7 +110,7 @@ class PolicySearchState:
 class PolicySearchDriver(Driver):
     """An ES optimizer over ``problem``'s policy parameters (sense: maximise the return)."""
 
-    sense = "max"
+    sense: Sense = "max"
     extra_columns = EXTRA_COLUMNS
 
     def __init__(self, problem: PolicyProblem, optimizer: Optimizer) -> None:
@@ -176,8 +176,9 @@ class PolicySearchDriver(Driver):
         opt_type = type(self.opt.init(np.random.default_rng(0)))
         opt_state = state_from_arrays(opt_type, arrays, meta, "opt.")
         obs = state_from_arrays(RunningStats, arrays, meta, "obs.")
-        fields = {f.name: (np.array(arrays[f.name]) if f.name in arrays else meta[f.name])
-                  for f in dataclasses.fields(PolicySearchState) if f.name not in ("opt", "obs")}
+        fields: dict[str, Any] = {
+            f.name: (np.array(arrays[f.name]) if f.name in arrays else meta[f.name])
+            for f in dataclasses.fields(PolicySearchState) if f.name not in ("opt", "obs")}
         return PolicySearchState(opt=opt_state, obs=obs, **fields)
 
     def check_state(self, state: PolicySearchState) -> None:

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from evomotion.core.checks import check_fields, check_number, check_text
-from evomotion.core.problem import Evaluation, GenomeSpec
+from evomotion.core.problem import Evaluation, GenomeSpec, Sense
 from evomotion.errors import InputError
 from evomotion.studies.arm_ik.geometry import segment_hits
 from evomotion.studies.arm_ik.heuristics import WristMap, build_wrist_map
@@ -88,7 +88,7 @@ _ASSESSMENT_FIELDS = tuple(f.name for f in dataclasses.fields(Assessment))
 class ArmIKProblem:
     """Batch evaluation of limbs; ``evaluate`` gives the penalised whole-limb fitness."""
 
-    sense = "min"
+    sense: Sense = "min"
     metric_names = ("distance", "intersections", "max_tip_error", "solved")
 
     def __init__(self, cfg: ArmIKConfig, scenario: Scenario | None = None) -> None:

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from evomotion.core.checks import MAX_POP_SIZE, check_fields, check_number
+from evomotion.core.problem import Sense
 from evomotion.core.state import replaced
 from evomotion.errors import InputError
 from evomotion.run.driver import Driver, Evaluate, StepReport
@@ -113,7 +114,7 @@ class ScheduleState:
 class ScheduleDriver(Driver):
     """Steps the schedule on an :class:`ArmIKProblem`."""
 
-    sense = "min"
+    sense: Sense = "min"
     extra_columns = EXTRA_COLUMNS
 
     def __init__(self, problem: ArmIKProblem, cfg: ScheduleConfig) -> None:

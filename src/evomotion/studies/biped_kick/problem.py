@@ -38,7 +38,7 @@ import numpy as np
 
 from evomotion.core.checks import check_fields, check_number, check_text
 from evomotion.core.constraints import feasibility_first
-from evomotion.core.problem import Evaluation, GenomeSpec
+from evomotion.core.problem import Evaluation, GenomeSpec, Sense
 from evomotion.errors import InputError
 from evomotion.sim.robots import nao
 from evomotion.sim.rollout import BatchSimulator, fall_step, interpolate_controls, torso_track
@@ -218,7 +218,7 @@ class KickProblem:
     ``cfg.robot`` (the NAO by default; a biped with feet ``left`` and ``right``): the robot's
     kicker (:func:`.kickers.kicker_for`) gives its genome bounds, scene and joint targets."""
 
-    sense = "max"
+    sense: Sense = "max"
     metric_names = METRICS  # the instance's: with ``ik_error_m`` for the numerical IK
 
     def __init__(self, cfg: KickConfig = KickConfig()) -> None:

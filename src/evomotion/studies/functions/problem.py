@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from evomotion.core.checks import check_fields, check_number
-from evomotion.core.problem import Evaluation, GenomeSpec, MeasureSpec
+from evomotion.core.problem import Evaluation, GenomeSpec, MeasureSpec, Sense
 from evomotion.core.registry import lookup
 from evomotion.errors import InputError
 
@@ -107,7 +107,7 @@ class FunctionsConfig:
 class FunctionProblem:
     """A benchmark function as a batch :class:`~evomotion.core.problem.Problem`."""
 
-    sense = "min"
+    sense: Sense = "min"
     metric_names = ("distance_to_optimum",)
 
     def __init__(self, cfg: FunctionsConfig) -> None:

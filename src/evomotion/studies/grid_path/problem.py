@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from evomotion.core.checks import check_choice, check_fields, check_number, check_text
-from evomotion.core.problem import Evaluation, GenomeSpec
+from evomotion.core.problem import Evaluation, GenomeSpec, Sense
 from evomotion.errors import InputError
 from evomotion.studies.grid_path.encoding import PerpendicularEncoding, parts_from_m
 from evomotion.studies.grid_path.geometry import RULES, polyline_segments_valid
@@ -132,7 +132,7 @@ def load_map(spec: str, start: tuple[int, int] | None = None,
 class GridPathProblem:
     """Batch evaluation of perpendicular-encoded paths on one map."""
 
-    sense = "min"
+    sense: Sense = "min"
     metric_names = ("length", "n_invalid")
 
     def __init__(self, cfg: GridPathConfig) -> None:

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 #: the tasks with an exact batched path: Gymnasium id prefix -> how their step reads
-TASKS = {
+TASKS: dict[str, dict[str, Any]] = {
     "Hopper": {"skip_qpos": 1, "clip_qvel": 10.0, "healthy": "hopper", "qvel_noise": "uniform"},
     "Walker2d": {"skip_qpos": 1, "clip_qvel": 10.0, "healthy": "walker",
                  "qvel_noise": "uniform"},

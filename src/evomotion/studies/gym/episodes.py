@@ -78,11 +78,11 @@ def run_batched(task: BatchedTask, policy: PolicyFn, owner: np.ndarray, seeds: n
         moments.add(alive, obs[alive])
         act = np.clip(policy(owner[alive], obs[alive]), action_low, action_high)
         x_before = qpos[alive, 0].copy()
-        for k, e in enumerate(alive):
-            d = datas[e]
+        for k, row in enumerate(alive.tolist()):
+            d = datas[row]
             d.ctrl[:] = act[k]
             mujoco.mj_step(m, d, nstep=task.frame_skip)
-            qpos[e], qvel[e] = d.qpos, d.qvel
+            qpos[row], qvel[row] = d.qpos, d.qvel
         healthy = task.is_healthy(qpos[alive], qvel[alive])
         returns[alive] += task.reward(x_before, qpos[alive, 0], act, healthy)
         steps[alive] += 1

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from evomotion.core.checks import check_choice, check_fields, check_number, check_text
-from evomotion.core.problem import Evaluation, GenomeSpec
+from evomotion.core.problem import Evaluation, GenomeSpec, Sense
 from evomotion.errors import InputError
 from evomotion.studies.gym.envs import BatchedTask, task_of
 from evomotion.studies.gym.episodes import Episodes, run_batched, run_gymnasium
@@ -104,8 +104,8 @@ def make_env(env_id: str) -> Any:
 class GymProblem:
     """Rows of policy parameters (+ normaliser and seeds) -> Gymnasium returns."""
 
-    sense = "max"
-    metric_names = ("return", "steps")
+    sense: Sense = "max"
+    metric_names: tuple[str, ...] = ("return", "steps")
 
     def __init__(self, cfg: GymConfig) -> None:
         from evomotion.core.policies import make_policy
@@ -137,7 +137,8 @@ class GymProblem:
             raise InputError(f"problem.backend: 'batched' steps only the v5 Hopper, Walker2d, "
                              f"HalfCheetah and Swimmer; {cfg.env} needs 'gymnasium' or 'auto'")
         self.backend = "gymnasium" if cfg.backend == "gymnasium" or task is None else "batched"
-        self.task = BatchedTask.from_env(env, task) if self.backend == "batched" else None
+        self.task = (BatchedTask.from_env(env, task) if self.backend == "batched" and task
+                     else None)
         self._env0 = env
         self.episodes, self.eval_episodes = cfg.episodes, cfg.eval_episodes
         self.normalize = cfg.normalize

@@ -21,6 +21,7 @@ Per episode (:func:`run_episodes`, :class:`~evomotion.sim.closed_loop.ClosedLoop
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -29,6 +30,9 @@ from evomotion.sim.closed_loop import ClosedLoopResult, ClosedLoopSimulator
 from evomotion.sim.worlds import World
 from evomotion.studies.episode_worlds import WorldDraw, episode_world, push_range
 from evomotion.studies.policy_search import observation_moments
+
+if TYPE_CHECKING:
+    from evomotion.sim.warp_closed_loop import WarpClosedLoopSimulator
 
 __all__ = ["Episodes", "WorldDraw", "episode_world", "push_range", "run_episodes"]
 
@@ -51,9 +55,9 @@ class Episodes:
     result: ClosedLoopResult
 
 
-def run_episodes(sim: ClosedLoopSimulator, spec: PolicySpec, params: np.ndarray,
-                 mean: np.ndarray, std: np.ndarray, worlds: list[World], nstep: int,
-                 tilt_weight: float, action_weight: float,
+def run_episodes(sim: ClosedLoopSimulator | WarpClosedLoopSimulator, spec: PolicySpec,
+                 params: np.ndarray, mean: np.ndarray, std: np.ndarray, worlds: list[World],
+                 nstep: int, tilt_weight: float, action_weight: float,
                  record_states: bool = False) -> Episodes:
     """Episode ``i``: policy ``params[i]`` with normaliser ``mean[i]``, ``std[i]`` in
     ``worlds[i]`` for ``nstep`` physics steps (see the module doc)."""

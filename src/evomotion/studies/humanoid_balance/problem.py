@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 import os
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -35,6 +35,9 @@ from evomotion.studies.humanoid_balance.episodes import (
     run_episodes,
 )
 from evomotion.studies.policy_search import EpisodeRows, neutral_rows, split_rows
+
+if TYPE_CHECKING:
+    from evomotion.sim.warp_closed_loop import WarpClosedLoopSimulator
 
 MAX_EPISODES = 1000
 MAX_DURATION_S = 600.0
@@ -163,6 +166,7 @@ class HumanoidBalanceProblem:
         self.nstep = int(math.ceil(cfg.duration_s / self.dt))
         self.obs_spec = ObservationSpec(cfg.channels(), phase_period_s=cfg.phase_period_s)
         threads = cfg.threads or max(1, min(os.cpu_count() or 1, 8))
+        self.sim: ClosedLoopSimulator | WarpClosedLoopSimulator
         if cfg.backend == "warp":  # the same loop on MuJoCo Warp (sim/warp_closed_loop.py)
             from evomotion.sim.warp_closed_loop import WarpClosedLoopSimulator
 

@@ -135,7 +135,7 @@ def quiet_problem(problem):
 
 
 def top_speeds(p, params, mean, std, tests: dict[str, tuple] | None = None
-               ) -> dict[str, dict[str, float]]:
+               ) -> dict[str, dict[str, Any]]:
     """Each direction alone at its range limit in ``p`` (a :func:`quiet_problem`; module
     doc), or each command of ``tests`` (name -> (vx, vy, ω)) alone."""
     cfg = p.cfg

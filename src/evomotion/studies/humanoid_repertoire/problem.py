@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from evomotion.core.checks import check_fields, check_number, check_text
-from evomotion.core.problem import Evaluation, GenomeSpec
+from evomotion.core.problem import Evaluation, GenomeSpec, Sense
 from evomotion.errors import InputError
 from evomotion.sim.backend import BatchedRollouts, make_simulator
 from evomotion.sim.motion import Motion
@@ -104,7 +104,7 @@ class HumanoidRepertoireProblem(BatchedRollouts):
     feet ``left`` and ``right``): objective and (dx, dy, dtheta) measures. The key poses
     come from the stepper its capabilities allow (:func:`.steppers.stepper_for`)."""
 
-    sense = "max"
+    sense: Sense = "max"
     metric_names = METRICS  # the instance's: its stepper's
     measure_spec = MEASURES  # the instance's: scaled to the robot's size
 

@@ -47,7 +47,7 @@ import mujoco
 import numpy as np
 
 from evomotion.core.checks import check_choice, check_fields, check_number
-from evomotion.core.problem import Evaluation
+from evomotion.core.problem import Evaluation, Sense
 from evomotion.errors import InputError
 from evomotion.sim.backend import BatchedRollouts, make_simulator
 from evomotion.sim.physics_config import PerturbedWorldsConfig, PhysicsConfig, validate_physics
@@ -207,7 +207,7 @@ def flight_steps(airborne: np.ndarray, min_run: int) -> np.ndarray:
 class HumanoidStepProblem(BatchedRollouts):
     """Batch evaluation of forward-step trajectories (fitness maximised)."""
 
-    sense = "max"
+    sense: Sense = "max"
     metric_names = METRICS
 
     def __init__(self, cfg: HumanoidStepConfig | None = None) -> None:

@@ -51,7 +51,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from evomotion.core.checks import check_choice, check_fields, check_number
-from evomotion.core.problem import Evaluation
+from evomotion.core.problem import Evaluation, Sense
 from evomotion.errors import InputError
 from evomotion.sim.backend import BatchedRollouts, make_simulator
 from evomotion.sim.motion import Motion
@@ -145,7 +145,7 @@ class HumanoidWalkProblem(BatchedRollouts):
     ``cfg.robot`` (the NAO by default), driven by the gait its capabilities allow
     (:func:`.gaits.gait_for`)."""
 
-    sense = "max"
+    sense: Sense = "max"
     metric_names = METRICS  # the instance's: its gait's (:mod:`.gaits`)
 
     def __init__(self, cfg: HumanoidWalkConfig | None = None) -> None:

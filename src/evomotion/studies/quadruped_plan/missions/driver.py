@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from evomotion.core.checks import check_fields, check_number
+from evomotion.core.problem import Sense
 from evomotion.errors import InputError
 from evomotion.run.driver import Driver, Evaluate, StepReport
 from evomotion.studies.quadruped_plan.missions.mission import (
@@ -113,7 +114,7 @@ def _from_json(meta: dict[str, Any]) -> MissionState:
 
 
 class RecedingDriver(Driver):
-    sense = "min"
+    sense: Sense = "min"
     extra_columns = EXTRA_COLUMNS
     uses_evaluator = False
     snapshot_every_step = True

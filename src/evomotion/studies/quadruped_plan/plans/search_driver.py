@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from evomotion.core.problem import Sense
 from evomotion.core.search import (
     FOUND,
     OPEN_EMPTY,
@@ -45,7 +46,7 @@ class SearchDriverState:
 
 
 class SearchDriver(Driver):
-    sense = "min"
+    sense: Sense = "min"
     extra_columns = EXTRA_COLUMNS
     uses_evaluator = False
     snapshot_every_step = False
