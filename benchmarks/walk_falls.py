@@ -9,7 +9,9 @@ every push 0 N s; ``--pushes MIN MAX`` plays another push range than the run's (
 trained with other pushes, measured on the default's ``0 5``). A fall "after the push" is
 one within 2 s of it. Directions: the push's horizontal direction against the torso's
 heading at the push (within 45° of forward, of backward, to the left, to the right).
-Output: one markdown table per run, then JSON with ``--json``.
+Push sizes are the worlds' own (for another robot than the NAO, already scaled by its mass:
+``episode_worlds.push_range``). Output: one markdown table per run, then JSON with
+``--json``.
 """
 
 from __future__ import annotations
@@ -21,7 +23,7 @@ import sys
 
 import numpy as np
 
-BINS = ((0.0, 2.0), (2.0, 3.0), (3.0, 4.0), (4.0, 5.01))
+BINS = ((0.0, 2.0), (2.0, 3.0), (3.0, 4.0), (4.0, float("inf")))
 SIDES = ("forward", "backward", "left", "right")
 
 
@@ -73,8 +75,8 @@ def measure(run: str, worlds: int, duration_s: float, seed: int,
            "by_size": {}, "by_side": {}}
     for lo, hi in BINS:
         s = (mag >= lo) & (mag < hi)
-        out["by_size"][f"{lo:g}-{min(hi, 5):g}"] = [int(s.sum()), float(up[s].mean()) if s.any()
-                                                    else float("nan")]
+        name = f"{lo:g}-{hi:g}" if hi < float("inf") else f"{lo:g}+"
+        out["by_size"][name] = [int(s.sum()), float(up[s].mean()) if s.any() else float("nan")]
     big = mag >= 3.0
     for i, name in enumerate(SIDES):
         s = big & (side == i)
@@ -106,6 +108,9 @@ def main(argv: list[str] | None = None) -> int:
                     help="push range (N s) instead of the run's own")
     ap.add_argument("--json", action="store_true")
     a = ap.parse_args(argv)
+    if a.worlds < 1 or a.duration <= 0 or a.seed < 0 or (a.pushes and not
+                                                         0 <= a.pushes[0] <= a.pushes[1]):
+        ap.error("expected --worlds >= 1, --duration > 0, --seed >= 0 and 0 <= MIN <= MAX")
     res = [measure(r, a.worlds, a.duration, a.seed, a.pushes and tuple(a.pushes)) for r in a.runs]
     for r in res:
         print(table(r), "\n")

@@ -37,6 +37,15 @@ def _field(page, key: str):
     return page.locator(f'input[data-key="{key}"], [data-key="{key}"] input').first
 
 
+def _status(page) -> str:
+    """The run page's status badge and action message (for a timeout's message)."""
+    try:
+        return (f"status {page.locator('.run-status').inner_text(timeout=2000)!r}, message "
+                f"{page.locator('.action-message').inner_text(timeout=2000)!r}")
+    except Exception as e:  # the page itself is gone: say so, keep the timeout's message
+        return f"page unreadable: {type(e).__name__}"
+
+
 def _wait(cond, timeout=30.0, what="condition"):
     end = time.time() + timeout
     while time.time() < end:
@@ -101,9 +110,8 @@ def test_live_run_grows_then_stop_and_resume_from_the_page(page, studio):
         _wait(lambda: _rows(page) >= first + 3, what="the curve to grow without a reload")
         assert "running" in page.locator(".run-status").inner_text()
         page.locator(".stop-button").click()
-        _wait(lambda: "interrupted" in page.locator(".run-status").inner_text(), 120,
-              lambda: f"the stop (status {page.locator('.run-status').inner_text()!r}, "
-                      f"message {page.locator('.action-message').inner_text()!r})")
+        _wait(lambda: "interrupted" in page.locator(".run-status").inner_text(), 90,
+              lambda: f"the stop ({_status(page)})")
         assert proc.wait(30) == 130
         assert "stopped: interrupted" in (out / "log.txt").read_text()
         stopped_at = _rows(page)
@@ -111,9 +119,8 @@ def test_live_run_grows_then_stop_and_resume_from_the_page(page, studio):
         _wait(lambda: "running" in page.locator(".run-status").inner_text(), 60, "resume")
         _wait(lambda: _rows(page) > stopped_at, 60, "the resumed run to go on")
         page.locator(".stop-button").click()
-        _wait(lambda: "interrupted" in page.locator(".run-status").inner_text(), 120,
-              lambda: f"the second stop (status {page.locator('.run-status').inner_text()!r}, "
-                      f"message {page.locator('.action-message').inner_text()!r})")
+        _wait(lambda: "interrupted" in page.locator(".run-status").inner_text(), 90,
+              lambda: f"the second stop ({_status(page)})")
     finally:
         if proc.poll() is None:
             proc.kill()
