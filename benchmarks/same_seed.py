@@ -10,12 +10,14 @@ not matter. Cases (``--list`` prints them with their commands):
 - ``run/<study>/default`` and ``run/<study>/<preset>``: ``evomotion run`` of every registered
   study with its defaults and with its paper preset (``--preset seed``; humanoid-walk-open-loop's
   ``nominal`` and humanoid-repertoire's ``map_elites``, which have none), 3 generations (1 for
-  the MuJoCo studies), videos off, no wall-clock budget; functions once per method (ga, cga,
+  the MuJoCo studies and the closed-loop ones: gym, humanoid-balance, humanoid-walk), videos
+  off, no wall-clock budget; functions once per method (ga, cga,
   cmaes; map_elites and cma_me with ``problem.measures=linear_projection``). Some add the
   study's deterministic follow-up commands on the run folder: ``grid-path make-map``,
   ``humanoid-walk-open-loop compare --json``, ``humanoid-repertoire pick / walk-to --json``,
   ``biped-kick
-  play --json``, ``quadruped-plan check / simulate --json``.
+  play --json``, ``quadruped-plan check / simulate --json``, ``humanoid-balance compare`` and
+  ``humanoid-walk compare`` on 2 worlds ``--json``.
 - ``robot/<robot>/<study>``: ``--robot op3`` for humanoid-step, humanoid-walk-open-loop,
   humanoid-repertoire and biped-kick (a tree that refuses it compares by its one-line error),
   ``--robot dm-humanoid`` for the first three, ``--robot dm-quadruped`` for humanoid-walk-open-loop
@@ -66,7 +68,8 @@ from same_seed_compare import Paths, first_difference, folder_values, stdout_val
 
 INTERNAL = Path(__file__).with_name("same_seed_internal.py")
 LOG_PREFIX = "same-seed-command-"  # each command's stdout and stderr, kept with --keep
-MUJOCO = {"humanoid-step", "humanoid-walk-open-loop", "humanoid-repertoire", "biped-kick"}
+MUJOCO = {"humanoid-step", "humanoid-walk-open-loop", "humanoid-repertoire", "biped-kick",
+          "gym", "humanoid-balance", "humanoid-walk"}
 PRESETS = {"grid-path": "seed", "humanoid-step": "seed", "humanoid-walk-open-loop": "nominal",
            "humanoid-repertoire": "map_elites", "arm-ik": "seed", "biped-kick": "seed",
            "quadruped-plan": "seed"}
@@ -79,7 +82,12 @@ FOLLOW_UP = {  # deterministic commands on the default run folder ("out")
     "biped-kick": [["biped-kick", "play", "--kick", "out", "--json"]],
     "quadruped-plan": [["quadruped-plan", "check", "out"],
                        ["quadruped-plan", "simulate", "out", "--json"]],
+    "humanoid-balance": [["humanoid-balance", "compare", "out", "--worlds", "2", "--json"]],
+    "humanoid-walk": [["humanoid-walk", "compare", "out", "--worlds", "2", "--duration", "2",
+                       "--json"]],
 }
+#: the closed-loop policy studies (issues 33, 34) and their paper preset, if any
+CLOSED_LOOP = {"gym": "paper", "humanoid-balance": None, "humanoid-walk": None}
 
 
 @dataclass
@@ -106,6 +114,10 @@ def cases() -> list[Case]:
     for study, preset in PRESETS.items():
         out.append(Case(f"run/{study}/default", [run_args(study), *FOLLOW_UP.get(study, [])]))
         out.append(Case(f"run/{study}/{preset}", [run_args(study, "--preset", preset)]))
+    for study, maybe in CLOSED_LOOP.items():
+        out.append(Case(f"run/{study}/default", [run_args(study), *FOLLOW_UP.get(study, [])]))
+        if maybe:
+            out.append(Case(f"run/{study}/{maybe}", [run_args(study, "--preset", maybe)]))
     robots = [("op3", s) for s in ("humanoid-step", "humanoid-walk-open-loop",
                                     "humanoid-repertoire",
                                    "biped-kick")]
