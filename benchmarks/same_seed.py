@@ -70,9 +70,12 @@ INTERNAL = Path(__file__).with_name("same_seed_internal.py")
 LOG_PREFIX = "same-seed-command-"  # each command's stdout and stderr, kept with --keep
 MUJOCO = {"humanoid-step", "humanoid-walk-open-loop", "humanoid-repertoire", "biped-kick",
           "gym", "humanoid-balance", "humanoid-walk"}
+#: each study's paper preset (None: the study has none); the last three are the closed-loop
+#: policy studies (issues 33, 34)
 PRESETS = {"grid-path": "seed", "humanoid-step": "seed", "humanoid-walk-open-loop": "nominal",
            "humanoid-repertoire": "map_elites", "arm-ik": "seed", "biped-kick": "seed",
-           "quadruped-plan": "seed"}
+           "quadruped-plan": "seed", "gym": "paper", "humanoid-balance": None,
+           "humanoid-walk": None}
 FOLLOW_UP = {  # deterministic commands on the default run folder ("out")
     "grid-path": [["grid-path", "make-map", "random.map", "--seed", "3"]],
     "humanoid-walk-open-loop": [["humanoid-walk-open-loop", "compare", "out", "--json"]],
@@ -86,8 +89,6 @@ FOLLOW_UP = {  # deterministic commands on the default run folder ("out")
     "humanoid-walk": [["humanoid-walk", "compare", "out", "--worlds", "2", "--duration", "2",
                        "--json"]],
 }
-#: the closed-loop policy studies (issues 33, 34) and their paper preset, if any
-CLOSED_LOOP = {"gym": "paper", "humanoid-balance": None, "humanoid-walk": None}
 
 
 @dataclass
@@ -113,11 +114,8 @@ def cases() -> list[Case]:
             for m in ("map_elites", "cma_me")]  # quality diversity needs measures
     for study, preset in PRESETS.items():
         out.append(Case(f"run/{study}/default", [run_args(study), *FOLLOW_UP.get(study, [])]))
-        out.append(Case(f"run/{study}/{preset}", [run_args(study, "--preset", preset)]))
-    for study, maybe in CLOSED_LOOP.items():
-        out.append(Case(f"run/{study}/default", [run_args(study), *FOLLOW_UP.get(study, [])]))
-        if maybe:
-            out.append(Case(f"run/{study}/{maybe}", [run_args(study, "--preset", maybe)]))
+        if preset:
+            out.append(Case(f"run/{study}/{preset}", [run_args(study, "--preset", preset)]))
     robots = [("op3", s) for s in ("humanoid-step", "humanoid-walk-open-loop",
                                     "humanoid-repertoire",
                                    "biped-kick")]

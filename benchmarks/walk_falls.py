@@ -27,13 +27,12 @@ BINS = ((0.0, 2.0), (2.0, 3.0), (3.0, 4.0), (4.0, float("inf")))
 SIDES = ("forward", "backward", "left", "right")
 
 
-def _episodes(problem, policy, seeds: np.ndarray, push_ns: float | None, batch: int = 20):
-    """(survived[n], time up (s)[n], heading (rad)[n] at each world's push)."""
+def _episodes(problem, policy, seeds: np.ndarray, push_t: np.ndarray, push_ns: float | None,
+              batch: int = 20):
+    """(survived[n], time up (s)[n], heading (rad)[n] at each world's push time ``push_t``)."""
     from evomotion.studies.humanoid_omniwalk.commands import torso_yaw
 
     up, t_up, heading = [], [], []
-    worlds = problem.worlds(seeds, None)
-    push_t = np.array([w.push_time_s for w in worlds])
     for a in range(0, len(seeds), batch):
         s = seeds[a:a + batch]
         n = len(s)
@@ -44,7 +43,7 @@ def _episodes(problem, policy, seeds: np.ndarray, push_ns: float | None, batch: 
         heading.append(torso_yaw(res.torso[np.arange(n), c, 3:7]))
         up.append(m["survived"] >= 1)
         t_up.append(m["time_up_s"])
-    return np.concatenate(up), np.concatenate(t_up), np.concatenate(heading), worlds
+    return np.concatenate(up), np.concatenate(t_up), np.concatenate(heading)
 
 
 def measure(run: str, worlds: int, duration_s: float, seed: int,
@@ -58,11 +57,12 @@ def measure(run: str, worlds: int, duration_s: float, seed: int,
         problem = OmniWalkProblem(dataclasses.replace(problem.cfg, push_min_ns=pushes[0],
                                                       push_max_ns=pushes[1]))
     seeds = EVAL_SEED_BASE + seed * MAX_WORLDS + np.arange(worlds)
-    up, t_up, heading, ws = _episodes(problem, policy, seeds, None)
-    up0, _, _, _ = _episodes(problem, policy, seeds, 0.0)
+    ws = problem.worlds(seeds, None)
+    when = np.array([w.push_time_s for w in ws])
+    up, t_up, heading = _episodes(problem, policy, seeds, when, None)
+    up0, _, _ = _episodes(problem, policy, seeds, when, 0.0)
     problem.sim.close()
     mag = np.array([w.params["push_magnitude_ns"] for w in ws])
-    when = np.array([w.push_time_s for w in ws])
     vec = np.array([w.push_ns[:2] for w in ws], float)
     rel = np.angle(np.exp(1j * (np.arctan2(vec[:, 1], vec[:, 0]) - heading)))
     side = np.select([np.abs(rel) <= np.pi / 4, np.abs(rel) >= 3 * np.pi / 4, rel > 0],

@@ -118,7 +118,7 @@ def render_video(qpos: np.ndarray, dt: float, out_path: str | Path, fps: int = 2
     xml = np.frombuffer((model_xml or "").encode(), dtype=np.uint8)
     names = np.frombuffer(json.dumps(list(assets)).encode(), dtype=np.uint8)
     files: dict[str, Any] = {f"asset_{i}": np.frombuffer(data, dtype=np.uint8)
-             for i, data in enumerate(assets.values())}
+                             for i, data in enumerate(assets.values())}
     np.savez(buf, qpos=np.ascontiguousarray(qpos[::stride], dtype=np.float64), xml=xml,
              asset_names=names, **files)
     with atomic_output(out_path, "video", suffix=".tmp.mp4") as tmp:
