@@ -1,7 +1,8 @@
-"""The step, walk and repertoire studies on the MuJoCo Warp backend (Warp's CPU device): the GA
-/ CMA-ES / MAP-Elites loop runs end to end through the one run loop, the run folder records the
-backend, and an interrupted run resumes bit-identically (Warp's CPU device runs every kernel in a
-fixed order, with ``warp_deterministic`` off, the default, as on)."""
+"""The step, walk, repertoire and balance studies on the MuJoCo Warp backend (Warp's CPU
+device): the GA / CMA-ES / MAP-Elites / ARS loop runs end to end through the one run loop, the
+run folder records the backend, and an interrupted run resumes bit-identically (Warp's CPU
+device runs every kernel in a fixed order, with ``warp_deterministic`` off, the default, as
+on)."""
 
 from __future__ import annotations
 
@@ -29,7 +30,7 @@ def _overrides(name: str) -> list[str]:
 
 
 @pytest.mark.parametrize("name", ["humanoid-step", "humanoid-walk-open-loop",
-                                  "humanoid-repertoire"])
+                                  "humanoid-repertoire", "humanoid-balance"])
 def test_study_runs_on_warp_and_resumes_bit_identically(name, tmp_path):
     s = get_study(name)
     cfg = resolve_config(s, None, _overrides(name))
@@ -53,8 +54,9 @@ def test_study_runs_on_warp_and_resumes_bit_identically(name, tmp_path):
     assert best == json.loads((tmp_path / "cut" / "best.json").read_text())
 
 
-def test_cpu_run_records_its_physics(tmp_path):
-    s = get_study("humanoid-step")
+@pytest.mark.parametrize("name", ["humanoid-step", "humanoid-balance"])
+def test_cpu_run_records_its_physics(name, tmp_path):
+    s = get_study(name)
     over = [*s.smoke, "run.generations=0"]
     run_study(s, resolve_config(s, None, over), tmp_path / "r", quiet=True)
     physics = json.loads((tmp_path / "r" / "physics.json").read_text())

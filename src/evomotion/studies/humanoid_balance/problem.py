@@ -196,6 +196,13 @@ class HumanoidBalanceProblem:
         self.episodes, self.eval_episodes = cfg.episodes, cfg.eval_episodes
         self.normalize = cfg.normalize
 
+    def physics_record(self) -> dict[str, Any]:
+        """``physics.json``: the backend and what it guarantees (a GPU run is not
+        bit-identical; docs/gpu.md), the robot and the digests of its spec and MJCF."""
+        from evomotion.sim.backend import physics_record, robot_identity
+
+        return {**physics_record(self.sim), **robot_identity(self.robot)}
+
     def worlds(self, seeds: np.ndarray, push_ns: float | None = None) -> list:
         """The episode worlds of ``seeds`` (one drawn per distinct seed)."""
         cache: dict[int, Any] = {}

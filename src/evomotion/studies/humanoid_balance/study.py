@@ -68,7 +68,6 @@ STUDY = Study(
     best_record=lazy_hook("evomotion.studies.policy_search", "best_record"),
     replay=None,
     replay_run=lazy("evomotion.studies.humanoid_balance.replay", "replay_policy_command"),
-    run_record=None,
     cli=cli,
     # the studio plays the exported policy in any unseen world, with any push
     view=StudyView(played=lazy("evomotion.studies.humanoid_balance.replay", "played")),
