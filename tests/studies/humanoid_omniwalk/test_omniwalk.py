@@ -81,6 +81,26 @@ def test_a_fall_scores_below_walking_on(problem):
     assert res.fell[1] and m["return"][1] < m["return"][0]
 
 
+def test_the_fall_weight_costs_a_fallen_episode_exactly_that(problem):
+    """``fall_weight`` lowers the score of an episode that fell by itself, and nothing else."""
+    import dataclasses
+
+    x0 = problem.initial_population(None, np.random.default_rng(0))[0]
+    (C, _), (K, _) = problem.policy.unflatten(x0)
+    names = [problem.robot.model.actuator(int(c)).name for c in problem.sim.columns]
+    C = C.copy()
+    C[[names.index("LKneePitch"), names.index("RKneePitch")], 0] += 1.5  # folds: falls
+    P = np.stack([x0, problem.policy.flatten([(C, None), (K, None)])])
+    M, S = np.zeros((2, problem.obs_dim)), np.ones((2, problem.obs_dim))
+    heavy = OmniWalkProblem(dataclasses.replace(problem.cfg, fall_weight=0.5))
+    m0, res, _ = problem.play(P, M, S, np.array([5, 5]))
+    m1, _, _ = heavy.play(P, M, S, np.array([5, 5]))
+    assert res.fell.tolist() == [False, True]
+    np.testing.assert_allclose(m1["return"], m0["return"] - 0.5 * res.fell, rtol=0, atol=1e-12)
+    with pytest.raises(InputError, match="problem.fall_weight"):
+        OmniWalkConfig(fall_weight=-1.0).validate()
+
+
 def test_run_writes_the_controller_and_its_description(run_dir, problem):
     for name in ("policy.npz", "policy.py", "policy.json", "best.json", "stats.csv"):
         assert (run_dir / name).is_file(), name

@@ -14,7 +14,7 @@ friction, masses, CoM, motors, latency, one push up to ``push_max_ns``) and one 
 schedule (:mod:`.commands`: a new command every 2-4 s). The episode score (maximised):
 
     score = mean_c [alive_c (r_v + yaw_share r_ω) / (1 + yaw_share)]
-            − energy_weight · power_w − speed_weight · speed_excess
+            − energy_weight · power_w − speed_weight · speed_excess − fall_weight · fell
 
 ``r_v = exp(−|v − v_cmd|² / σ_v²)``, ``r_ω = exp(−(ω − ω_cmd)² / σ_ω²)`` over sliding one-cycle
 windows (:func:`.commands.tracking`, after the first cycle), ``alive_c`` 0 from the fall on (a
@@ -22,7 +22,8 @@ fall loses the rest of the episode); ``power_w`` the servos' mean mechanical pow
 ``Σ|τ q̇|`` (W, ``τ = clip(kp (target − q), force range)``, sampled at the control steps);
 ``speed_excess`` the mean over control steps of ``Σ_j max(|Δtarget_j| / Δt / v_j − 1, 0)``,
 ``v_j`` the NAO motor's no-load speed (:data:`~evomotion.sim.robots.nao.joint_limits.
-SPEED_LIMITS`): targets faster than the real motors cost.
+SPEED_LIMITS`): targets faster than the real motors cost; ``fell`` 1 for an episode that fell
+(``fall_weight`` 0 by default: the fall costs only the windows it loses).
 """
 
 from __future__ import annotations
@@ -87,6 +88,7 @@ class OmniWalkConfig:
     yaw_share: float = 0.5  # weight of yaw tracking beside velocity tracking
     energy_weight: float = 0.0005  # score lost per W of mean servo power
     speed_weight: float = 0.5  # score lost per unit of speed excess
+    fall_weight: float = 0.0  # score lost by an episode that falls (beside the lost windows)
     param_bound: float = 100.0  # the genome box +- this
     threads: int = 0  # mujoco.rollout threads; 0 = all cores (1 in a worker process)
     # the walk engine the tape starts from (omni_gait.py), in the NAO's units: another robot
@@ -124,7 +126,7 @@ class OmniWalkConfig:
         check_number("problem.push_max_ns", self.push_max_ns, lo=self.push_min_ns, hi=1000.0)
         for key in ("sigma_v_mps", "sigma_yaw_rps"):
             check_number(f"problem.{key}", getattr(self, key), lo=0.0, hi=100.0, lo_open=True)
-        for key in ("yaw_share", "energy_weight", "speed_weight"):
+        for key in ("yaw_share", "energy_weight", "speed_weight", "fall_weight"):
             check_number(f"problem.{key}", getattr(self, key), lo=0.0, hi=1000.0)
         check_number("problem.param_bound", self.param_bound, lo=1e-6, hi=1e6)
         check_number("problem.threads", self.threads, lo=0, hi=1024, integer=True)
@@ -218,7 +220,8 @@ class OmniWalkProblem:
         track = (r * alive).mean(axis=1)
         n_alive = np.maximum(alive.sum(axis=1), 1)
         power, excess = self.ctl.effort(res)
-        score = track - cfg.energy_weight * power - cfg.speed_weight * excess
+        score = (track - cfg.energy_weight * power - cfg.speed_weight * excess
+                 - cfg.fall_weight * res.fell)
         return {"return": score, "survived": (~res.fell).astype(float),
                 "time_up_s": res.fall_time_s, "steps": np.ceil(res.steps / self.control_steps),
                 "speed_error_mps": (ev * alive).sum(axis=1) / n_alive,
