@@ -62,6 +62,9 @@ def test_cpu_run_records_its_physics(name, tmp_path):
     physics = json.loads((tmp_path / "r" / "physics.json").read_text())
     assert physics["backend"] == "cpu" and physics["precision"] == "float64"
     assert "physics:" not in (tmp_path / "r" / "log.txt").read_text()
+    if name == "humanoid-balance":  # the robot in its stance is still the NAO's spec and MJCF
+        assert physics["robot"] == "nao"
+        assert "?" not in (physics["robot_spec_sha256"], physics["robot_mjcf_sha256"])
 
 
 def test_resume_on_other_physics_is_noted(tmp_path):

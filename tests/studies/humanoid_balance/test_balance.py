@@ -183,8 +183,11 @@ SPEC_POSE = ("problem.stance_width_rad=0", "problem.stance_stagger_rad=0",
 
 
 def _before_the_stance(run) -> None:
-    """Make ``run`` look written before problem.stance_* existed: no such keys anywhere."""
+    """Make ``run`` look written before problem.stance_* existed: no such keys anywhere, and no
+    ``physics.json`` (recorded since 2026-12-05)."""
     import re
+
+    (run / "physics.json").unlink()
 
     cfg = run / "config.toml"
     cfg.write_text(re.sub(r"^stance_\w+ = .*\n", "", cfg.read_text(), flags=re.M))
@@ -249,3 +252,6 @@ def test_the_default_stance_is_wider_and_a_folder_from_before_it_resumes_in_the_
     assert len(a["generation"]) == len(b["generation"]) == 4
     for col in set(a) - {"wall_s", "evals_per_s"}:
         np.testing.assert_array_equal(a[col], b[col], err_msg=col)
+    # the resume wrote the record the old folder lacked, without a note about other physics
+    assert json.loads((part / "physics.json").read_text())["backend"] == "cpu"
+    assert "other physics" not in (part / "log.txt").read_text()
