@@ -38,13 +38,20 @@ def make_simulator(model: mujoco.MjModel, cfg: Any, threads: int = 0):
     return BatchSimulator(model, threads)
 
 
-def physics_record(sim: Any) -> dict[str, Any]:
-    """What a run folder records about its physics (``physics.json``)."""
+def physics_record(sim: Any, robot: Any = None) -> dict[str, Any]:
+    """What a run folder records about its physics (``physics.json``): the backend, its
+    device and guarantee; with ``robot`` also its name and the digests of its spec and MJCF
+    (:func:`robot_identity`)."""
     if getattr(sim, "backend", "cpu") == "warp":
-        return sim.record()
-    return {"backend": "cpu", "threads": sim.nthread, "precision": "float64",
-            "mujoco": mujoco.__version__,
-            "guarantee": "bit-identical for one seed, whatever the evaluator and thread count"}
+        record = sim.record()
+    else:
+        record = {"backend": "cpu", "threads": sim.nthread, "precision": "float64",
+                  "mujoco": mujoco.__version__,
+                  "guarantee": "bit-identical for one seed, whatever the evaluator and thread "
+                               "count"}
+    if robot is not None:
+        record.update(robot_identity(robot))
+    return record
 
 
 def robot_identity(robot: Any) -> dict[str, str]:
@@ -108,11 +115,7 @@ class BatchedRollouts:
         """The physics backend, device and its reproducibility guarantee (``physics.json``);
         for another robot than the NAO also its name and the SHA-256 of its spec and MJCF (a
         resume with an edited robot is noted in the log)."""
-        record = physics_record(self.sim)
-        robot = getattr(self, "robot", None)
-        if robot is not None:
-            record.update(robot_identity(robot))
-        return record
+        return physics_record(self.sim, getattr(self, "robot", None))
 
     def device_memory(self, pop_size: int) -> tuple[int, int | None, str] | None:
         """(needed, free bytes, device) of a population's batch on a GPU backend, else None."""

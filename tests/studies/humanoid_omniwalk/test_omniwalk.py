@@ -67,16 +67,19 @@ def test_evaluation_rows_are_independent_of_their_neighbours(problem):
     assert np.all(ev.metrics["power_w"] > 0) and np.all(ev.metrics["speed_excess"] >= 0)
 
 
-def test_a_fall_scores_below_walking_on(problem):
-    """The engine's walk beside a controller that folds the knees: it falls and scores less."""
+def _walk_and_fold(problem) -> np.ndarray:
+    """Two controllers: the engine's walk and one that folds the knees (it falls)."""
     x0 = problem.initial_population(None, np.random.default_rng(0))[0]
-    bad = x0.copy()
-    (C, _), (K, _) = problem.policy.unflatten(bad)
+    (C, _), (K, _) = problem.policy.unflatten(x0)
     names = [problem.robot.model.actuator(int(c)).name for c in problem.sim.columns]
     C = C.copy()
     C[[names.index("LKneePitch"), names.index("RKneePitch")], 0] += 1.5
-    bad = problem.policy.flatten([(C, None), (K, None)])
-    m, res, _ = problem.play(np.stack([x0, bad]), np.zeros((2, problem.obs_dim)),
+    return np.stack([x0, problem.policy.flatten([(C, None), (K, None)])])
+
+
+def test_a_fall_scores_below_walking_on(problem):
+    """The engine's walk beside a controller that folds the knees: it falls and scores less."""
+    m, res, _ = problem.play(_walk_and_fold(problem), np.zeros((2, problem.obs_dim)),
                              np.ones((2, problem.obs_dim)), np.array([5, 5]))
     assert res.fell[1] and m["return"][1] < m["return"][0]
 
@@ -85,12 +88,7 @@ def test_the_fall_weight_costs_a_fallen_episode_exactly_that(problem):
     """``fall_weight`` lowers the score of an episode that fell by itself, and nothing else."""
     import dataclasses
 
-    x0 = problem.initial_population(None, np.random.default_rng(0))[0]
-    (C, _), (K, _) = problem.policy.unflatten(x0)
-    names = [problem.robot.model.actuator(int(c)).name for c in problem.sim.columns]
-    C = C.copy()
-    C[[names.index("LKneePitch"), names.index("RKneePitch")], 0] += 1.5  # folds: falls
-    P = np.stack([x0, problem.policy.flatten([(C, None), (K, None)])])
+    P = _walk_and_fold(problem)
     M, S = np.zeros((2, problem.obs_dim)), np.ones((2, problem.obs_dim))
     heavy = OmniWalkProblem(dataclasses.replace(problem.cfg, fall_weight=0.5))
     m0, res, _ = problem.play(P, M, S, np.array([5, 5]))

@@ -199,9 +199,9 @@ class HumanoidBalanceProblem:
     def physics_record(self) -> dict[str, Any]:
         """``physics.json``: the backend and what it guarantees (a GPU run is not
         bit-identical; docs/gpu.md), the robot and the digests of its spec and MJCF."""
-        from evomotion.sim.backend import physics_record, robot_identity
+        from evomotion.sim.backend import physics_record
 
-        return {**physics_record(self.sim), **robot_identity(self.robot)}
+        return physics_record(self.sim, self.robot)
 
     def worlds(self, seeds: np.ndarray, push_ns: float | None = None) -> list:
         """The episode worlds of ``seeds`` (one drawn per distinct seed)."""
