@@ -286,3 +286,14 @@ def write_policy_files(ctx: Any, extra: dict[str, Any] | None = None) -> None:
                   state.best_obs_std, formats)
     for name, record in (extra or {}).items():
         atomic_write_text(Path(ctx.out_dir) / name, json.dumps(record, indent=1) + "\n")
+
+
+def log_best_centre(ctx: Any, study: str) -> None:
+    """The closing log line of a robot's policy study (humanoid-balance, humanoid-walk): the
+    best centre's score and the files written."""
+    s = ctx.state
+    if s is not None and s.best_cost < float("inf"):
+        ctx.log(f"{study}: best centre score {-s.best_cost:.3f} after "
+                f"{s.train_episodes} training episodes; policy.npz, policy.py, policy.json"
+                + (", policy.onnx" if not ctx.cache.get("onnx_note") else "")
+                + f"; evomotion {study} compare RUN measures it")

@@ -104,6 +104,9 @@ def test_run_writes_the_policy_and_its_description(run_dir):
     assert info["robot"] == "nao" and info["observations"] == list(p.obs_names)
     assert len(info["joints"]) == len(info["nominal_rad"]) == p.act_dim
     assert info["control_period_s"] == 0.02 and info["control_steps"] == 5
+    log = (run_dir / "log.txt").read_text()
+    assert "humanoid-balance: best centre score" in log
+    assert "evomotion humanoid-balance compare RUN measures it" in log
 
 
 def test_run_writes_the_naoqi_runner_beside_the_policy(run_dir):

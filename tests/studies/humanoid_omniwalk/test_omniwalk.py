@@ -109,6 +109,9 @@ def test_run_writes_the_controller_and_its_description(run_dir, problem):
     assert info["phase_period_s"] == problem.ctl.gait.period_s
     record = json.loads((run_dir / "naoqi" / "policy.json").read_text())
     assert (run_dir / "naoqi" / "policy_runner.py").is_file()
+    log = (run_dir / "log.txt").read_text()
+    assert "humanoid-walk: best centre score" in log
+    assert "evomotion humanoid-walk compare RUN measures it" in log
     assert record["command_ramp_s"] == 0.5 and record["joints"] == info["joints"]
 
 

@@ -10,14 +10,13 @@ following its root body).
 
 from __future__ import annotations
 
-import json
-import sys
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from evomotion.errors import InputError
+from evomotion.sim.replay_report import report_replay
 
 STUDY_NAME = "gym"
 MAX_EPISODES = 1000
@@ -120,11 +119,8 @@ def replay_command(path: Path, json_out: bool = False, video: Path | None = None
     if push_ns is not None:
         raise InputError("--push: a gym environment has no pushes; --stress N plays N episodes")
     summary, skipped = replay_run(path, stress or 1, seed, video)
-    if skipped is not None:
-        print(f"video skipped: {skipped}", file=sys.stderr)
-        video = None
-    if json_out:
-        print(json.dumps(summary))
+    done, video = report_replay(summary, skipped, video, json_out)
+    if done:
         return
     print(f"{summary['env']}: mean return {summary['return_mean']:.1f} over "
           f"{summary['episodes']} unseen episode(s) (min {summary['return_min']:.1f}, max "

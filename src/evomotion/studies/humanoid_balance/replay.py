@@ -10,13 +10,12 @@ included (the model drawn is the nominal one: masses and friction do not show).
 
 from __future__ import annotations
 
-import json
-import sys
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from evomotion.sim.replay_report import report_replay
 from evomotion.studies.humanoid_balance.compare import (
     MAX_WORLDS,
     check_options,
@@ -110,11 +109,8 @@ def replay_policy_command(path: Path, json_out: bool = False, video: Path | None
                           push_ns: float | None = None) -> None:
     """CLI body of ``evomotion replay RUN`` for a policy run (JSON only with ``json_out``)."""
     summary, skipped = replay_policy(path, stress, seed, push_ns, video)
-    if skipped is not None:
-        print(f"video skipped: {skipped}", file=sys.stderr)
-        video = None
-    if json_out:
-        print(json.dumps(summary))
+    done, video = report_replay(summary, skipped, video, json_out)
+    if done:
         return
     p = np.asarray(summary["push_ns"])
     state = f"fell at {summary['fall_time_s']:.2f} s" if summary["fell"] else "stayed up"

@@ -81,13 +81,10 @@ def write_naoqi(ctx: Any) -> None:
 
 
 def finalize(ctx: Any) -> int | None:
+    from evomotion.studies.policy_search import log_best_centre
+
     write_policy(ctx)
     write_naoqi(ctx)
-    s = ctx.state
-    if s is not None and s.best_cost < float("inf"):
-        ctx.log(f"humanoid-walk: best centre score {-s.best_cost:.3f} after "
-                f"{s.train_episodes} training episodes; policy.npz, policy.py, policy.json"
-                + (", policy.onnx" if not ctx.cache.get("onnx_note") else "")
-                + "; evomotion humanoid-walk compare RUN measures it")
+    log_best_centre(ctx, "humanoid-walk")
     return None
 

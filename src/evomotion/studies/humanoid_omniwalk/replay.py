@@ -11,15 +11,14 @@ renders the first (the nominal model is drawn: masses and friction do not show).
 
 from __future__ import annotations
 
-import json
 import math
-import sys
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from evomotion.errors import InputError
+from evomotion.sim.replay_report import report_replay
 
 MAX_WORLDS = 10_000
 MAX_FILE_LINES = 10_000
@@ -154,11 +153,8 @@ def replay_walk_command(path: Path, json_out: bool = False, video: Path | None =
     """CLI body of ``evomotion replay RUN`` for a humanoid-walk run."""
     summary, skipped = replay_walk(path, stress, seed, push_ns, video, command,
                                    20.0 if duration_s is None else duration_s)
-    if skipped is not None:
-        print(f"video skipped: {skipped}", file=sys.stderr)
-        video = None
-    if json_out:
-        print(json.dumps(summary))
+    done, video = report_replay(summary, skipped, video, json_out)
+    if done:
         return
     w = summary["mean_walked"]
     state = f"fell at {summary['fall_time_s']:.2f} s" if summary["fell"] else "stayed up"

@@ -24,8 +24,6 @@ is ill-defined (its yaw is read from a quaternion pitched 90 degrees).
 
 from __future__ import annotations
 
-import json
-import sys
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -37,6 +35,7 @@ from evomotion.core.checks import check_choice, check_number
 from evomotion.outfile import check_target
 from evomotion.sim.motion import Motion, read_motion
 from evomotion.sim.play import keyframe_targets
+from evomotion.sim.replay_report import report_replay
 from evomotion.sim.robots import nao
 from evomotion.sim.rollout import BatchSimulator, fall_step, torso_track
 from evomotion.sim.worlds import Perturbation, draw_worlds, make_world, simulate_worlds
@@ -257,11 +256,8 @@ def replay_command(path: Path, json_out: bool = False, video: Path | None = None
     if video is not None:
         video = check_target(video, "video")
     summary, skipped = replay_motion(read_motion(path), video, hold_s, stress)
-    if skipped is not None:
-        print(f"video skipped: {skipped}", file=sys.stderr)
-        video = None
-    if json_out:
-        print(json.dumps(summary))
+    done, video = report_replay(summary, skipped, video, json_out)
+    if done:
         return
     dx, dy = summary["displacement_m"]
     state = f"fell at {summary['fall_time_s']:.2f} s" if summary["fell"] else "stayed up"
