@@ -13,7 +13,7 @@ the contact points), ``h`` the centre of mass's height. Energy beyond the
 barrier must leave through the joints (the servos' damping, a bending body) or a step, and the
 fall rule (the torso tilted 45 degrees) limits how far the body may bend.
 
-    python benchmarks/balance_push_energy.py --push 4
+    python benchmarks/balance_push_energy.py --push 4 [--lean 0.2]
 """
 
 from __future__ import annotations
@@ -29,7 +29,10 @@ from scipy.spatial import ConvexHull
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
 from evomotion.sim.worlds import torso_id  # noqa: E402
-from evomotion.studies.humanoid_balance.problem import HumanoidBalanceProblem  # noqa: E402
+from evomotion.studies.humanoid_balance.problem import (  # noqa: E402
+    HumanoidBalanceConfig,
+    HumanoidBalanceProblem,
+)
 
 DIRECTIONS = {"from behind (pushed forward)": 0.0, "from the front (pushed backward)": 180.0,
               "from the right (pushed left)": 90.0, "from the left (pushed right)": -90.0}
@@ -45,8 +48,10 @@ def edge_distance(hull: ConvexHull, origin: np.ndarray, u: np.ndarray) -> float:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--push", type=float, default=4.0, help="N s")
+    ap.add_argument("--lean", type=float, default=0.0,
+                    help="problem.stance_lean_rad (rad; the default stance otherwise)")
     a = ap.parse_args()
-    problem = HumanoidBalanceProblem()
+    problem = HumanoidBalanceProblem(HumanoidBalanceConfig(stance_lean_rad=a.lean))
     m = problem.robot.model
     d = mujoco.MjData(m)
     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
@@ -63,8 +68,9 @@ def main() -> None:
     points = np.array([d.contact[i].pos[:2] for i in range(d.ncon)
                        if m.geom_bodyid[d.contact[i].geom1] in feet
                        or m.geom_bodyid[d.contact[i].geom2] in feet])
-    print(f"{problem.robot.name} in the stance: {mass:.2f} kg, centre of mass {com[2]:.3f} m "
-          f"high; {len(points)} sole contacts; push {a.push:g} N s on the torso\n")
+    print(f"{problem.robot.name} in the stance (lean {a.lean:g} rad): {mass:.2f} kg, centre "
+          f"of mass {com[2]:.3f} m high; {len(points)} sole contacts; push {a.push:g} N s on "
+          "the torso\n")
     print("| push | kinetic energy after it (J) | centre of mass speed (m/s) | support edge "
           "(m) | tipping barrier (J) | energy / barrier |")
     print("|---|---|---|---|---|---|")

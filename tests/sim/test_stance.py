@@ -82,3 +82,36 @@ def test_gait_roles_listed_right_leg_first_are_one_line():
         with_stance(bad, 0.3, 0.2, 0.15, where="problem.stance")
     assert str(e.value).startswith("problem.stance: ") and "\n" not in str(e.value)
     assert with_stance(r, 0.3, 0.2, 0.15) is not r  # listed left first: fine
+
+
+def _at_rest(robot) -> tuple[list, float]:
+    """(each sole's (height, normal), the centre of mass ahead of the soles' middle along x)
+    of ``robot`` in its initial state."""
+    m = robot.model
+    d = mujoco.MjData(m)
+    mujoco.mj_setState(m, d, robot.state0, mujoco.mjtState.mjSTATE_FULLPHYSICS)
+    mujoco.mj_kinematics(m, d)
+    mujoco.mj_comPos(m, d)
+    sites = [d.site(robot.sole_site(f)) for f in robot.feet]
+    soles = [(float(s.xpos[2]), s.xmat.reshape(3, 3)[:, 2].copy()) for s in sites]
+    return soles, float(d.subtree_com[0][0] - np.mean([s.xpos[0] for s in sites]))
+
+
+@pytest.mark.parametrize("name", BIPEDS)
+def test_a_lean_pitches_the_torso_forward_with_the_soles_flat_on_the_floor(name):
+    """The lean turns the thighs forward and the whole robot back onto flat soles: the centre
+    of mass moves forward; the soles stay flat (their mean exactly, each within 0.3 deg on the
+    NAO, whose hip roll turns the thigh's pitch axis) and as high as the spec pose's."""
+    r = load_robot(name)
+    base = with_stance(r, 0.1, 0.1, 0.1)
+    leaned = with_stance(r, 0.1, 0.1, 0.1, lean_rad=0.2)
+    (soles0, com0), (soles, com) = _at_rest(base), _at_rest(leaned)
+    spec_low = min(h for h, _ in _at_rest(r)[0])
+    assert min(h for h, _ in soles) == pytest.approx(spec_low, abs=1e-9)
+    for (_, n), (_, n0) in zip(soles, soles0, strict=True):
+        assert np.arccos(np.clip(n[2], -1.0, 1.0)) < 0.006 + np.arccos(np.clip(n0[2], -1, 1))
+    assert com - com0 > 0.01, (com, com0)  # the centre of mass forward (the robot faces +x)
+    changed = np.flatnonzero(leaned.pose != base.pose)
+    hips = sorted(c for c, _ in r.gait["hip_pitch"])
+    assert sorted(changed.tolist()) == hips  # only the hip pitches move
+    np.testing.assert_array_equal(stance_pose(r, lean_rad=0.0), r.pose)

@@ -224,7 +224,7 @@ def test_the_default_stance_is_wider_and_a_folder_from_before_it_resumes_in_the_
     assert "stance_" not in (part / "config.toml").read_text()
     raw = config_from_run_dir(part)[1]["problem"]
     assert [raw[k] for k in ("stance_width_rad", "stance_stagger_rad",
-                             "stance_crouch_rad")] == [0.0, 0.0, 0.0]
+                             "stance_crouch_rad", "stance_lean_rad")] == [0.0, 0.0, 0.0, 0.0]
     problem = load_run(part)[0]
     np.testing.assert_array_equal(problem.robot.pose, spec)
     problem.sim.close()
@@ -258,3 +258,16 @@ def test_the_default_stance_is_wider_and_a_folder_from_before_it_resumes_in_the_
     # the resume wrote the record the old folder lacked, without a note about other physics
     assert json.loads((part / "physics.json").read_text())["backend"] == "cpu"
     assert "other physics" not in (part / "log.txt").read_text()
+
+
+def test_a_folder_from_before_the_lean_reads_as_standing_upright_in_its_own_stance():
+    """A run config with the stance's first three keys but no ``stance_lean_rad`` (written
+    before the lean existed) reads as the run it was: its own stance, no lean."""
+    from evomotion.run.config import as_now
+
+    raw = {"study": "humanoid-balance", "problem": {
+        "stance_width_rad": 0.3, "stance_stagger_rad": 0.2, "stance_crouch_rad": 0.15}}
+    problem = as_now(raw)["problem"]
+    assert problem == {"stance_width_rad": 0.3, "stance_stagger_rad": 0.2,
+                       "stance_crouch_rad": 0.15, "stance_lean_rad": 0.0}
+

@@ -55,6 +55,9 @@ class HumanoidBalanceConfig:
     stance_width_rad: float = 0.3
     stance_stagger_rad: float = 0.2
     stance_crouch_rad: float = 0.15
+    #: the torso pitched forward at the hips, the soles flat: the centre of mass over the
+    #: middle of the support polygon along x (sim/stance.py; docs/humanoid-balance.md)
+    stance_lean_rad: float = 0.0
     duration_s: float = 10.0  # episode length (s)
     control_period_s: float = 0.02  # the policy's period (s), a whole number of physics steps
     #: the observation channels (sim/observations.py), comma-separated
@@ -87,7 +90,8 @@ class HumanoidBalanceConfig:
     def validate(self) -> None:
         check_fields(self, "problem")
         check_text("problem.robot", self.robot)
-        for key in ("stance_width_rad", "stance_stagger_rad", "stance_crouch_rad"):
+        for key in ("stance_width_rad", "stance_stagger_rad", "stance_crouch_rad",
+                    "stance_lean_rad"):
             check_number(f"problem.{key}", getattr(self, key), lo=-1.0, hi=1.0)
         check_number("problem.duration_s", self.duration_s, lo=0.0, hi=MAX_DURATION_S,
                      lo_open=True)
@@ -156,7 +160,8 @@ class HumanoidBalanceProblem:
                              "task stands a biped")
         self.robot = r = with_stance(r, cfg.stance_width_rad, cfg.stance_stagger_rad,
                                      cfg.stance_crouch_rad, "problem.stance_width_rad, "
-                                     "stance_stagger_rad, stance_crouch_rad")
+                                     "stance_stagger_rad, stance_crouch_rad, stance_lean_rad",
+                                     lean_rad=cfg.stance_lean_rad)
         self.dt = float(r.model.opt.timestep)
         k = cfg.control_period_s / self.dt
         if abs(k - round(k)) > 1e-6 or round(k) < 1:
