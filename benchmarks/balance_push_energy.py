@@ -28,6 +28,7 @@ from scipy.spatial import ConvexHull
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
+from evomotion.errors import InputError  # noqa: E402
 from evomotion.sim.worlds import torso_id  # noqa: E402
 from evomotion.studies.humanoid_balance.problem import (  # noqa: E402
     HumanoidBalanceConfig,
@@ -51,7 +52,10 @@ def main() -> None:
     ap.add_argument("--lean", type=float, default=0.0,
                     help="problem.stance_lean_rad (rad; the default stance otherwise)")
     a = ap.parse_args()
-    problem = HumanoidBalanceProblem(HumanoidBalanceConfig(stance_lean_rad=a.lean))
+    try:
+        problem = HumanoidBalanceProblem(HumanoidBalanceConfig(stance_lean_rad=a.lean))
+    except InputError as e:
+        sys.exit(f"--lean {a.lean}: {e}")
     m = problem.robot.model
     d = mujoco.MjData(m)
     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
@@ -63,8 +67,7 @@ def main() -> None:
     mujoco.mj_getState(m, d, rest, spec)
     mass = float(m.body_subtreemass[0])
     com = d.subtree_com[0].copy()
-    feet = {problem.robot.model.body(b).id for b in ("LFoot", "RFoot")} if \
-        problem.robot.name == "nao" else set()
+    feet = {problem.robot.model.body(b).id for b in ("LFoot", "RFoot")}  # the NAO's
     points = np.array([d.contact[i].pos[:2] for i in range(d.ncon)
                        if m.geom_bodyid[d.contact[i].geom1] in feet
                        or m.geom_bodyid[d.contact[i].geom2] in feet])

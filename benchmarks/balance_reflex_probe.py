@@ -10,7 +10,11 @@ torso's lean and pitch rate standing in for the centre of mass's offset and spee
   point's offset, both axes, clipped to 0.2 m) over ``swing_s`` with a ``lift`` (m) sine
   arc, the target levelled by the IMU's gravity direction (the sole stays flat on the floor
   while the torso leans) and solved by the NAO's closed-form leg IK
-  (:mod:`evomotion.sim.robots.nao.leg_ik`); the policy still drives the other leg.
+  (:mod:`evomotion.sim.robots.nao.leg_ik`). With ``shift_s``, ``shift_m`` the body first
+  shifts ``shift_m`` over the right foot in ``shift_s`` (both feet's targets move, levelled and
+  solved alike): the stepping leg's targets replace the policy's; the stance leg's too, or with
+  ``keep`` 1 the shift is added to the policy's action there, so the policy keeps balancing on
+  the stance leg.
 - ``hip``: both hip pitches flex by ``hip`` rad and both ankle pitches move by ``ankle`` rad,
   ramped in over ``ramp_s`` and released over 0.3 s after 0.6 s (a hip strategy: the torso
   thrown forward against the backward fall).
@@ -41,8 +45,8 @@ from evomotion.studies.humanoid_balance.episodes import push_range  # noqa: E402
 
 LEG = ("HipYawPitch", "HipRoll", "HipPitch", "KneePitch", "AnklePitch", "AnkleRoll")
 STEP = [dict(swing_s=0.15, thr=t, gain=1.0, lift=0.02) for t in (0.10, 0.13)] + [
-    dict(shift_s=h, shift_m=0.04, swing_s=s, thr=t, gain=1.0, lift=0.02)
-    for h, s, t in itertools.product((0.1, 0.2), (0.15, 0.25), (0.10, 0.13))]
+    dict(shift_s=0.2, shift_m=0.04, keep=k, swing_s=s, thr=t, gain=1.0, lift=0.02)
+    for k, s, t in itertools.product((0, 1), (0.15, 0.25), (0.10, 0.13))]
 HIP = [dict(ramp_s=r, thr=0.10, hip=h, ankle=k) for r, h, k in
        itertools.product((0.04, 0.1), (-0.4, -0.8), (0.0, 0.15, -0.15))]
 
@@ -96,7 +100,10 @@ class Reflex:
             a = a.copy()
             if self.kind == "step":
                 for side, q in self._step(r, obs[on][:, self.g]).items():
-                    a[np.ix_(on, self.cols[side])] = q
+                    if side == "R" and o.get("keep"):  # the policy's action + the shift
+                        a[np.ix_(on, self.cols[side])] += q
+                    else:  # the leg follows the reflex alone
+                        a[np.ix_(on, self.cols[side])] = q
             else:
                 s = np.clip(self.t[r] / o["ramp_s"], 0, 1) * np.clip((0.6 - self.t[r]) / 0.3 + 1,
                                                                     0, 1)
@@ -107,26 +114,31 @@ class Reflex:
         return a
 
     def _step(self, r: np.ndarray, g: np.ndarray) -> dict[str, np.ndarray]:
-        """Both legs' offsets (HipRoll..AnkleRoll) from the nominal pose along the step: the
-        body first shifts ``shift_m`` over the right foot in ``shift_s``, then the left foot
-        swings."""
+        """The left leg's offsets (HipRoll..AnkleRoll) from the nominal pose along the step,
+        and with a shift the right leg's (its offsets, or with ``keep`` only the shift's
+        change, added to the policy's action): the body first shifts
+        ``shift_m`` over the right foot in ``shift_s``, then the left foot swings."""
         o = self.opt
-        shift_s = o.get("shift_s", 0.0)
+        shift_s, shift_m = o.get("shift_s", 0.0), o.get("shift_m", 0.0)
         u = np.clip(self.t[r] / shift_s, 0, 1) if shift_s > 0 else np.ones(len(r))
         s = np.clip((self.t[r] - shift_s) / o["swing_s"], 0, 1)
         Q = level(g)
-        out = {}
-        for side in "LR":
+
+        def solve(side: str, shift: float, step: bool) -> np.ndarray:
             p = np.tile(self.foot[side][0], (len(r), 1))
-            p[:, 1] += o.get("shift_m", 0.0) * (u * u * (3 - 2 * u))
-            if side == "L":
+            p[:, 1] += shift * (u * u * (3 - 2 * u))
+            if step:
                 p[:, :2] += self.d[r] * (s * s * (3 - 2 * s))[:, None]
                 p[:, 2] += o["lift"] * np.sin(np.pi * s)
             hip = hip_position(side == "L")
             p = (Q @ (p - hip)[..., None])[..., 0] + hip
-            q = leg_ik(p, Q @ self.foot[side][1], side == "L")
-            out[side] = q[:, 1:] - self.q[side][1:]
-        return out if shift_s > 0 or o.get("shift_m", 0.0) else {"L": out["L"]}
+            return leg_ik(p, Q @ self.foot[side][1], side == "L")[:, 1:]
+
+        out = {"L": solve("L", shift_m, True) - self.q["L"][1:]}
+        if shift_m:
+            out["R"] = solve("R", shift_m, False) - (solve("R", 0.0, False) if o.get("keep")
+                                                      else self.q["R"][1:])
+        return out
 
 
 def nominal_step(problem, policy, com_height_m: float, dx_m: float = -0.08,
@@ -209,7 +221,8 @@ def main() -> None:
         sys.exit("self-check failed: the untriggered probe differs from the policy's own run")
     print(f"self-check: the untriggered probe equals compare's run ({n} worlds)")
     print(nominal_step(problem, policy, a.com_height))
-    print(nominal_step(problem, policy, a.com_height, shift_s=0.2, shift_m=0.04))
+    for keep in (0, 1):
+        print(nominal_step(problem, policy, a.com_height, shift_s=0.2, shift_m=0.04, keep=keep))
     print(f"{n} worlds, push {a.push:g} N s, {int(back.sum())} from the front\n")
     print("| reflex | settings | survival | backward | backward falls: s after the push | "
           "fired in (worlds) | there: survival with / without |")

@@ -114,4 +114,5 @@ def test_a_lean_pitches_the_torso_forward_with_the_soles_flat_on_the_floor(name)
     changed = np.flatnonzero(leaned.pose != base.pose)
     hips = sorted(c for c, _ in r.gait["hip_pitch"])
     assert sorted(changed.tolist()) == hips  # only the hip pitches move
-    np.testing.assert_array_equal(stance_pose(r, lean_rad=0.0), r.pose)
+    mean = np.mean([n for _, n in soles], axis=0)
+    assert np.arccos(np.clip(mean[2] / np.linalg.norm(mean), -1.0, 1.0)) < 1e-9  # mean flat

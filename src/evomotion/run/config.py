@@ -403,10 +403,10 @@ def current_study_name(name: str, problem_keys: Any = ()) -> str:
     return name
 
 
-#: keys a study gained after run folders were written whose default changes what such a run
-#: does: absent from a saved config, they read as these values (what those runs did).
-#: 33: humanoid-balance's stance (sim/stance.py; those runs stood in the spec pose, and
-#: runs before its lean stood upright).
+#: keys a study gained after run folders were written whose default changes (or may change)
+#: what such a run does: absent from a saved config, they read as these values (what those
+#: runs did). 33: humanoid-balance's stance (sim/stance.py; those runs stood in the spec pose;
+#: runs before its lean stood upright, which the lean's default 0 also gives).
 ADDED_KEYS: dict[str, dict[str, dict[str, Any]]] = {
     "humanoid-balance": {"problem": {"stance_width_rad": 0.0, "stance_stagger_rad": 0.0,
                                      "stance_crouch_rad": 0.0, "stance_lean_rad": 0.0}},

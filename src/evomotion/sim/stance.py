@@ -81,7 +81,8 @@ def with_stance(robot: Robot, width_rad: float = 0.0, stagger_rad: float = 0.0,
                 lean_rad: float = 0.0) -> Robot:
     """``robot`` standing in the stance: its ``pose`` and its initial state at rest in it
     (the lowest sole ``clearance_m`` above the floor, as the spec pose's; with a lean, the
-    robot turned so that its soles lie flat); the robot itself when all four are 0. A stance
+    robot turned so that its soles lie flat, its lowest sole site as high as in the spec
+    pose's initial state); the robot itself when all four are 0. A stance
     that widens a robot with feet ``left`` and ``right`` but brings its soles closer
     (``[gait]`` listing the right leg first) is one line."""
     pose = stance_pose(robot, width_rad, stagger_rad, crouch_rad, where, lean_rad=lean_rad)
@@ -89,7 +90,7 @@ def with_stance(robot: Robot, width_rad: float = 0.0, stagger_rad: float = 0.0,
         return robot
     state0 = robot.state_at(pose)
     if lean_rad != 0.0:
-        state0 = _soles_flat(robot, state0)
+        state0 = _soles_flat(robot, state0, where)
     if width_rad > 0 and {"left", "right"} <= set(robot.feet) and \
             _feet_apart_m(robot, state0) <= _feet_apart_m(robot, robot.state0):
         raise InputError(f"{where}: the stance moves robot {robot.name!r}'s feet together, "
@@ -98,7 +99,7 @@ def with_stance(robot: Robot, width_rad: float = 0.0, stagger_rad: float = 0.0,
     return dataclasses.replace(robot, pose=pose, state0=state0)
 
 
-def _soles_flat(robot: Robot, state: np.ndarray) -> np.ndarray:
+def _soles_flat(robot: Robot, state: np.ndarray, where: str = "stance") -> np.ndarray:
     """``state`` with the whole robot turned about its root so that the mean of its soles'
     normals points up, then raised or lowered so that its lowest sole stands as high as in the
     robot's own initial state (flat soles, the spec's clearance)."""
@@ -124,7 +125,7 @@ def _soles_flat(robot: Robot, state: np.ndarray) -> np.ndarray:
                               float(np.arccos(np.clip(normal[2], -1.0, 1.0))))
     free = [j for j in range(m.njnt) if m.jnt_type[j] == mujoco.mjtJoint.mjJNT_FREE]
     if not free:
-        raise InputError(f"stance: robot {robot.name!r} has no free root joint to lean")
+        raise InputError(f"{where}: robot {robot.name!r} has no free root joint to lean")
     out = np.array(state, dtype=float)
     q = out[1:1 + m.nq]  # FULLPHYSICS: time, then qpos
     a = int(m.jnt_qposadr[free[0]])

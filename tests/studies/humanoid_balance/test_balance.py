@@ -270,4 +270,3 @@ def test_a_folder_from_before_the_lean_reads_as_standing_upright_in_its_own_stan
     problem = as_now(raw)["problem"]
     assert problem == {"stance_width_rad": 0.3, "stance_stagger_rad": 0.2,
                        "stance_crouch_rad": 0.15, "stance_lean_rad": 0.0}
-
