@@ -36,6 +36,7 @@ import numpy as np
 from evomotion.errors import InputError
 from evomotion.sim.closed_loop_parts import target_bounds
 from evomotion.sim.robots.build import Robot
+from evomotion.sim.state import state_qpos_all
 from evomotion.sim.worlds import torso_id
 
 ROLES = ("hip_pitch", "knee", "ankle_pitch", "hip_roll", "ankle_roll")
@@ -127,7 +128,7 @@ def _soles_flat(robot: Robot, state: np.ndarray, where: str = "stance") -> np.nd
     if not free:
         raise InputError(f"{where}: robot {robot.name!r} has no free root joint to lean")
     out = np.array(state, dtype=float)
-    q = out[1:1 + m.nq]  # FULLPHYSICS: time, then qpos
+    q = state_qpos_all(m, out)  # a view: writing q writes out
     a = int(m.jnt_qposadr[free[0]])
     quat = np.zeros(4)
     mujoco.mju_mulQuat(quat, turn, q[a + 3:a + 7].copy())
