@@ -26,7 +26,7 @@ from evomotion.core.problem import GenomeSpec
 TABLE = {"noise_table": 2**22}
 OURS = {"openai_es": ("openai_es", {}), "ars": ("ars", {}), "pgpe": ("pgpe", {}),
         "snes": ("snes", {}), "openai_es+table": ("openai_es", TABLE),
-        "ars+table": ("ars", TABLE), "pgpe+table": ("pgpe", TABLE)}
+        "ars+table": ("ars", TABLE), "pgpe+table": ("pgpe", TABLE), "snes+table": ("snes", TABLE)}
 
 
 def time_ours(label: str, pop: int, dim: int, gens: int, warmup: int) -> float:

@@ -34,7 +34,8 @@ def _same(a: Path, b: Path) -> None:
     assert (a / "policy.npz").read_bytes() == (b / "policy.npz").read_bytes()
 
 
-CASES = [(name, ()) for name in POLICY_OPTIMIZERS] + [("ars", ("algorithm.noise_table=5000",))]
+CASES = [(name, ()) for name in POLICY_OPTIMIZERS] + [("ars", ("algorithm.noise_table=5000",)),
+                                                       ("snes", ("algorithm.noise_table=5000",))]
 
 
 @pytest.mark.parametrize("name, more", CASES)

@@ -1,4 +1,4 @@
-"""What the four evolution strategies share: the centre, the box, mirrored pairs.
+"""What the four evolution strategies share: the centre, the box, mirrored pairs, the noise.
 
 The centre (distribution mean) starts at the middle of the genome bounds (``0`` on a gene
 whose bounds are infinite on both sides, the finite bound on a half-infinite one), or at row
@@ -137,21 +137,26 @@ class GaussianES(Optimizer):
         """``[center + p; center - p]`` with ``p = scale * N(0, I)[n, d]`` drawn in one call,
         or taken from the shared noise table (``cfg.noise_table``; see the module), rows ``k``
         and ``k + n`` a pair, clipped; built in one fresh array."""
-        d = self.genome.dim
-        x = np.empty((2 * n, d))
-        size = int(getattr(self.cfg, "noise_table", 0))
-        p = x[:n]
-        if size:
-            offsets = rng.integers(0, size - d + 1, size=n)
-            windows = np.lib.stride_tricks.sliding_window_view(noise_table(size), d)
-            np.multiply(windows[offsets], scale, out=p)
-        else:
-            rng.standard_normal(out=p)
-            p *= scale
+        x = np.empty((2 * n, self.genome.dim))
+        p = self.scaled_normal(rng, scale, out=x[:n])
         inside = not self.bounded or self._inside(center, p)
         np.subtract(center, p, out=x[n:])
         p += center
         return x if inside else self.clip(x)
+
+    def scaled_normal(self, rng: np.random.Generator, scale: Any, out: np.ndarray) -> np.ndarray:
+        """``out[n, d] = scale * N(0, I)``: drawn in one call, or windows of the shared noise
+        table (``cfg.noise_table``; see the module) at offsets drawn from ``rng``."""
+        d = self.genome.dim
+        size = int(getattr(self.cfg, "noise_table", 0))
+        if size:
+            offsets = rng.integers(0, size - d + 1, size=out.shape[0])
+            windows = np.lib.stride_tricks.sliding_window_view(noise_table(size), d)
+            np.multiply(windows[offsets], scale, out=out)
+        else:
+            rng.standard_normal(out=out)
+            out *= scale
+        return out
 
     def _inside(self, center: np.ndarray, p: np.ndarray) -> bool:
         """Whether every ``center ± p`` row is inside the bounds already (then clipping, two

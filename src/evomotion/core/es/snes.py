@@ -6,8 +6,9 @@ Strategies", JMLR 15).
 A Gaussian with diagonal covariance ``N(μ, diag(σ²))``: O(d) per sample, meant for
 ``d >= 1000`` parameters where full covariance is too costly. One generation:
 
-1. ``ask``: ``s_k ~ N(0, I)``, ``k = 1..λ`` (one call); ``z_k = μ + σ s_k``, clipped into the
-   bounds (see :mod:`~evomotion.core.es.common`).
+1. ``ask``: ``s_k ~ N(0, I)``, ``k = 1..λ`` (one call, or windows of the shared noise table
+   with ``noise_table > 0``); ``z_k = μ + σ s_k``, clipped into the bounds (see
+   :mod:`~evomotion.core.es.common`).
 2. ``tell``: utilities ``u_k`` by rank (:func:`~evomotion.core.es.ranking.nes_utilities`);
    ``s_k`` is recomputed from the evaluated ``z_k`` as ``(z_k - μ) / σ``.
 3. Natural gradients: ``∇_μ J = Σ_k u_k s_k``, ``∇_σ J = Σ_k u_k (s_k² - 1)``.
@@ -26,7 +27,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from evomotion.core.es.common import GaussianES, check_nonneg, check_pop_size, check_positive
+from evomotion.core.es.common import (
+    GaussianES,
+    check_noise_table,
+    check_nonneg,
+    check_pop_size,
+    check_positive,
+)
 from evomotion.core.es.ranking import nes_utilities
 from evomotion.core.optimizer import MutateFn
 from evomotion.core.problem import GenomeSpec
@@ -42,9 +49,11 @@ class SNESConfig:
     sigma_init: float = 0.1  # initial σ of every parameter, genome units
     center_learning_rate: float = 1.0  # η_μ
     sigma_learning_rate: float = 0.0  # η_σ; 0 -> (3 + ln d) / (5 sqrt(d))
+    noise_table: int = 0  # > 0: s_k from a shared table of this many N(0, 1) numbers
 
     def validate(self) -> None:
         check_pop_size(self, even=False, allow_zero=True)
+        check_noise_table(self)
         check_positive(self, "sigma_init", "center_learning_rate")
         check_nonneg(self, "sigma_learning_rate")
 
@@ -92,10 +101,10 @@ class SNES(GaussianES):
                          cost=np.full(self.lam, np.inf), best_x=c.copy(), best_cost=math.inf)
 
     def _ask(self, state: SNESState, rng: np.random.Generator) -> tuple[np.ndarray, SNESState]:
-        z = rng.standard_normal((self.lam, self.genome.dim))  # s_k
-        z *= state.sigma
+        z = self.scaled_normal(rng, state.sigma, np.empty((self.lam, self.genome.dim)))  # σ s_k
+        inside = not self.bounded or self._inside(state.center, z)
         z += state.center  # z_k = μ + σ s_k
-        return self.clip(z), state
+        return (z if inside else self.clip(z)), state
 
     def _tell(self, state: SNESState, genomes: np.ndarray, cost: np.ndarray,
               rng: np.random.Generator, measures: np.ndarray | None = None) -> SNESState:
