@@ -81,8 +81,15 @@ def run_cmd(
         typer.echo(f"note: --preset {preset} is the old name of "
                    f"--preset {current_preset_name(s, preset)}", err=True)
     cfg = resolve_config(s, config, overrides, preset=preset)
+    made = out is None or not (Path(out).exists() or Path(out).is_symlink())
     out_dir = make_run_dir(s.name, out)
-    _finish(run_study(s, cfg, out_dir, quiet=quiet, overwrite=overwrite), quiet)
+    try:
+        res = run_study(s, cfg, out_dir, quiet=quiet, overwrite=overwrite)
+    except InputError:
+        if made and out_dir.is_dir() and not any(out_dir.iterdir()):
+            out_dir.rmdir()  # refused before anything was written: no empty folder left
+        raise
+    _finish(res, quiet)
 
 
 def _finish(res, quiet: bool) -> None:

@@ -146,3 +146,23 @@ def test_plot_out_into_a_missing_folder_makes_nothing(tmp_path):
     r = _cli("plot", str(d), "--out", str(tmp_path / "missing" / "fig"))
     assert r.returncode == 2 and "does not exist" in r.stderr and "Traceback" not in r.stderr
     assert not (tmp_path / "missing").exists()
+
+
+def test_a_config_the_problem_refuses_makes_no_folder_and_keeps_an_old_run(tmp_path):
+    """A stance beyond a joint's range is refused when the problem is built: that left an empty
+    folder with a marker and a lock behind, and --overwrite had already emptied the old run."""
+    bad = ("--set", "problem.stance_width_rad=0.9", "--set", "problem.threads=1", "-q")
+    r = _cli("run", "humanoid-balance", "--out", str(tmp_path / "new"), *bad)
+    assert r.returncode == 2 and "LHipRoll" in r.stderr and "Traceback" not in r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1
+    assert not (tmp_path / "new").exists()
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    assert _cli("run", "humanoid-balance", "--out", str(empty), *bad).returncode == 2
+    assert empty.is_dir() and not any(empty.iterdir())  # the user's folder: left as it was
+    old = tmp_path / "old"
+    assert _cli("run", "functions", "--out", str(old), *ARGS).returncode == 0
+    before = _tree(old)
+    r = _cli("run", "humanoid-balance", "--out", str(old), "--overwrite", *bad)
+    assert r.returncode == 2 and "LHipRoll" in r.stderr
+    assert _tree(old) == before

@@ -110,10 +110,14 @@ def run_study(study: LoopStudy, config: Config, out_dir: Path | str | None = Non
             raise InputError("resume needs a run folder")
         return _run(study, config, None, True, False, problem, evaluator, None, subscribers)
     out_dir = Path(out_dir)
+    prepared = None
     if resume:
         check_resumable(out_dir)  # before anything is made or removed in the folder
     else:
         check_new_run(out_dir, overwrite)  # refused before the lock file is made
+        # a config the problem refuses is refused before the folder is made or emptied
+        with sigterm_as_interrupt():
+            prepared = _prepare(study, config, problem)
     out_dir.mkdir(parents=True, exist_ok=True)
     # SIGTERM is Ctrl-C from the moment the lock names this process (a stop from the studio
     # during the set-up ends the run cleanly, not by the signal's default)
@@ -121,14 +125,15 @@ def run_study(study: LoopStudy, config: Config, out_dir: Path | str | None = Non
         if not resume:
             prepare_new_run(out_dir, study.name, overwrite)
         return _run(study, config, out_dir, quiet, resume, problem, evaluator,
-                    lock.stale_owner, subscribers)
+                    lock.stale_owner, subscribers, prepared)
 
 
 def _run(study: LoopStudy, config: Config, out_dir: Path | None, quiet: bool, resume: bool,
          problem: Any, evaluator: Any, stale_owner: str | None = None,
-         extra: Sequence[Subscriber] = ()) -> RunResult:
+         extra: Sequence[Subscriber] = (),
+         prepared: tuple[Config, Any, Driver] | None = None) -> RunResult:
     hooks = _hooks(study) if out_dir is not None else None
-    config, problem, driver = _prepare(study, config, problem)
+    config, problem, driver = prepared or _prepare(study, config, problem)
     rc = config.run
     loggers = make_loggers(rc.loggers, out_dir, hooks.replay) \
         if hooks is not None and out_dir is not None else Loggers([])  # before any file
