@@ -89,7 +89,7 @@ class ArmIKProblem:
     """Batch evaluation of limbs; ``evaluate`` gives the penalised whole-limb fitness."""
 
     sense: Sense = "min"
-    metric_names = ("distance", "intersections", "max_tip_error", "solved")
+    metric_names: tuple[str, ...] = ("distance", "intersections", "max_tip_error", "solved")
 
     def __init__(self, cfg: ArmIKConfig, scenario: Scenario | None = None) -> None:
         t0, c0 = time.perf_counter(), time.process_time()

@@ -219,7 +219,8 @@ class KickProblem:
     kicker (:func:`.kickers.kicker_for`) gives its genome bounds, scene and joint targets."""
 
     sense: Sense = "max"
-    metric_names = METRICS  # the instance's: with ``ik_error_m`` for the numerical IK
+    # the instance's: with ``ik_error_m`` for the numerical IK
+    metric_names: tuple[str, ...] = METRICS
 
     def __init__(self, cfg: KickConfig = KickConfig()) -> None:
         from evomotion.sim.robots import load_robot

@@ -108,7 +108,7 @@ class FunctionProblem:
     """A benchmark function as a batch :class:`~evomotion.core.problem.Problem`."""
 
     sense: Sense = "min"
-    metric_names = ("distance_to_optimum",)
+    metric_names: tuple[str, ...] = ("distance_to_optimum",)
 
     def __init__(self, cfg: FunctionsConfig) -> None:
         cfg.validate()

@@ -133,7 +133,7 @@ class GridPathProblem:
     """Batch evaluation of perpendicular-encoded paths on one map."""
 
     sense: Sense = "min"
-    metric_names = ("length", "n_invalid")
+    metric_names: tuple[str, ...] = ("length", "n_invalid")
 
     def __init__(self, cfg: GridPathConfig) -> None:
         self.cfg = cfg

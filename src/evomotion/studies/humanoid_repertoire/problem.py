@@ -105,7 +105,7 @@ class HumanoidRepertoireProblem(BatchedRollouts):
     come from the stepper its capabilities allow (:func:`.steppers.stepper_for`)."""
 
     sense: Sense = "max"
-    metric_names = METRICS  # the instance's: its stepper's
+    metric_names: tuple[str, ...] = METRICS  # the instance's: its stepper's
     measure_spec = MEASURES  # the instance's: scaled to the robot's size
 
     def __init__(self, cfg: HumanoidRepertoireConfig | None = None) -> None:

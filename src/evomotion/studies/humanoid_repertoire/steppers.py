@@ -35,7 +35,7 @@ class ClosedFormStepper:
     """The NAO's step (:mod:`.step`): closed-form IK key poses every 20 ms."""
 
     name = "closed_form"
-    metric_names = METRICS
+    metric_names: tuple[str, ...] = METRICS
 
     def __init__(self, robot, cfg, dt: float) -> None:
         for cap in CLOSED_FORM_CAPABILITIES:
@@ -76,7 +76,7 @@ class NumericalStepper(RobotStep):
     from its planned place (0 when the IK reached every key pose)."""
 
     name = "numerical"
-    metric_names = (*METRICS, "ik_error_m")
+    metric_names: tuple[str, ...] = (*METRICS, "ik_error_m")
 
     def __init__(self, robot, cfg, dt: float) -> None:
         super().__init__(robot)

@@ -208,7 +208,7 @@ class HumanoidStepProblem(BatchedRollouts):
     """Batch evaluation of forward-step trajectories (fitness maximised)."""
 
     sense: Sense = "max"
-    metric_names = METRICS
+    metric_names: tuple[str, ...] = METRICS
 
     def __init__(self, cfg: HumanoidStepConfig | None = None) -> None:
         self.cfg = cfg = cfg or HumanoidStepConfig()

@@ -48,7 +48,8 @@ class FootPlacementGait:
     """The 14-gene foot-placement walk of :mod:`.foot_gait` (see its module doc)."""
 
     name = "foot"
-    metric_names = (*BASE_METRICS, "cost_of_transport", "fell", "fall_rate", "speed_ratio")
+    metric_names: tuple[str, ...] = (*BASE_METRICS, "cost_of_transport", "fell", "fall_rate",
+                                     "speed_ratio")
 
     def __init__(self, robot, cfg, dt: float) -> None:
         for cap in FOOT_CAPABILITIES:
@@ -101,7 +102,8 @@ class JointSpaceGait:
     """The oscillator gait of :mod:`.joint_gait` on the robot's ``[gait]`` roles."""
 
     name = "joint"
-    metric_names = (*BASE_METRICS, "straightness", "cost_of_transport", "fell", "fall_rate")
+    metric_names: tuple[str, ...] = (*BASE_METRICS, "straightness", "cost_of_transport", "fell",
+                                     "fall_rate")
 
     def __init__(self, robot, cfg, dt: float) -> None:
         if robot.gait_kind is None:

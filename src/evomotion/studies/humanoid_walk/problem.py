@@ -146,7 +146,7 @@ class HumanoidWalkProblem(BatchedRollouts):
     (:func:`.gaits.gait_for`)."""
 
     sense: Sense = "max"
-    metric_names = METRICS  # the instance's: its gait's (:mod:`.gaits`)
+    metric_names: tuple[str, ...] = METRICS  # the instance's: its gait's (:mod:`.gaits`)
 
     def __init__(self, cfg: HumanoidWalkConfig | None = None) -> None:
         from evomotion.sim.robots import load_robot
