@@ -242,9 +242,9 @@ def replay_cmd(
                          "folder, not a .motion")
     if stress is not None:
         raise InputError("--stress is for a policy run folder; a .motion takes --trials N")
-    stress = StressOptions(friction=friction, mass_scale=mass_scale, push_ns=push,
-                           trials=trials, seed=seed, start=start)
-    replay_command(motion, json_out=json_out, video=video, hold_s=hold, stress=stress)
+    options = StressOptions(friction=friction, mass_scale=mass_scale, push_ns=push,
+                            trials=trials, seed=seed, start=start)
+    replay_command(motion, json_out=json_out, video=video, hold_s=hold, stress=options)
 
 
 @app.command("export")

@@ -67,8 +67,8 @@ def reason(e: BaseException) -> str:
 def check_target(path: str | Path, what: str = "output file", mkdir: bool = False) -> Path:
     """``path`` as a :class:`Path` if it can be written: a new name in an existing, writable
     folder (made when ``mkdir``) or an existing regular file; else one :class:`WriteError`."""
+    path = Path(path)
     try:
-        path = Path(path)
         st = os.stat(path)  # follows a link: a link to /dev/null is a device
     except FileNotFoundError:
         st = None

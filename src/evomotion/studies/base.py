@@ -6,9 +6,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from evomotion.core.problem import Problem
 from evomotion.run.context import RunContext
-from evomotion.run.contracts import ArtifactScope, ReplayHook, RunRecord
+from evomotion.run.contracts import ArtifactScope, ReplayHook, RunRecord, StudyAlgorithms
 from evomotion.studies.run_hooks import motion_replay, physics_run_record, videos_scope
 from evomotion.studies.view import StudyView
 
@@ -19,7 +18,9 @@ class Study:
 
     - ``problem_config``: a frozen dataclass type; its defaults are the study's defaults and
       it must be picklable (process/Ray workers rebuild the problem from it).
-    - ``make_problem(problem_cfg)`` builds the :class:`Problem` (once per worker).
+    - ``make_problem(problem_cfg)`` builds the :class:`~evomotion.core.problem.Problem` (once
+      per worker; a study with its own ``algorithms`` may build another kind, a search's
+      state space).
     - ``defaults``: the study's best-known setting, as overrides of the sections, e.g.
       ``{"algorithm": {"pop_size": 100, "crossover": "blx_alpha"}, "run": {"generations": 60}}``.
     - ``presets``: named settings over the defaults (``--preset paper``: the paper's literal
@@ -61,13 +62,13 @@ class Study:
     name: str
     description: str
     problem_config: type
-    make_problem: Callable[[Any], Problem]
+    make_problem: Callable[[Any], Any]
     defaults: dict[str, dict[str, Any]] = field(default_factory=dict)
     presets: dict[str, dict[str, dict[str, Any]]] = field(default_factory=dict)
     preset_notes: dict[str, str] = field(default_factory=dict)
     preset_studies: dict[str, str] = field(default_factory=dict)
     core_algorithms: tuple[str, ...] | None = None
-    algorithms: dict[str, tuple[type, Callable[..., Any]]] = field(default_factory=dict)
+    algorithms: StudyAlgorithms = field(default_factory=dict)
     on_checkpoint: Callable[[RunContext], None] | None = None
     finalize: Callable[[RunContext], int | None] | None = None
     best_record: Callable[[RunContext], dict[str, Any]] | None = None
@@ -92,5 +93,5 @@ def lazy_hook(module: str, name: str) -> Callable[[RunContext], Any]:
         return getattr(importlib.import_module(module), name)(ctx)
 
     hook.__name__ = hook.__qualname__ = name
-    hook.module = module  # type: ignore[attr-defined] - what it imports, for preloading
+    hook.module = module  # type: ignore[attr-defined]  # what it imports, for preloading
     return hook

@@ -241,8 +241,9 @@ def form_fields(study: str, preset: str | None = None,
     out = []
     for sec in ("run", "algorithm", "problem"):
         obj = getattr(cfg, sec)
-        hints = typing.get_type_hints(type(obj))
-        docs = fs.field_docs(type(obj))
+        cls: type = type(obj)  # (typed: a class is hashable, for field_docs' cache)
+        hints = typing.get_type_hints(cls)
+        docs = fs.field_docs(cls)
         for f in dataclasses.fields(obj):
             if sec == "algorithm" and f.name == "name":
                 continue

@@ -15,6 +15,7 @@ from __future__ import annotations
 import contextlib
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -41,7 +42,8 @@ def drive_panel(ui, run_dir: Path, robot: str = "nao") -> None:
     names = list(walk.command_ranges)
     ui.label("drive the controller: W/S or arrows forward/back, A/D turn, Q/E sideways, "
              "P or space push, R restart").classes("font-bold drive-help")
-    sliders, held = {}, {}
+    sliders: dict[str, Any] = {}
+    held: dict[str, float] = {}
     with ui.row().classes("items-center gap-6"):
         for n in names:
             lo, hi = walk.command_ranges[n]

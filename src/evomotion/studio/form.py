@@ -109,7 +109,8 @@ def build(root: Path) -> None:
             state["clone_values"] = {}
             for f in state["fields"]:  # a cloned run's values where they differ
                 sec, key = f.key.split(".", 1)
-                table = cloned.get(sec) if isinstance(cloned.get(sec), dict) else {}
+                got = cloned.get(sec)
+                table = got if isinstance(got, dict) else {}
                 if key in table:
                     text = form_schema.shown_text(f.kind, table[key])
                     if text != f.shown:
@@ -129,14 +130,18 @@ def build(root: Path) -> None:
                 return
             start.disable()
             try:  # waits until the run wrote its config.toml: off the event loop
-                out, _proc = await run.io_bound(actions.start_run, root, study,
-                                                preset.value or None, current_sets(),
-                                                (run_name.value or "").strip(),
-                                                parse_tags(run_tags.value or ""))
+                started = await run.io_bound(actions.start_run, root, study,
+                                             preset.value or None, current_sets(),
+                                             (run_name.value or "").strip(),
+                                             parse_tags(run_tags.value or ""))
             except InputError as e:
                 start.enable()
                 error_top.set_text(f"error: {e}")
                 return
+            if started is None:  # cancelled, or the studio is stopping
+                start.enable()
+                return
+            out, _proc = started
             ui.navigate.to(f"/run?name={quote(out.relative_to(root).as_posix())}")
 
         def preset_changed() -> None:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import time
 from pathlib import Path
+from typing import Any
 from urllib.parse import quote
 
 from evomotion.errors import InputError
@@ -167,7 +168,9 @@ def build(root: Path) -> None:
                 return
             busy["on"] = True
             try:
-                show(await run.io_bound(rows_now))
+                rows = await run.io_bound(rows_now)
+                if rows is not None:  # None: cancelled, or the studio is stopping
+                    show(rows)
             finally:
                 busy["on"] = False
 
@@ -233,7 +236,7 @@ def build(root: Path) -> None:
             extend_b.set_enabled(can_extend)
             more.set_enabled(can_extend)
 
-        seen = {"signature": data.artifact_signature(run_dir), "ticks": 0}
+        seen: dict[str, Any] = {"signature": data.artifact_signature(run_dir), "ticks": 0}
 
         def refresh_view() -> None:
             """Redraw the study view when the run's artifacts changed (every 2 s)."""

@@ -91,6 +91,8 @@ def played(ui, run_dir: Path, play: Any, scene: str) -> None:
             return
         finally:
             go.enable()
+        if episode is None:  # cancelled, or the studio is stopping
+            return
         caption.set_text(episode.caption)
         box.clear()
         with box:

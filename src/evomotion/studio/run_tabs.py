@@ -34,8 +34,13 @@ def files_panel(ui, root: Path, run_dir: Path) -> None:
         return
     videos = [f for f in files if f.kind == "video"][:MAX_VIDEOS]
     stems: set[str] = set()  # plots/fitness.png and .svg: the first one only
-    images = [f for f in files if f.kind == "image" and not (
-        f.rel.rsplit(".", 1)[0] in stems or stems.add(f.rel.rsplit(".", 1)[0]))][:MAX_IMAGES]
+    images = []
+    for f in files:
+        stem = f.rel.rsplit(".", 1)[0]
+        if f.kind == "image" and stem not in stems:
+            stems.add(stem)
+            images.append(f)
+    images = images[:MAX_IMAGES]
     if videos:
         with ui.row().classes("w-full gap-4"):
             for f in videos:

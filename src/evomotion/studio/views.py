@@ -324,8 +324,8 @@ def _stepper(ui, n: int, draw, label: str = "generation") -> None:
 
     with ui.row().classes("items-center w-full max-w-3xl"):
         ui.button(icon="chevron_left", on_click=lambda: slider.set_value(max(0, slider.value - 1)))
-        slider = ui.slider(min=0, max=max(n - 1, 0), value=max(n - 1, 0),
-                           on_change=lambda e: show(e.value)).classes("w-96 view-step")
+        slider: Any = ui.slider(min=0, max=max(n - 1, 0), value=max(n - 1, 0),
+                                on_change=lambda e: show(e.value)).classes("w-96 view-step")
         ui.button(icon="chevron_right",
                   on_click=lambda: slider.set_value(min(n - 1, slider.value + 1)))
         ui.label(label)

@@ -12,7 +12,7 @@ from evomotion.run.config import Config, RunSection
 from evomotion.run.in_memory import run_in_memory
 from evomotion.studies.arm_ik.artifacts import ArmResult, result_of
 from evomotion.studies.arm_ik.problem import ArmIKConfig, ArmIKProblem, make_problem
-from evomotion.studies.arm_ik.schedule import OWN_ALGORITHMS, ScheduleConfig
+from evomotion.studies.arm_ik.schedule import OWN_ALGORITHMS, ScheduleConfig, ScheduleDriver
 
 
 def split_overrides(**kw: Any) -> tuple[dict, dict, dict]:
@@ -34,6 +34,7 @@ def evolve(problem_cfg: ArmIKConfig, seed: int, schedule: ScheduleConfig | None 
                                       wall_seconds=wall_seconds),
                  schedule or ScheduleConfig(), problem_cfg)
     res = run_in_memory(cfg, problem, make_problem=make_problem, algorithms=OWN_ALGORITHMS)
+    assert isinstance(res.driver, ScheduleDriver)  # the config's algorithm is the schedule
     return result_of(res.driver.problem, res.state, res.evaluations)
 
 
@@ -73,8 +74,9 @@ def success_table(scenario: str, seeds: int, **overrides) -> SuccessRow:
     for s in range(seeds):
         r = evolve(cfg, s, sched, rk.get("wall_seconds", 30.0), problem=ArmIKProblem(cfg))
         ok += r.solved
-        times.append(r.time_to_solution_s if r.solved else np.inf)
-        cpu.append(r.time_to_solution_cpu_s if r.solved else np.inf)
+        # the times are None exactly when the run was not solved
+        times.append(r.time_to_solution_s if r.time_to_solution_s is not None else np.inf)
+        cpu.append(r.time_to_solution_cpu_s if r.time_to_solution_cpu_s is not None else np.inf)
         gens.append(r.generations)
         errs.append(float(r.best_assessment.tip_error[0].sum()))
     return SuccessRow(scenario, cfg.matching, seeds, ok, float(np.median(times)),

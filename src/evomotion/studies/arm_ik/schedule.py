@@ -124,8 +124,9 @@ class ScheduleDriver(Driver):
 
     def init(self, rng: np.random.Generator) -> ScheduleState:
         d = self.problem.genome.dim
-        empty = Assessment(*(np.zeros((0,)) for _ in range(4)), np.zeros((0, 1)),
-                           np.zeros((0, 1), int), np.zeros((0, 1, 2)), np.zeros(0, bool))
+        empty = Assessment(np.zeros((0,)), np.zeros((0,)), np.zeros((0,)), np.zeros((0,)),
+                           np.zeros((0, 1)), np.zeros((0, 1), int), np.zeros((0, 1, 2)),
+                           np.zeros(0, bool))
         return ScheduleState(np.zeros((0, d)), empty, np.full(d, np.nan), empty,
                              np.zeros((0, d)), whole_left=self.cfg.whole_generations,
                              elapsed_s=self.problem.build_seconds,

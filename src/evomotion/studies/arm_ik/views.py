@@ -5,7 +5,7 @@ best feasible one green. ``best.gif`` animates the best limb over the generation
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import matplotlib
 
@@ -14,6 +14,7 @@ import imageio.v2 as imageio  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.colors import ListedColormap  # noqa: E402
+from numpy.typing import ArrayLike  # noqa: E402
 
 from evomotion.outfile import atomic_output, save_figure  # noqa: E402
 from evomotion.studies.arm_ik.kinematics import forward  # noqa: E402
@@ -91,7 +92,7 @@ def save_gif(prob: ArmIKProblem, history: np.ndarray, path: Path, frames: int = 
     """Animated GIF of the best limb at ``frames`` generations spread over ``history``."""
     idx = np.unique(np.linspace(0, history.shape[0] - 1, max(1, frames)).round().astype(int))
     fig, ax = _figure(prob)
-    images = []
+    images: list[ArrayLike] = []
     for g in idx:
         ax.clear()
         _draw_board(ax, prob)
@@ -113,7 +114,7 @@ def studio_frames(files: RunFiles) -> Frames:
     """The studio's view of an arm-ik run: the board with each recorded generation's
     population and best limb, and the paper's statistics of that generation."""
     hist = files.history()
-    prob = files.problem()
+    prob = cast(ArmIKProblem, files.problem())  # an arm-ik run's (this study's view)
     stats = files.stats()
     gens = stats.get("generation", [])
 

@@ -26,7 +26,7 @@ def _visible(a: np.ndarray, b: np.ndarray, edges: np.ndarray,
     if edges.shape[0] == 0:
         return np.ones(a.shape[:-1], dtype=bool)
     seg = np.stack([a, b], axis=-2)[..., None, :, :]
-    cross = proper_crossings(seg, edges).any(axis=-1)
+    cross = np.asarray(proper_crossings(seg, edges).any(axis=-1))  # an array, not a scalar
     if closed:
         cross |= points_in_polygons((a + b) / 2, closed)
     return ~cross

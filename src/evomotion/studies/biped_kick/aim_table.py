@@ -210,7 +210,8 @@ def read(path: str | Path) -> AimTable:
     # files before these keys: the evolved timing, a level sole
     stretch = _bounded(path, rec, "adapt_max_stretch", 1.0, 1.0, MAX_STRETCH)
     roll = _bounded(path, rec, "adapt_foot_roll_rad", 0.0, 0.0, MAX_FOOT_ROLL_RAD)
-    return AimTable(*axes, *grids, stretch, roll)
+    (aims, dx, dy), (angle, distance) = axes, grids
+    return AimTable(aims, dx, dy, angle, distance, stretch, roll)
 
 
 def _bounded(path: str | Path, rec: dict, key: str, default: float, lo: float, hi: float

@@ -20,7 +20,7 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, TypeGuard
 
 import numpy as np
 
@@ -32,8 +32,8 @@ from evomotion.studies.biped_kick.motion import ball_offset, named
 AIMS_DEG = (-30, -20, -10, 0, 10, 20, 30)
 
 
-def _ok(genome: Any) -> bool:
-    return genome is not None and np.all(np.isfinite(genome))
+def _ok(genome: Any) -> TypeGuard[np.ndarray]:
+    return genome is not None and bool(np.all(np.isfinite(genome)))
 
 
 def best_record(ctx: RunContext) -> dict[str, Any]:
@@ -46,15 +46,17 @@ def best_record(ctx: RunContext) -> dict[str, Any]:
 def write_motions(ctx: RunContext) -> None:
     if not _ok(ctx.best_genome):
         return
+    out = ctx.out_dir
+    assert out is not None  # the artifact hooks run only in a run with a folder
     kick_motion = ctx.problem.kicker.kick_motion  # the robot's joints
-    atomic_write_text(ctx.out_dir / "best.motion", format_motion(kick_motion(ctx.best_genome)))
+    atomic_write_text(out / "best.motion", format_motion(kick_motion(ctx.best_genome)))
     mirror = getattr(ctx.problem.kicker, "mirror", None)
     for a in AIMS_DEG:  # kicks/ is the run's own folder
         motion = kick_motion(ctx.best_genome, np.radians(a))
-        atomic_write_text(ctx.out_dir / "kicks" / f"aim_{a:+d}.motion", format_motion(motion),
+        atomic_write_text(out / "kicks" / f"aim_{a:+d}.motion", format_motion(motion),
                           "aimed kick", mkdir=True)
         if mirror is not None:
-            atomic_write_text(ctx.out_dir / "kicks" / f"left_aim_{-a:+d}.motion",
+            atomic_write_text(out / "kicks" / f"left_aim_{-a:+d}.motion",
                               format_motion(left_foot(motion, mirror)), "aimed kick")
 
 
@@ -97,6 +99,8 @@ def finalize(ctx: RunContext) -> None:
     if not _ok(ctx.best_genome):
         return
     write_motions(ctx)
+    out = ctx.out_dir
+    assert out is not None  # the artifact hooks run only in a run with a folder
     g = np.asarray(ctx.best_genome, dtype=float)
     p = ctx.problem
     if not ctx.best_metrics.get("feasible", 0.0):
@@ -104,9 +108,9 @@ def finalize(ctx: RunContext) -> None:
                 "violated); give the search more evaluations")
     if p.robot.has("naoqi_export"):
         p.robot.capability("naoqi_export", "biped-kick's export").write_run_exports(
-            p.kicker.kick_motion(g), ctx.out_dir, ctx.log)
+            p.kicker.kick_motion(g), out, ctx.log)
     rows = aim_table(p, g)
-    write_json(ctx.out_dir / "best_kicks.json", rows)
+    write_json(out / "best_kicks.json", rows)
     k = p.kicks(g[None], np.zeros(1), p.ball_xy(g[None], np.zeros(1)), keep=True)
     end = int(k["end"][0])
     times = k["times"][:end]
@@ -115,19 +119,20 @@ def finalize(ctx: RunContext) -> None:
     plot_foot(g, 0.0, times, sens[:, p.sl["r_sole"]], ctx.plots_dir / "kick_foot",
               feet=p.kicker.foot_trajectories(g[None], times, 0.0))
     plot_zmp(g, times, margin, cop, corners, p.cfg.zmp_margin_m, ctx.plots_dir / "kick_zmp")
-    if (ctx.out_dir / "stats.csv").exists():
-        plot_progress(ctx.out_dir / "stats.csv", FLOOR_M, ctx.plots_dir / "kick_progress")
+    if (out / "stats.csv").exists():
+        plot_progress(out / "stats.csv", FLOOR_M, ctx.plots_dir / "kick_progress")
     qpos = state_qpos_all(p.model, k["states"][0, :end])
-    video = ctx.out_dir / "best.mp4"
+    video = out / "best.mp4"
     try:
         render_video(qpos, p.dt, video, model_xml=p.kicker.scene_xml,
                      assets=p.robot.assets or None, camera="kick")
+        video_note = f"; video {video.name}"
     except RenderUnavailableError as exc:
         ctx.log(f"best.mp4 skipped: {exc}")
-        video = None
+        video_note = ""
     straight = rows[AIMS_DEG.index(0)]
     ctx.log(f"best kick: {straight['distance_along_m']:.2f} m straight, "
             f"{'fell' if straight['fell'] else 'stayed up'}, min ZMP margin "
             f"{1000 * straight['min_margin_m']:.1f} mm; aimed -30..+30 deg: mean angle error "
             f"{np.mean([abs(r['angle_error_deg']) for r in rows]):.1f} deg"
-            + (f"; video {video.name}" if video else ""))
+            + video_note)

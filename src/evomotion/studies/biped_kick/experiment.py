@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import dataclasses
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -84,7 +85,8 @@ def kick_worlds(problem: KickProblem, n: int, rng: np.random.Generator,
     friction scale perturbs the robot's feet, not the ball's roll."""
     base = problem.model
     duration = float(SETTLE_S + execution_time_s(problem.kicker.start[None])[0])
-    worlds = draw_worlds(base, Perturbation(push_ns=tuple(push_ns)), int(n), rng, duration)
+    lo, hi = push_ns
+    worlds = draw_worlds(base, Perturbation(push_ns=(lo, hi)), int(n), rng, duration)
     ball = base.geom("ball").id
     for w in worlds:
         w.model.geom_friction[ball] = base.geom_friction[ball]
@@ -226,7 +228,8 @@ def run_experiment(out_dir: Path, seeds: int = 1, budget: int = 1500, kicks: int
     names = list(variants or DEFAULT_VARIANTS)
     grid = np.arange(1, budget + 1)
     offsets = np.random.default_rng(12345).uniform(-perturb_m, perturb_m, (kicks, 2))
-    curves, rows = {}, {}
+    curves: dict[str, np.ndarray] = {}
+    rows: dict[str, dict[str, Any]] = {}
     for name in names:
         runs, best_x, best_f = [], None, -np.inf
         for seed in range(seeds):
@@ -235,6 +238,8 @@ def run_experiment(out_dir: Path, seeds: int = 1, budget: int = 1500, kicks: int
             log(f"{name} seed {seed}: best {f:.3f} after {ev[-1]} evaluations")
             if f > best_f:
                 best_x, best_f = x, f
+        if best_x is None:  # every run's best was -inf: no kick to report
+            raise RuntimeError(f"biped-kick study: no {name} run found a kick")
         curves[name] = np.array(runs)
         rows[name] = {"best_fitness": best_f, "genes": named(best_x),
                       "straight": summary(perturbed_kicks(problem, best_x, offsets)),
@@ -242,7 +247,7 @@ def run_experiment(out_dir: Path, seeds: int = 1, budget: int = 1500, kicks: int
                                                                        a))
                                 for a in (ACCURACY_AIMS_DEG if len(cfg.aims_deg) > 1 else ())}}
     buf = io.BytesIO()
-    np.savez(buf, grid=grid, **curves)
+    np.savez(buf, grid=grid, **curves)  # type: ignore[arg-type]  # numpy's stub: allow_pickle
     atomic_write_bytes(out_dir / "curves.npz", buf.getvalue(), "study curves")
     plot_convergence(grid, curves, out_dir / "convergence.png")
     res = {"config": dataclasses.asdict(cfg), "seeds": seeds, "budget": budget,

@@ -34,11 +34,11 @@ def shoot_motion(path: str | Path | None = None) -> Motion:
 
 def kicking_foot(motion: Motion) -> str:
     """``"l"`` or ``"r"``: the foot whose ankle goes furthest forward (torso frame)."""
-    reach = {}
+    reach: dict[str, float] = {}
     for side, names, left in (("l", nao.LEFT_LEG, True), ("r", nao.RIGHT_LEG, False)):
         q = np.stack([np.nan_to_num(motion.column(n)) for n in names], axis=1)
         reach[side] = float(leg_fk(q, left)[0][:, 0].max())
-    return max(reach, key=reach.get)
+    return max(reach, key=reach.__getitem__)
 
 
 def keyframe_kicks(offsets_m: np.ndarray, path: str | Path | None = None,
@@ -52,7 +52,8 @@ def keyframe_kicks(offsets_m: np.ndarray, path: str | Path | None = None,
     foot = kicking_foot(motion)
     ball0 = scene.default_ball_xy(model, pose=first, foot=foot)
     decel = scene.measured_deceleration(cfg.rolling_m)
-    out = {k: [] for k in ("distance_m", "lateral_m", "fell", "exec_time_s", "min_margin_m")}
+    out: dict[str, list[float]] = {
+        k: [] for k in ("distance_m", "lateral_m", "fell", "exec_time_s", "min_margin_m")}
     sl = scene.sensor_slices(model)
     with BatchSimulator(model, cfg.nthread) as sim:
         for off in np.atleast_2d(offsets_m):

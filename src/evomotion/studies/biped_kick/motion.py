@@ -159,8 +159,8 @@ def foot_trajectories(genomes: np.ndarray, times_s: np.ndarray,
     dy = -gene(g, "shift_y_m")[:, None] * shift
     left = np.broadcast_to(l0, (len(g), t.shape[1], 3)).copy()
     left[..., 1] += dy
-    rest = np.broadcast_to(r0, (len(g), 3)).copy()
-    rest[:, 1] -= gene(g, "shift_y_m")
+    r_rest = np.broadcast_to(r0, (len(g), 3)).copy()
+    r_rest[:, 1] -= gene(g, "shift_y_m")
     phi = gene(g, "aim_swing") * aims
     u = np.stack([np.cos(phi), np.sin(phi), np.zeros(len(g))], axis=1)
 
@@ -170,13 +170,13 @@ def foot_trajectories(genomes: np.ndarray, times_s: np.ndarray,
 
     def point(x: str, z: str) -> np.ndarray:
         up = np.stack([np.zeros(len(g)), gene(g, "kick_y_m"), gene(g, z)], axis=1)
-        return rest + up + gene(g, x)[:, None] * u + seen
+        return r_rest + up + gene(g, x)[:, None] * u + seen
 
     L, K = point("lift_x_m", "lift_z_m"), point("kick_x_m", "kick_z_m")
-    lift = _bezier_phase(rest, L, gene(g, "lift_bulge_m"), _smooth((t - ts) / tl))
+    lift = _bezier_phase(r_rest, L, gene(g, "lift_bulge_m"), _smooth((t - ts) / tl))
     u_k = _smooth(np.clip((t - e1) / tk, 0.0, 1.0) ** gene(g, "kick_ease")[:, None])
     kick = _bezier_phase(L, K, gene(g, "kick_bulge_m"), u_k)
-    back = _bezier_phase(K, rest, np.full(len(g), retract_bulge_m), _smooth((t - e2) / tr))
+    back = _bezier_phase(K, r_rest, np.full(len(g), retract_bulge_m), _smooth((t - e2) / tr))
     right = np.broadcast_to(r0, (len(g), t.shape[1], 3)).copy()
     right[..., 1] += dy
     for lo, hi, curve in ((ts, e1, lift), (e1, e2, kick), (e2, e3, back)):

@@ -324,8 +324,9 @@ class KickProblem:
         exec_t = execution_time_s(g)
         keys, ctrl, end, ik_error = self.controls(g, aims_k, shift)
         if left.any():
-            keys[left], ctrl[left] = self.kicker.mirror(keys[left]), self.kicker.mirror(
-                ctrl[left])
+            mirror = self.kicker.mirror
+            assert mirror is not None  # left_flags refuses a left kick without a mirror image
+            keys[left], ctrl[left] = mirror(keys[left]), mirror(ctrl[left])
         nstep = ctrl.shape[1]
         state0 = np.stack([self.kicker.initial_state(b) for b in ball0])
         if worlds is not None and len(worlds) != len(g):

@@ -32,10 +32,12 @@ def plot_kick_plan(robot: np.ndarray, ball: np.ndarray, goal: np.ndarray, out_pn
     bz_len, bz_t = bezier_time(plan.control_points, walk)
     bl_len, bl_t = baseline_time(robot, plan, walk)
     fig, ax = plt.subplots(figsize=(7, 5), dpi=110)
-    ax.add_patch(plt.Circle(ball, radius_m, fill=False, ls="--", color="0.5",
+    centre = (ball[0], ball[1])
+    ax.add_patch(plt.Circle(centre, radius_m, fill=False, ls="--", color="0.5",
                             label=f"ball inflated by R = {radius_m:.2f} m"))
-    ax.add_patch(plt.Circle(ball, BALL_RADIUS_M, color="orange", label="ball"))
-    sc = ax.scatter(*plan.candidates.T, c=plan.cost, cmap="viridis", s=18, zorder=3)
+    ax.add_patch(plt.Circle(centre, BALL_RADIUS_M, color="orange", label="ball"))
+    cand_x, cand_y = plan.candidates.T
+    sc = ax.scatter(cand_x, cand_y, c=plan.cost, cmap="viridis", s=18, zorder=3)
     fig.colorbar(sc, ax=ax, label="C_kick", shrink=0.6)
     ax.plot(*plan.kick_point, "r*", ms=14, zorder=4, label="chosen kick point")
     ax.plot(*path.T, "b-", lw=2, label=f"Bézier: {bz_len:.2f} m, {bz_t:.1f} s")

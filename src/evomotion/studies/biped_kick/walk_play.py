@@ -118,7 +118,8 @@ def walk(run: SceneRun, repertoire: Path, ctrl: np.ndarray, goal: np.ndarray,
     goal = np.array([goal[0] + c * shift[0] - s * shift[1], goal[1] + s * shift[0]
                      + c * shift[1], goal[2]])
     goals = waypoints(ctrl, goal)
-    k, taken = 0, []
+    k = 0
+    taken: list[int] = []
     while len(taken) < max_steps and not run.fell:
         pose = run.pose()
         last = k == len(goals) - 1

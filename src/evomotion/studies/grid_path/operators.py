@@ -36,13 +36,13 @@ def free_pieces(enc: PerpendicularEncoding, blocked: np.ndarray) -> tuple[np.nda
     h, w = blocked.shape
     for g in range(enc.dim):
         a, b = enc.lower[g], enc.upper[g]
-        cuts = [a, b]
+        at = [a, b]
         for axis in (0, 1):
             if abs(nrm[axis]) > 1e-15:
                 v0, v1 = sorted((feet[g, axis] + a * nrm[axis], feet[g, axis] + b * nrm[axis]))
                 ks = np.arange(np.ceil(v0), np.floor(v1) + 1)
-                cuts.extend(((ks - feet[g, axis]) / nrm[axis]).tolist())
-        cuts = np.unique(np.clip(cuts, a, b))
+                at.extend(((ks - feet[g, axis]) / nrm[axis]).tolist())
+        cuts = np.unique(np.clip(at, a, b))
         mids = 0.5 * (cuts[1:] + cuts[:-1])
         cells = np.floor(feet[g] + mids[:, None] * nrm).astype(int)
         inside = (cells[:, 0] >= 0) & (cells[:, 0] < w) & (cells[:, 1] >= 0) & (cells[:, 1] < h)
@@ -153,10 +153,13 @@ class PathOperators:
         cell comes from :attr:`piece_cell`. The same draws, so the same result where a
         valid position is found (elsewhere the returned ``y`` is not used)."""
         t, R, n = self.tables, self.retries, genes.size
+        piece_cell, gene_pairs = self.piece_cell, self._gene_pairs
+        # discrete mode only: the tables, their stretch cells and gene pairs are all set
+        assert t is not None and piece_cell is not None and gene_pairs is not None
         gr = genes.repeat(R)
         y, j = self._draw(gr, rng)
-        ip = self.piece_cell[gr, j]
-        in_off, in_mul, out_off, out_mul = self._gene_pairs
+        ip = piece_cell[gr, j]
+        in_off, in_mul, out_off, out_mul = gene_pairs
         into = (in_off[genes] + ia * in_mul[genes]).repeat(R)  # segment in: + drawn position
         out = (out_off[genes] + ib).repeat(R)  # segment out: + drawn position * out_mul
         ok = t.valid[into + ip] & t.valid[out + ip * out_mul[gr]]
@@ -192,9 +195,11 @@ class PathOperators:
             p = self._point(gr, y)
             ip = None if ia is None or (right is not None and ib is None) \
                 else self._layer_index(gr + 1, p)
-            if ip is not None:
+            if ip is not None:  # then the tables and the end points' positions are known
+                assert t is not None and ia is not None
                 ok = t.valid[t.offset[gr] + np.repeat(ia[todo], R) * t.sizes[gr + 1] + ip]
                 if right is not None:
+                    assert ib is not None
                     ok &= t.valid[t.offset[gr + 1] + ip * t.sizes[gr + 2]
                                   + np.repeat(ib[todo], R)]
             else:
@@ -231,7 +236,7 @@ class PathOperators:
     def mutate(self, x: np.ndarray, rng: np.random.Generator, rate: float) -> np.ndarray:
         """The paper's mutation on each row with probability ``rate`` (see module doc)."""
         n, d = x.shape
-        u = rng.random(n)  # u < rate picks the row; u / rate (uniform) picks the point
+        u = rng.random((n,))  # u < rate picks the row; u / rate (uniform) picks the point
         rows = (u < rate).nonzero()[0]
         x = np.array(x, dtype=float)
         if rows.size == 0:
@@ -243,7 +248,8 @@ class PathOperators:
         if rows.size == 0:
             return x
         k = np.arange(rows.size)
-        cells = None if self.piece_cell is None else self.tables.gene_cells(x[rows])
+        t = self.tables  # set wherever piece_cell is
+        cells = None if self.piece_cell is None or t is None else t.gene_cells(x[rows])
         if cells is not None:  # discrete mode: lookups only
             full = np.zeros((rows.size, d + 2), dtype=np.int64)  # S and G: position 0
             full[:, 1:-1] = cells

@@ -166,11 +166,11 @@ def study(
     else:
         table = ex.beyond_table(seeds, n_maps, rows or list(ex.BEYOND_ROWS), pop,
                                 generations or 50, pc, pm, update)
-    for row in table:
-        typer.echo(row.line())
+    for result in table:
+        typer.echo(result.line())
 
 
-PAPER_PRESET = {
+PAPER_PRESET: dict[str, dict[str, Any]] = {
     "problem": {"mode": "discrete", "m": 1.2, "repair": False},
     "algorithm": {"name": "cga", "pop_size": 100, "neighbourhood": "L5", "update": "line_sweep",
                   "crossover": "one_point", "crossover_rate": 0.05, "mutation_rate": 0.01},

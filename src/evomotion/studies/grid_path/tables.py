@@ -29,7 +29,7 @@ def _touched_cells(a: np.ndarray, b: np.ndarray, w: int, h: int) -> np.ndarray:
     t = np.unique(np.clip(ts, 0, 1))
     t = np.concatenate([t, 0.5 * (t[1:] + t[:-1])])
     p = a + t[:, None] * d
-    cells = set()
+    cells: set[int] = set()
     for x, y in p.tolist():
         xs = {int(np.floor(x)), int(np.floor(x - 1e-9))}
         ys = {int(np.floor(y)), int(np.floor(y - 1e-9))}
@@ -108,7 +108,8 @@ class SegmentTables:
         cell = xy[..., 1].astype(np.int64) * self.w + xy[..., 0].astype(np.int64)
         return self.lookup[layer, cell]
 
-    def pairs(self, layer: np.ndarray, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, ...]:
+    def pairs(self, layer: np.ndarray, a: np.ndarray, b: np.ndarray
+              ) -> tuple[np.ndarray, np.ndarray]:
         """``(valid, length)`` of segments from index ``a`` in ``layer`` to ``b`` in the next."""
         flat = self.offset[layer] + a * self.sizes[layer + 1] + b
         return self.valid[flat], self.length[flat]

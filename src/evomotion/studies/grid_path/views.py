@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import matplotlib
 
@@ -13,6 +13,7 @@ import numpy as np  # noqa: E402
 
 from evomotion.outfile import save_figure  # noqa: E402
 from evomotion.studies.grid_path.maps import GridMap  # noqa: E402
+from evomotion.studies.grid_path.problem import GridPathProblem  # noqa: E402
 from evomotion.studies.grid_path.solvers import Solution  # noqa: E402
 from evomotion.studies.view import Frames, RunFiles  # noqa: E402
 
@@ -66,7 +67,7 @@ def studio_frames(files: RunFiles) -> Frames:
     """The studio's view of a grid-path run: the map with each recorded generation's best
     path."""
     hist = files.history()
-    prob = files.problem()
+    prob = cast(GridPathProblem, files.problem())  # a grid-path run's (this study's view)
     sign = -1.0 if getattr(prob, "sense", "min") == "max" else 1.0
 
     def draw(k: int) -> tuple[Any, str]:

@@ -79,7 +79,7 @@ def write_repertoire(out_dir: Path, hold_s: float, problem: Any = None) -> list[
     folder = repertoire_folder(out_dir)
     inside = np.all((a.measures >= box.lower) & (a.measures <= box.upper), axis=1)
     up = a.objective > FALLEN_OBJECTIVE + 1.0
-    entries = []
+    entries: list[dict[str, Any]] = []
     for k in np.flatnonzero(inside & up):
         c = int(a.cell[k])
         name = f"cell-{c:04d}.motion"
@@ -193,21 +193,27 @@ def export(run: Path, hold_s: float | None = None) -> tuple[Path, list[dict]]:
 def _write(ctx: RunContext) -> list[dict]:
     """The repertoire of the run's archive, written once per generation (the finishing
     phase calls both hooks)."""
+    out = ctx.out_dir
+    assert out is not None  # the artifact hooks run only in a run with a folder
     key = ("humanoid-repertoire", ctx.generation, ctx.evaluations)
     if ctx.cache.get("repertoire-written") != key:
-        ctx.cache["repertoire-entries"] = write_repertoire(ctx.out_dir, ctx.problem.cfg.hold_s,
+        ctx.cache["repertoire-entries"] = write_repertoire(out, ctx.problem.cfg.hold_s,
                                                            ctx.problem)
         ctx.cache["repertoire-written"] = key
     return ctx.cache["repertoire-entries"]
 
 
 def on_checkpoint(ctx: RunContext) -> None:
-    if (ctx.out_dir / "archive.npz").exists():
+    out = ctx.out_dir
+    assert out is not None  # the artifact hooks run only in a run with a folder
+    if (out / "archive.npz").exists():
         _write(ctx)
 
 
 def finalize(ctx: RunContext) -> None:
-    if not (ctx.out_dir / "archive.npz").exists():
+    out = ctx.out_dir
+    assert out is not None  # the artifact hooks run only in a run with a folder
+    if not (out / "archive.npz").exists():
         return
     entries = _write(ctx)
     if not entries:
@@ -217,8 +223,7 @@ def finalize(ctx: RunContext) -> None:
             ".motion each)")
     sheet = spread(entries, 6)
     try:
-        contact_sheet(ctx.out_dir / "repertoire", sheet,
-                      ctx.out_dir / "repertoire" / "contact_sheet.mp4",
+        contact_sheet(out / "repertoire", sheet, out / "repertoire" / "contact_sheet.mp4",
                       robot=None if ctx.problem.steps.name == "closed_form"
                       else ctx.problem.robot)
     except RuntimeError as exc:  # no GL backend (RenderUnavailableError) or a render error

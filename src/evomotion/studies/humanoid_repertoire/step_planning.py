@@ -24,6 +24,7 @@ from __future__ import annotations
 import heapq
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -72,7 +73,7 @@ NAO_BOX_SIZE = (0.25, 0.16, 90.0)
 
 def _box_size(index: dict) -> np.ndarray:
     """The archive's ranges (m, m, deg): from the index's ``box``, else the NAO's."""
-    box = index.get("box")
+    box: Any = index.get("box")  # the file's: anything (a wrong one is refused below)
     try:
         size = np.array(box["upper"], float) - np.array(box["lower"], float)
     except (TypeError, KeyError, ValueError):
@@ -119,9 +120,10 @@ def plan(steps: np.ndarray, target: np.ndarray, tol_m: float = 0.03, tol_deg: fl
     cost = 1.0 + risk_weight * np.maximum(-np.asarray(objective, float), 0.0) \
         if objective is not None else np.ones(len(steps))
     start = np.zeros(3)
-    heap = [(float(h(start)), 0.0, 0, start, ())]
+    heap: list[tuple[float, float, int, np.ndarray, tuple[int, ...]]] = [
+        (float(h(start)), 0.0, 0, start, ())]
     seen: set[tuple[int, int, int]] = set()
-    best = (math.inf, start, ())
+    best: tuple[float, np.ndarray, tuple[int, ...]] = (math.inf, start, ())
     tie = 0
     for _ in range(min(max_expansions, max(1, MAX_PUSHES // len(steps)))):
         if not heap:

@@ -27,7 +27,9 @@ def genome_motion(problem: HumanoidStepProblem, genome: np.ndarray) -> Motion:
 def write_best_motion(ctx: RunContext) -> Path | None:
     if ctx.best_genome is None or not np.all(np.isfinite(ctx.best_genome)):
         return None
-    path = ctx.out_dir / "best.motion"
+    out = ctx.out_dir
+    assert out is not None  # the artifact hooks run only in a run with a folder
+    path = out / "best.motion"
     atomic_write_text(path, format_motion(genome_motion(ctx.problem, ctx.best_genome)))
     return path
 
@@ -54,21 +56,23 @@ def finalize(ctx: RunContext) -> None:
     from evomotion.sim.motion import read_motion
     from evomotion.sim.robots.nao.replay import replay_motion
 
-    stats = ctx.out_dir / "stats.csv"
+    out = ctx.out_dir
+    assert out is not None  # the artifact hooks run only in a run with a folder
+    stats = out / "stats.csv"
     if stats.exists():
-        plot_fitness(stats, ctx.out_dir / "fitness", title="humanoid-step")
+        plot_fitness(stats, out / "fitness", title="humanoid-step")
     path = write_best_motion(ctx)
     if path is None:
         return
     if not ctx.problem.robot.has("webots_names"):  # replayed as Webots plays it: the NAO
         return finalize_robot(ctx)
     write_exports(ctx)
-    video: Path | None = ctx.out_dir / "best.mp4"
+    video: Path | None = out / "best.mp4"
     summary, skipped = replay_motion(read_motion(path), video, ctx.problem.cfg.hold_s)
     if skipped is not None:  # no GL backend: keep everything but the video
         ctx.log(f"best.mp4 skipped: {skipped}")
         video = None
-    write_json(ctx.out_dir / "best_replay.json", summary)
+    write_json(out / "best_replay.json", summary)
     dx, dy = summary["displacement_m"]
     ctx.log(f"best.motion replayed: dx={dx:+.3f} m dy={dy:+.3f} m, "
             f"{'fell' if summary['fell'] else 'stayed up'}"
@@ -82,6 +86,10 @@ def finalize_robot(ctx: RunContext) -> None:
     from evomotion.sim.rollout import torso_track
 
     problem, robot = ctx.problem, ctx.problem.robot
+    out = ctx.out_dir
+    assert out is not None  # the artifact hooks run only in a run with a folder
+    if ctx.best_genome is None:  # finalize calls it only after best.motion
+        return
     states, sensors = problem.simulate(np.atleast_2d(ctx.best_genome))
     ev = problem.score(states, sensors)
     track = torso_track(states)
@@ -91,8 +99,8 @@ def finalize_robot(ctx: RunContext) -> None:
                "fell": bool(ev.metrics["fell"][0]),
                "time_to_fall_s": float(ev.metrics["time_to_fall_s"][0]),
                "torso_height_m": [float(track.xyz[0, 0, 2]), float(track.xyz[0, -1, 2])]}
-    write_json(ctx.out_dir / "best_replay.json", summary)
-    video: Path | None = ctx.out_dir / "best.mp4"
+    write_json(out / "best_replay.json", summary)
+    video = out / "best.mp4"
     try:
         if not robot.xml:
             raise RuntimeError("the robot's edited model cannot be written as MJCF text")
@@ -100,10 +108,11 @@ def finalize_robot(ctx: RunContext) -> None:
 
         render_video(states[0, :, 1:1 + robot.model.nq], problem.dt, video,
                      model_xml=robot.xml, camera=robot_camera(robot))
+        video_note = f"; video {video.name}"
     except (RenderUnavailableError, RuntimeError) as e:
         ctx.log(f"best.mp4 skipped: {e}")
-        video = None
+        video_note = ""
     dx, dy = summary["displacement_m"]
     ctx.log(f"best step on {robot.name}: dx={dx:+.3f} m dy={dy:+.3f} m, "
             f"{'fell' if summary['fell'] else 'stayed up'}"
-            + (f"; video {video.name}" if video else ""))
+            + video_note)

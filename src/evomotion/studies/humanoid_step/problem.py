@@ -246,7 +246,7 @@ class HumanoidStepProblem(BatchedRollouts):
         lo = q0 + cfg.bounds_scale * (np.minimum(r.lower, q0) - q0)
         hi = q0 + cfg.bounds_scale * (np.maximum(r.upper, q0) - q0)
         self.encoding = ServoEncoding(cfg.encoding, q0, lo, hi, cfg.intervals, cfg.motion_s)
-        self.genome = self.encoding.genome(list(r.evolved))
+        self.genome = self.encoding.genome(r.evolved)
         self.leg_columns = r.columns
         self.base = r.pose
         self.state0 = r.state0
@@ -331,9 +331,12 @@ class HumanoidStepProblem(BatchedRollouts):
         the worlds, plus ``fall_rate``."""
         from evomotion.sim.worlds import aggregate_worlds, simulate_worlds
 
-        n, k = len(genomes), len(self.worlds)
+        worlds = self.worlds
+        if worlds is None:
+            raise ValueError("evaluate_worlds: the problem has one world (problem.worlds <= 1)")
+        n, k = len(genomes), len(worlds)
         ctrl = np.repeat(self.controls(genomes), k, axis=0)  # genome-major: i * k + world
-        states, sensors = simulate_worlds(self.worlds * n, self.state0, ctrl,
+        states, sensors = simulate_worlds(worlds * n, self.state0, ctrl,
                                           self.sim.nthread, sensors=True, stopped=self._fallen,
                                           segment_steps=self.segment_steps,
                                           simulator=self.sim)

@@ -13,7 +13,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeGuard
 
 import numpy as np
 
@@ -26,8 +26,8 @@ from evomotion.studies.humanoid_walk.walk_motion import assemble, walk_parts
 PART_FILES = ("walk_start.motion", "walk_cycle.motion", "walk_stop.motion")
 
 
-def _ok(genome: Any) -> bool:
-    return genome is not None and np.all(np.isfinite(genome))
+def _ok(genome: Any) -> TypeGuard[np.ndarray]:
+    return genome is not None and bool(np.all(np.isfinite(genome)))
 
 
 def best_record(ctx: RunContext) -> dict[str, Any]:
@@ -56,15 +56,17 @@ def write_motions(ctx: RunContext) -> Motion | None:
     """``best.motion`` and its three parts; the whole walk (``None`` without a best)."""
     if not _ok(ctx.best_genome):
         return None
+    out = ctx.out_dir
+    assert out is not None  # the artifact hooks run only in a run with a folder
     if ctx.problem.gait.name != "foot":  # the robot's channels every 20 ms
         whole = ctx.problem.motion(ctx.best_genome)
-        atomic_write_text(ctx.out_dir / "best.motion", format_motion(whole))
+        atomic_write_text(out / "best.motion", format_motion(whole))
         return whole
     parts = walk_parts(ctx.best_genome, ctx.problem.cfg.walk_s)
     for name, motion in zip(PART_FILES, (parts.start, parts.cycle, parts.stop), strict=True):
-        atomic_write_text(ctx.out_dir / name, format_motion(motion))
+        atomic_write_text(out / name, format_motion(motion))
     whole = assemble(parts)
-    atomic_write_text(ctx.out_dir / "best.motion", format_motion(whole))
+    atomic_write_text(out / "best.motion", format_motion(whole))
     return whole
 
 
@@ -82,10 +84,12 @@ def finalize(ctx: RunContext) -> None:
         return
     if ctx.problem.gait.name != "foot":
         return finalize_robot(ctx)
+    out = ctx.out_dir
+    assert out is not None  # the artifact hooks run only in a run with a folder
     # best_naoqi.py and best_keyframes.json only when the walk passes the real-NAO checks
-    write_run_exports(motion, ctx.out_dir, ctx.log)
+    write_run_exports(motion, out, ctx.log)
     hold = ctx.problem.cfg.hold_s
-    video: Path | None = ctx.out_dir / "best.mp4"
+    video: Path | None = out / "best.mp4"
     summary, skipped = replay_motion(motion, video, hold)
     if skipped is not None:
         ctx.log(f"best.mp4 skipped: {skipped}")
@@ -95,7 +99,7 @@ def finalize(ctx: RunContext) -> None:
     summary.update(hold_s=hold, duration_s=duration, speed_mps=dx / duration,
                    heading_deg_per_m=float(np.degrees(abs(summary["heading_change_rad"]))
                                            / max(dx, 0.01)))
-    write_json(ctx.out_dir / "best_replay.json", summary)
+    write_json(out / "best_replay.json", summary)
     ctx.log(f"best.motion replayed: {dx:+.3f} m forward, {dy:+.3f} m sideways in "
             f"{duration:.2f} s ({summary['speed_mps']:.3f} m/s over the whole motion), "
             f"{'fell' if summary['fell'] else 'stayed up'}"
@@ -108,15 +112,19 @@ def finalize_robot(ctx: RunContext) -> None:
     from evomotion.sim.render import RenderUnavailableError, render_video
 
     p = ctx.problem
+    out = ctx.out_dir
+    assert out is not None  # the artifact hooks run only in a run with a folder
+    if not _ok(ctx.best_genome):  # finalize calls it only after the best's motions
+        return
     states, batch = p.simulate(np.atleast_2d(ctx.best_genome))
     ev = p.score(states, batch.ctrl, batch)
     summary = {"robot": p.robot.name, "gait_kind": p.kind,
                **{k: float(v[0]) for k, v in ev.metrics.items()},
                "walk_s": float(batch.walk_s[0]), "horizon_s": p.horizon_s}
     summary["fell"] = bool(summary["fell"])
-    write_json(ctx.out_dir / "best_replay.json", summary)
+    write_json(out / "best_replay.json", summary)
     back = 3.0 if p.kind == "biped" else 6.0  # a quadruped is longer than it is tall
-    video: Path | None = ctx.out_dir / "best.mp4"
+    video = out / "best.mp4"
     try:
         if not p.robot.xml:
             raise RuntimeError("the robot's edited model cannot be written as MJCF text")
@@ -124,11 +132,12 @@ def finalize_robot(ctx: RunContext) -> None:
 
         render_video(states[0, :, 1:1 + p.model.nq], p.dt, video, model_xml=p.robot.xml,
                      camera=robot_camera(p.robot, back, least_m=1.2))
+        video_note = f"; video {video.name}"
     except (RenderUnavailableError, RuntimeError) as e:
         ctx.log(f"best.mp4 skipped: {e}")
-        video = None
+        video_note = ""
     ctx.log(f"best gait on {p.robot.name}: {summary['forward_m']:+.3f} m forward, "
             f"{summary['lateral_m']:+.3f} m sideways, {summary['speed_mps']:.3f} m/s, "
             f"straightness {summary['straightness']:.2f}, "
             f"{'fell' if summary['fell'] else 'stayed up'}"
-            + (f"; video {video.name}" if video else ""))
+            + video_note)

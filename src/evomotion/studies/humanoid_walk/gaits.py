@@ -132,7 +132,7 @@ class JointSpaceGait:
         """The walk of one genome as a motion of the robot's channels, every 20 ms."""
         t_ms = np.arange(0, int(self.horizon_s * 1000) + 1, foot_gait.POSE_MS)
         q = self.targets(np.atleast_2d(genes), t_ms / 1000.0)[0]
-        return Motion(list(self.robot.joints), t_ms, q)
+        return Motion(tuple(self.robot.joints), t_ms, q)
 
     def batch(self, genomes: np.ndarray, nstep: int) -> GaitBatch:
         period = genomes[:, 0]

@@ -212,13 +212,15 @@ class HumanoidWalkProblem(BatchedRollouts):
         n, k = len(genomes), len(self.worlds)
         c = np.repeat(b.ctrl, k, axis=0)  # genome-major: i * k + world
         init = b.init if b.init.ndim == 1 else np.repeat(b.init, k, axis=0)
-        states = simulate_worlds(self.worlds * n, init, c, self.sim.nthread,
-                                 stopped=self._fallen, segment_steps=self.segment_steps,
-                                 simulator=self.sim)
+        w_states = simulate_worlds(self.worlds * n, init, c, self.sim.nthread,
+                                   stopped=self._fallen, segment_steps=self.segment_steps,
+                                   simulator=self.sim)
+        assert isinstance(w_states, np.ndarray)  # without sensors: the states alone
         lat = np.tile([w.latency_steps for w in self.worlds], n)
-        per_world = GaitBatch(init, c, *(None if v is None else np.repeat(v, k) for v in (
-            b.walk_s, b.speed_ratio, b.period_s)))
-        ev = self.score(states, delayed_controls(c, lat), per_world)
+        speed, period = (None if v is None else np.repeat(v, k)
+                         for v in (b.speed_ratio, b.period_s))
+        per_world = GaitBatch(init, c, np.repeat(b.walk_s, k), speed, period)
+        ev = self.score(w_states, delayed_controls(c, lat), per_world)
         return aggregate_worlds(ev, n, k, self.cfg.world_aggregate, self.cfg.world_quantile)
 
     def score(self, states: np.ndarray, ctrl: np.ndarray, b: GaitBatch) -> Evaluation:

@@ -64,9 +64,9 @@ def walk_parts(genes: np.ndarray, walk_s: float) -> WalkParts:
     """The three motions of one genome."""
     g = np.asarray(genes, dtype=float)
     s = foot_gait.schedule(float(g[foot_gait.INDEX["period_s"]]), walk_s, 0.0)
-    start, cycle, stop = (p[0] for p in parts_batch(g[None], s))
-    return WalkParts(*(Motion(nao.JOINTS, _times(len(p)), p) for p in (start, cycle, stop)),
-                     cycles=s.steady_ms // s.period_ms, schedule=s)
+    start, cycle, stop = (Motion(nao.JOINTS, _times(len(p[0])), p[0])
+                          for p in parts_batch(g[None], s))
+    return WalkParts(start, cycle, stop, cycles=s.steady_ms // s.period_ms, schedule=s)
 
 
 def assemble(parts: WalkParts) -> Motion:

@@ -75,7 +75,7 @@ def find_task(plan_file: Path, doc: dict[str, Any], study_def: Study,
     problem = cfg.problem if cfg is not None else None
     goal_move = GOAL_MOVE_MAX
     clearances = model = None
-    if problem is not None:
+    if cfg is not None and problem is not None:
         clearances = (problem.body_clearance, problem.foot_clearance)
         model = {k: getattr(problem, k) for k in ("a", "b", "l_min", "l_max",
                                                   "sector_half_width", "min_margin")}

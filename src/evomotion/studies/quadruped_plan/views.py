@@ -12,14 +12,16 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
 from matplotlib.patches import Patch, Polygon  # noqa: E402
+from numpy.typing import ArrayLike  # noqa: E402
 
 from evomotion.errors import InputError  # noqa: E402
 from evomotion.outfile import atomic_output, save_figure  # noqa: E402
@@ -85,7 +87,7 @@ def _draw_state(ax: Any, doc: dict[str, Any], st: dict[str, Any], alpha: float =
 def _draw_world(ax: Any, doc: dict[str, Any], upto: int | None = None) -> list:
     """Obstacles and no-step zones (those existing at state ``upto``); legend handles."""
     world = doc.get("world")
-    handles = []
+    handles: list[Any] = []
     if not world:
         return handles
     kinds = set()
@@ -232,7 +234,8 @@ def animate_plan(doc: dict[str, Any], out_gif: str | Path, max_frames: int = 150
     if idx[-1] != len(states) - 1:
         idx.append(len(states) - 1)
     fig, ax = plt.subplots(figsize=_figsize(doc, 6.0), dpi=80)
-    frames = []
+    frames: list[ArrayLike] = []
+    canvas = cast(FigureCanvasAgg, fig.canvas)  # the Agg backend (matplotlib.use above)
     path = np.array([st["body"][:2] for st in states])
     for i in idx:
         ax.clear()
@@ -242,8 +245,8 @@ def animate_plan(doc: dict[str, Any], out_gif: str | Path, max_frames: int = 150
         st = states[i]
         ax.set_title(f"state {i}/{len(states) - 1}: {rule_name(st['rule'], st.get('event', ''))}"
                      f"\nstability margin {st['margin']:.2f}", fontsize=9)
-        fig.canvas.draw()
-        frames.append(np.asarray(fig.canvas.buffer_rgba())[..., :3].copy())
+        canvas.draw()
+        frames.append(np.asarray(canvas.buffer_rgba())[..., :3].copy())
     plt.close(fig)
     with atomic_output(out_gif, "plan animation", suffix=".tmp.gif") as tmp:
         imageio.mimsave(tmp, frames, duration=1.0 / fps, loop=0)

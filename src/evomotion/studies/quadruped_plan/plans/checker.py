@@ -194,9 +194,9 @@ def _check_extra_move(g: _Geometry, b0: np.ndarray, f0: np.ndarray, b1: np.ndarr
         if hull_margin(np.delete(f1, leg, axis=0), b1[:2]) < g.min_margin - 1e-9:
             raise PlanViolationError(f"{where}: rule {rule} does not free leg {leg}")
     for t in np.linspace(0.0, 1.0, PATH_SAMPLES):
-        leg = g.outside(g.body_feet(b0 + t * (b1 - b0), f0))
-        if leg is not None:
-            raise PlanViolationError(f"{where}: foot {leg} leaves its workspace during the move")
+        out = g.outside(g.body_feet(b0 + t * (b1 - b0), f0))
+        if out is not None:
+            raise PlanViolationError(f"{where}: foot {out} leaves its workspace during the move")
 
 
 def _check_body_move(g: _Geometry, b0: np.ndarray, f0: np.ndarray, b1: np.ndarray,

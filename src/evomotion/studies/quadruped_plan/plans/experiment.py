@@ -63,7 +63,7 @@ def run_config(cfg: QuadrupedPlanConfig, search: SearchConfig, start: str) -> Ro
                             cfg.goal_tolerance, cfg.sense, cfg.rule_set, problem.zone, {})
         try:
             summary = check_plan(doc)
-            legs, travel, check = summary["leg_moves"], summary["travel"], "ok"
+            legs, travel, check = int(summary["leg_moves"]), summary["travel"], "ok"
         except PlanViolationError as e:
             check = f"FAIL: {e}"
     fn = search.function if search.method == "best-first" else None

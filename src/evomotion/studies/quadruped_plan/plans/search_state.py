@@ -9,7 +9,7 @@ exactly what the original would have.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -24,7 +24,9 @@ def search_to_arrays(search: BestFirstSearch) -> tuple[dict[str, np.ndarray], di
     index = {k: i for i, k in enumerate(keys)}
     recs = list(s.nodes.values())
     n = len(keys)
-    kb = np.frombuffer(b"".join(k.to_bytes(KEY_BYTES, "little") for k in keys), np.uint8)
+    # a walking search's keys are ints (see the module doc)
+    kb = np.frombuffer(b"".join(cast(int, k).to_bytes(KEY_BYTES, "little") for k in keys),
+                       np.uint8)
     arrays = {
         "keys": kb.reshape(n, KEY_BYTES),
         "f": np.array([r.f for r in recs], float),

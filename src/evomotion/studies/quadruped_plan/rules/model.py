@@ -59,19 +59,30 @@ class QuadrupedModel:
             raise ValueError("sector_half_width must be in (0, pi/2)")
         if self.a <= 0 or self.b <= 0:
             raise ValueError("body sides a, b must be positive")
-        # constants of the hot geometry (translation and rotation limits), per leg
+
+    # constants of the hot geometry (translation and rotation limits), per leg
+
+    @cached_property
+    def _trans(self) -> tuple[tuple[int, float, float, float], ...]:
+        """Per leg: (index of the foot's x in a state, hip x, hip y, side)."""
+        return tuple((3 + 2 * i, hx, hy, side)
+                     for i, ((hx, hy), side) in enumerate(zip(self.hips, self.sides, strict=True)))
+
+    @cached_property
+    def _rot(self) -> tuple[tuple[float, float, float, float, tuple[tuple[float, float], ...]],
+                            ...]:
+        """Per leg: (hip distance, hip angle, outer and inner circle constants, the two wedge
+        edges' (angle, offset))."""
         tn = math.tan(self.sector_half_width)
-        trans, rot = [], []
-        for i, ((hx, hy), side) in enumerate(zip(self.hips, self.sides, strict=True)):
-            trans.append((3 + 2 * i, hx, hy, side))
+        rot = []
+        for (hx, hy), side in zip(self.hips, self.sides, strict=True):
             h = math.hypot(hx, hy)
             wedge = []
             for nx, ny in ((side * tn, -1.0), (side * tn, 1.0)):
                 wedge.append((math.atan2(ny, nx), (nx * hx + ny * hy) / math.hypot(nx, ny)))
             rot.append((h, math.atan2(hy, hx), h * h - self.l_max ** 2,
                         h * h - self.l_min ** 2, tuple(wedge)))
-        object.__setattr__(self, "_trans", tuple(trans))
-        object.__setattr__(self, "_rot", tuple(rot))
+        return tuple(rot)
 
     @cached_property
     def hips(self) -> tuple[tuple[float, float], ...]:

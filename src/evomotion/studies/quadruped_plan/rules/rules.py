@@ -40,7 +40,7 @@ from evomotion.studies.quadruped_plan.rules.model import (
 from evomotion.studies.quadruped_plan.rules.shifts import shift_moves, shifted
 
 try:  # the successors in C (setup.py builds it when a compiler is there); else Python
-    from evomotion.studies.quadruped_plan.rules import _walkcore
+    import evomotion.studies.quadruped_plan.rules._walkcore as _walkcore
 except ImportError:  # pragma: no cover - depends on the install
     _walkcore = None
 if os.environ.get("EVOMOTION_PURE_PYTHON", "0") not in ("", "0"):  # the Python code only
@@ -162,7 +162,9 @@ class WalkProblem:
         if compiled and _walkcore is not None and zone is None and not shifts:
             # the same successors from compiled code (_walkcore.c; tested equal)
             c = _walkcore.WalkCore(*self._core_args())
-            self.body_moves, self.leg_options = c.body_moves, c.leg_options
+            # the compiled successors shadow the Python methods on this instance
+            self.body_moves = c.body_moves  # type: ignore[method-assign]
+            self.leg_options = c.leg_options  # type: ignore[method-assign]
             self.core = True
 
     def _core_args(self) -> tuple:
@@ -238,7 +240,7 @@ class WalkProblem:
             if abs(turn) > MIN_MOVE and (self.terrain is None or
                                          self.terrain.rotation_ok(s, turn)):
                 c, sn = math.cos(turn), math.sin(turn)  # feet turn by -turn in body frame
-                feet = []
+                feet: list[float] = []
                 for i in range(4):
                     px, py = s[3 + 2 * i], s[4 + 2 * i]
                     feet += (c * px + sn * py, -sn * px + c * py)
@@ -280,13 +282,14 @@ class WalkProblem:
         return [(rule, leg, fx, fy, key + dk) for part in self.parts for leg, opt in opts
                 for rule, fx, fy, dk in opt[part]]
 
-    def leg_options(self, s: tuple) -> list[tuple[int, tuple[tuple, tuple, tuple]]]:
+    def leg_options(self, s: tuple) -> list[tuple[int, tuple[tuple, ...]]]:
         """``(leg, moves)`` of the legs that may be lifted (stability), ``moves`` as in
         :meth:`_leg_options` less those into the exclusion zone."""
         lift = _liftable(s, self._stable)
         opts = self._leg_options
-        out = [(leg, opts(leg, s[j], s[j + 1]))
-               for leg, j in ((0, 3), (1, 5), (2, 7), (3, 9)) if lift[leg]]
+        out: list[tuple[int, tuple[tuple, ...]]] = [
+            (leg, opts(leg, s[j], s[j + 1])) for leg, j in ((0, 3), (1, 5), (2, 7), (3, 9))
+            if lift[leg]]
         zone = self.zone
         if zone is not None and out:  # drop the moves that put a foot into the zone
             c, sn = math.cos(s[2]), math.sin(s[2])
@@ -312,7 +315,7 @@ class WalkProblem:
         j = 3 + 2 * leg
         wx, wy = KEY_WEIGHT[j], KEY_WEIGHT[j + 1]
         own = round(px * q) * wx + round(py * q) * wy
-        parts = []
+        parts: list[tuple[tuple[int, float, float, int], ...]] = []
         for rule, fx, fy, kp in self._fixed_keyed[leg]:  # rules 4 + leg and 8 + leg
             if -1e-7 < fx - px < 1e-7 and -1e-7 < fy - py < 1e-7:
                 parts.append(())

@@ -125,7 +125,7 @@ def shifted(s: tuple, dx: float, dy: float) -> tuple[float, ...]:
     """The 11 values of ``s`` with the body moved by world (dx, dy), feet fixed."""
     c, sn = math.cos(s[2]), math.sin(s[2])
     bx, by = c * dx + sn * dy, -sn * dx + c * dy
-    feet = []
+    feet: list[float] = []
     for leg in range(4):
         feet += (s[3 + 2 * leg] - bx, s[4 + 2 * leg] - by)
     return (s[0] + dx, s[1] + dy, s[2], *feet)

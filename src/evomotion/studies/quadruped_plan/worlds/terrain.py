@@ -147,7 +147,7 @@ class Terrain:
         if not len(self._verts):
             return True
         d = self._verts[None, :, :] - poses[:, None, :2]
-        if c is None:
+        if c is None or s is None:
             c, s = _cos_sin(poses[:, 2])
         u, v = c * d[..., 0] + s * d[..., 1], -s * d[..., 0] + c * d[..., 1]
         return not np.any((np.abs(u) < self.model.a / 2) & (np.abs(v) < self.model.b / 2))
