@@ -13,7 +13,8 @@ loop):
   run's range limit, nominal world).
 
     python benchmarks/bench_omniwalk_robots.py --robots op3 dm-humanoid --seeds 0 \
-        --out /tmp/omniwalk-robots [--worlds 20] [--duration 60] [--reuse] [--threads 1]
+        --out /tmp/omniwalk-robots [--worlds 20] [--duration 60] [--reuse] [--threads 1] \
+        [--set problem.KEY=VALUE ...]
 
 ``--reuse`` measures runs already in ``OUT/ROBOT-seed-N``. Write the printed table into
 benchmarks/README.md and docs/humanoid-walk.md.
@@ -34,12 +35,13 @@ import numpy as np
 FORWARD = (0.1, 0.2, 0.3)
 
 
-def evolve(out: Path, robot: str, seed: int, threads: int) -> float:
+def evolve(out: Path, robot: str, seed: int, threads: int, sets: list[str]) -> float:
     t0 = time.perf_counter()
+    more = [a for s in sets for a in ("--set", s)]
     subprocess.run([sys.executable, "-m", "evomotion.cli", "run", "humanoid-walk",
                     "--robot", robot, "--out", str(out), "--overwrite", "--set",
-                    f"run.seed={seed}", "--set", f"problem.threads={threads}", "--quiet"],
-                   check=True)
+                    f"run.seed={seed}", "--set", f"problem.threads={threads}", *more,
+                    "--quiet"], check=True)
     return time.perf_counter() - t0
 
 
@@ -92,7 +94,8 @@ def _top(t: dict) -> str:
     def v(name: str, key: str, scale: float = 1.0) -> str:
         return f"{scale * t[name][key]:.2f}" + ("*" if t[name]["fell"] else "")
 
-    return (f"{v('forward', 'vx_mps')}, {v('backward', 'vx_mps')}, {v('left', 'vy_mps')}, "
+    slowest = "backward" if "backward" in t else "forward_min"  # forward-only ranges
+    return (f"{v('forward', 'vx_mps')}, {v(slowest, 'vx_mps')}, {v('left', 'vy_mps')}, "
             f"{t['turn_left']['yaw_rate_dps']:.0f}" + ("*" if t["turn_left"]["fell"] else ""))
 
 
@@ -124,12 +127,14 @@ def main() -> int:
     ap.add_argument("--duration", type=float, default=60.0)
     ap.add_argument("--threads", type=int, default=0)
     ap.add_argument("--reuse", action="store_true")
+    ap.add_argument("--set", dest="sets", action="append", default=[],
+                    help="a setting of the evolved runs, KEY=VALUE (repeatable)")
     a = ap.parse_args()
     results = {}
     for robot in a.robots:
         for seed in a.seeds:
             folder = a.out / f"{robot}-seed-{seed}"
-            wall = None if a.reuse else evolve(folder, robot, seed, a.threads)
+            wall = None if a.reuse else evolve(folder, robot, seed, a.threads, a.sets)
             results[f"{robot}, {seed}"] = dict(measure(folder, a.worlds, a.duration),
                                                evolve_s=wall)
     print(json.dumps(results, indent=1))

@@ -63,3 +63,38 @@ def test_tracking_reads_the_velocity_in_the_heading_frame():
     np.testing.assert_allclose(tr.vy, 0.1, atol=3e-3)
     ev, ew = tr.errors()
     assert ev.max() < 5e-3 and ew.max() < 1e-9
+
+
+def test_kind_weights_choose_the_kinds_and_the_defaults_draw_as_before():
+    fwd = CommandDraw(vx_min=0.25, vx_max=0.45, kind_weights=(1.0, 0.0, 0.0, 0.0, 0.0))
+    for seed in range(20):
+        c = command_schedule(fwd, seed, T)
+        assert np.all(c[:, 1:] == 0) and np.all(c[:, 0] <= 0.45 + 1e-12)
+        after_first_ramp = fwd.ramp_s <= T  # (the first command ramps up from standing)
+        assert np.all(c[after_first_ramp, 0] >= 0.25 - 1e-12)
+    # the default weights, spelled out, draw the very same schedules
+    spelled = CommandDraw(kind_weights=(0.3, 0.15, 0.15, 0.3, 0.1))
+    for seed in range(5):
+        np.testing.assert_array_equal(command_schedule(spelled, seed, T),
+                                      command_schedule(CommandDraw(), seed, T))
+
+
+def test_command_weights_are_checked_and_normalised():
+    import pytest
+
+    from evomotion.errors import InputError
+    from evomotion.studies.humanoid_omniwalk.problem import OmniWalkConfig
+
+    cfg = OmniWalkConfig(command_weights=(2.0, 0.0, 0.0, 0.0, 0.0), vx_min=0.1)
+    cfg.validate()
+    assert cfg.commands().kind_weights == (1.0, 0.0, 0.0, 0.0, 0.0)
+    assert OmniWalkConfig().commands().kind_weights == (0.3, 0.15, 0.15, 0.3, 0.1)
+    for bad, match in (((1.0, 0.0), "expected 5 weights"),
+                       ((1.0, -1.0, 0.0, 0.0, 0.0), r"command_weights\[1\]"),
+                       ((0.0,) * 5, "at least one weight"),
+                       ((float("nan"), 0.0, 0.0, 0.0, 1.0), r"command_weights\[0\]")):
+        with pytest.raises(InputError, match=match) as e:
+            OmniWalkConfig(command_weights=bad).validate()
+        assert "\n" not in str(e.value)
+    with pytest.raises(InputError, match="problem.vx_min"):
+        OmniWalkConfig(vx_min=0.5, vx_max=0.45).validate()

@@ -270,3 +270,23 @@ def test_command_feedback_starts_where_it_is_set():
         OmniWalkConfig(command_feedback_start=5.0).validate()
     with pytest.raises(InputError, match="command_feedback"):
         OmniWalkConfig(command_feedback=1).validate()
+
+
+def test_a_forward_only_run_trains_on_forward_commands_and_names_its_slowest_test(tmp_path):
+    """``problem.command_weights = [1, 0, 0, 0, 0]`` with ``vx_min > 0`` (how the dm humanoid
+    learns to walk forward): every training command is forward, and the top-speed test at
+    ``vx_min`` is named ``forward_min``, not ``backward``."""
+    from evomotion.studies.humanoid_omniwalk.commands import schedules
+    from evomotion.studies.humanoid_omniwalk.compare import top_speeds
+
+    sets = [*TINY, "problem.command_weights=[1, 0, 0, 0, 0]", "problem.vx_min=0.1"]
+    s = get_study("humanoid-walk")
+    run_study(s, resolve_config(s, None, sets), tmp_path / "run", quiet=True)
+    cfg = OmniWalkConfig(duration_s=1.0, threads=1, command_weights=(1.0, 0, 0, 0, 0),
+                         vx_min=0.1)
+    p = OmniWalkProblem(cfg)
+    cmds = schedules(cfg.commands(), np.arange(30), np.arange(200) * 0.02)
+    assert np.all(cmds[..., 1:] == 0) and np.all(cmds[:, 25:, 0] >= 0.1 - 1e-12)
+    speeds = top_speeds(p, p.ctl.initial_params(), np.zeros(p.obs_dim), np.ones(p.obs_dim))
+    assert "forward_min" in speeds and "backward" not in speeds
+    assert speeds["forward_min"]["command"] == [0.1, 0.0, 0.0]

@@ -3,7 +3,8 @@
 Schedules (:func:`command_schedule`): an episode's commands come from
 ``numpy.random.default_rng([seed, 1])`` alone (its world from ``default_rng(seed)``,
 :mod:`evomotion.studies.episode_worlds`). A new command every ``U(hold_min_s, hold_max_s)``
-seconds, of one kind drawn with :data:`KIND_WEIGHTS`: forward/backward only
+seconds, of one kind drawn with ``kind_weights`` (by default :data:`KIND_WEIGHTS`):
+forward/backward only
 (``vx ~ U(vx_min, vx_max)``), sideways only (``vy ~ U(−vy_max, vy_max)``), turning only
 (``ω ~ U(−ω_max, ω_max)``), mixed (all three, each at most ``MIXED_SHARE`` of its range) or
 standing (zero), as Playground's joystick tasks sample velocity commands [walking.md §4]. The
@@ -39,10 +40,12 @@ class CommandDraw:
     hold_min_s: float = 2.0
     hold_max_s: float = 4.0
     ramp_s: float = 0.5
+    #: the probabilities of the kinds forward/back, sideways, turn, mixed, stand (sum 1)
+    kind_weights: tuple[float, ...] = KIND_WEIGHTS
 
 
 def _one(draw: CommandDraw, rng: np.random.Generator) -> np.ndarray:
-    kind = int(rng.choice(len(KIND_WEIGHTS), p=KIND_WEIGHTS))
+    kind = int(rng.choice(len(KIND_WEIGHTS), p=draw.kind_weights))
     vx = rng.uniform(draw.vx_min, draw.vx_max)
     vy = rng.uniform(-draw.vy_max, draw.vy_max)
     w = rng.uniform(-draw.yaw_rate_max, draw.yaw_rate_max)

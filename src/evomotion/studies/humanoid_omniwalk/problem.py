@@ -38,7 +38,12 @@ from evomotion.core.checks import check_fields, check_number, check_text, inf_ok
 from evomotion.core.problem import Evaluation, GenomeSpec, Sense
 from evomotion.errors import InputError
 from evomotion.studies.episode_worlds import WorldDraw, episode_world, push_range
-from evomotion.studies.humanoid_omniwalk.commands import CommandDraw, schedules, tracking
+from evomotion.studies.humanoid_omniwalk.commands import (
+    KIND_WEIGHTS,
+    CommandDraw,
+    schedules,
+    tracking,
+)
 from evomotion.studies.humanoid_omniwalk.omni_gait import OmniGait
 from evomotion.studies.policy_search import (
     EpisodeRows,
@@ -77,6 +82,9 @@ class OmniWalkConfig:
     vx_max: float = 0.45
     vy_max: float = 0.2
     yaw_rate_max: float = 1.2
+    #: the command kinds' weights: forward/backward, sideways, turning, mixed, standing
+    #: (commands.py; normalised to sum 1); e.g. [1, 0, 0, 0, 0]: forward/backward only
+    command_weights: tuple[float, ...] = KIND_WEIGHTS
     hold_min_s: float = 2.0  # a new command every U(hold_min_s, hold_max_s) s
     hold_max_s: float = 4.0
     ramp_s: float = 0.5  # commands ramp linearly over this (s)
@@ -116,7 +124,15 @@ class OmniWalkConfig:
             check_number(f"problem.{key}", getattr(self, key), lo=1, hi=MAX_EPISODES,
                          integer=True)
         check_number("problem.vx_max", self.vx_max, lo=0.0, hi=2.0)
-        check_number("problem.vx_min", self.vx_min, lo=-2.0, hi=0.0)
+        check_number("problem.vx_min", self.vx_min, lo=-2.0, hi=self.vx_max)
+        if len(self.command_weights) != len(KIND_WEIGHTS):
+            raise InputError(f"problem.command_weights: expected {len(KIND_WEIGHTS)} weights "
+                             "(forward/backward, sideways, turning, mixed, standing), got "
+                             f"{len(self.command_weights)}")
+        for i, wt in enumerate(self.command_weights):
+            check_number(f"problem.command_weights[{i}]", wt, lo=0.0, hi=1000.0)
+        if sum(self.command_weights) <= 0:
+            raise InputError("problem.command_weights: expected at least one weight above 0")
         check_number("problem.vy_max", self.vy_max, lo=0.0, hi=2.0)
         check_number("problem.yaw_rate_max", self.yaw_rate_max, lo=0.0, hi=10.0)
         check_number("problem.hold_min_s", self.hold_min_s, lo=0.0, hi=600.0, lo_open=True)
@@ -150,8 +166,11 @@ class OmniWalkConfig:
                         sway_phase_rad=self.sway_phase_rad)
 
     def commands(self) -> CommandDraw:
+        given = tuple(float(w) for w in self.command_weights)
+        weights = KIND_WEIGHTS if given == KIND_WEIGHTS else \
+            tuple(w / sum(given) for w in given)  # the default drawn exactly as before
         return CommandDraw(self.vx_min, self.vx_max, self.vy_max, self.yaw_rate_max,
-                           self.hold_min_s, self.hold_max_s, self.ramp_s)
+                           self.hold_min_s, self.hold_max_s, self.ramp_s, weights)
 
     def for_worker(self) -> OmniWalkConfig:
         """One rollout thread in a one-core evaluator worker (an explicit count is kept)."""
