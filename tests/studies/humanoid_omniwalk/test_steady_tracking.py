@@ -2,6 +2,7 @@
 the command last changed (the episode's start counts as a change)."""
 
 import numpy as np
+import pytest
 
 from evomotion.studies.humanoid_omniwalk.compare import steady_windows
 
@@ -29,3 +30,13 @@ def test_a_ramp_keeps_the_windows_unsteady_until_it_ends():
     during = ends > 20  # the windows that see the ramp (the earlier ones end before it)
     np.testing.assert_array_equal(got[during], ends[during] >= 29 + W + S)
     assert got[(ends >= W + S) & ~during].all()
+
+
+def test_a_relative_error_of_a_quantity_never_commanded_is_none_not_a_huge_percentage():
+    """A forward-only run commands no yaw rate: its relative yaw-rate error was the error over
+    a sum of rounding errors (2e15 %); it is None, and the table shows a dash."""
+    from evomotion.studies.humanoid_omniwalk.compare import _pct, _relative
+
+    assert _relative(np.array([0.02, 0.03]), np.array([1e-17, 0.0])) is None
+    assert _relative(np.array([0.02, 0.03]), np.array([0.25, 0.25])) == pytest.approx(0.1)
+    assert _pct(None) == "–" and _pct(0.237) == "24 %"

@@ -8,7 +8,8 @@
   training episode uses), each ``duration`` seconds of the run's random command schedule with
   one push of up to the run's ``push_max_ns``. Reported: survival (never fallen), mean time up,
   the tracking errors (m/s, rad/s) and the relative error ``Σ|v − v_cmd| / Σ|v_cmd|`` over the
-  one-cycle windows while up (velocity and yaw rate apart); and the **steady** relative errors:
+  one-cycle windows while up (velocity and yaw rate apart; ``None``, shown "–", where that
+  quantity was never commanded); and the **steady** relative errors:
   the same sums over the windows that begin :data:`SETTLE_S` or more after the command last
   changed (its ramp included), each quantity over the windows where it is commanded
   (``|v_cmd| >= 0.05`` m/s, ``|ω_cmd| >= 0.1`` rad/s): how well a held command is walked,
@@ -39,6 +40,8 @@ SPEED_TEST_S = 10.0
 BATCH = 20  # worlds per closed-loop call (the recorded states of 60 s are large)
 SETTLE_S = 1.0  # a window is steady when it begins this long after the command's last change
 STEADY_MIN_V_MPS, STEADY_MIN_W_RPS = 0.05, 0.1  # the commanded quantities of the steady errors
+#: a relative error needs more than this summed |command| (m/s or rad/s x windows); else None
+MIN_COMMANDED = 1e-6
 
 
 def steady_windows(cmds: np.ndarray, window: int, settle: int) -> np.ndarray:
@@ -111,16 +114,21 @@ def _play(problem, params: np.ndarray, mean: np.ndarray, std: np.ndarray, seeds:
     return {k: np.concatenate(v) for k, v in out.items()}
 
 
-def _summary(m: dict) -> dict[str, float]:
+def _relative(err: np.ndarray, cmd: np.ndarray) -> float | None:
+    """``Σ err / Σ |cmd|``; None where nothing was commanded (a forward-only run's yaw rate),
+    which a ratio to a sum of rounding errors would show as an absurd percentage."""
+    total = float(cmd.sum())
+    return float(err.sum()) / total if total > MIN_COMMANDED else None
+
+
+def _summary(m: dict) -> dict[str, Any]:
     return {"survival": float(m["survived"].mean()), "time_up_s": float(m["time_up_s"].mean()),
             "speed_error_mps": float(m["speed_error_mps"].mean()),
             "yaw_rate_error_rps": float(m["yaw_rate_error_rps"].mean()),
-            "relative_speed_error": float(m["err_v"].sum() / max(m["cmd_v"].sum(), 1e-12)),
-            "relative_yaw_rate_error": float(m["err_w"].sum() / max(m["cmd_w"].sum(), 1e-12)),
-            "steady_relative_speed_error": float(m["steady_err_v"].sum()
-                                                 / max(m["steady_cmd_v"].sum(), 1e-12)),
-            "steady_relative_yaw_rate_error": float(m["steady_err_w"].sum()
-                                                    / max(m["steady_cmd_w"].sum(), 1e-12)),
+            "relative_speed_error": _relative(m["err_v"], m["cmd_v"]),
+            "relative_yaw_rate_error": _relative(m["err_w"], m["cmd_w"]),
+            "steady_relative_speed_error": _relative(m["steady_err_v"], m["steady_cmd_v"]),
+            "steady_relative_yaw_rate_error": _relative(m["steady_err_w"], m["steady_cmd_w"]),
             "power_w": float(m["power_w"].mean()),
             "speed_excess": float(m["speed_excess"].mean())}
 
@@ -187,6 +195,10 @@ def compare(run: str | Path, worlds: int = 100, duration_s: float = 60.0, seed: 
     return out
 
 
+def _pct(v: float | None) -> str:
+    return "–" if v is None else f"{100 * v:.0f} %"
+
+
 def table(res: dict[str, Any]) -> str:
     lo, hi = res["push_ns"]
     robot = {"nao": "NAO", "op3": "OP3"}.get(res.get("robot", "nao"), res.get("robot"))
@@ -199,11 +211,11 @@ def table(res: dict[str, Any]) -> str:
                                                                        "loop, the start)")):
         r = res[key]
         lines.append(f"| {name} | {100 * r['survival']:.0f} % | {r['time_up_s']:.1f} | "
-                     f"{r['speed_error_mps']:.3f} | {100 * r['relative_speed_error']:.0f} % | "
-                     f"{100 * r['steady_relative_speed_error']:.0f} % | "
+                     f"{r['speed_error_mps']:.3f} | {_pct(r['relative_speed_error'])} | "
+                     f"{_pct(r['steady_relative_speed_error'])} | "
                      f"{np.degrees(r['yaw_rate_error_rps']):.1f} | "
-                     f"{100 * r['relative_yaw_rate_error']:.0f} % | "
-                     f"{100 * r['steady_relative_yaw_rate_error']:.0f} % | {r['power_w']:.0f} |")
+                     f"{_pct(r['relative_yaw_rate_error'])} | "
+                     f"{_pct(r['steady_relative_yaw_rate_error'])} | {r['power_w']:.0f} |")
     lines += ["", f"Top speeds (nominal world, each command alone for {SPEED_TEST_S:g} s, the "
               "mean over the last half):", "",
               "| command | controller | engine |", "|---|---|---|"]
