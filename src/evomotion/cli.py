@@ -81,15 +81,46 @@ def run_cmd(
         typer.echo(f"note: --preset {preset} is the old name of "
                    f"--preset {current_preset_name(s, preset)}", err=True)
     cfg = resolve_config(s, config, overrides, preset=preset)
-    made = out is None or not (Path(out).exists() or Path(out).is_symlink())
+    top = _first_missing(Path(out) if out is not None else Path("runs"))
     out_dir = make_run_dir(s.name, out)
     try:
         res = run_study(s, cfg, out_dir, quiet=quiet, overwrite=overwrite)
-    except InputError:
-        if made and out_dir.is_dir() and not any(out_dir.iterdir()):
-            out_dir.rmdir()  # refused before anything was written: no empty folder left
+    except (InputError, KeyboardInterrupt):
+        _remove_empty(out_dir, top)  # refused before anything was written: no folder left
         raise
     _finish(res, quiet)
+
+
+def _first_missing(path: Path) -> Path | None:
+    """The outermost folder of ``path`` (absolute) that does not exist yet, or None."""
+    try:
+        p = path.absolute()
+        missing = None
+        for q in (p, *p.parents):
+            if q.exists() or q.is_symlink():
+                break
+            missing = q
+        return missing
+    except (OSError, ValueError):
+        return None
+
+
+def _remove_empty(out_dir: Path, top: Path | None) -> None:
+    """Remove ``out_dir`` and its parents up to ``top`` (the folders this command made), each
+    only while it is empty."""
+    if top is None:
+        return
+    p = out_dir.absolute()
+    while True:
+        try:
+            if not p.is_dir() or any(p.iterdir()):
+                return
+            p.rmdir()
+        except OSError:
+            return
+        if p == top or p.parent == p:
+            return
+        p = p.parent
 
 
 def _finish(res, quiet: bool) -> None:

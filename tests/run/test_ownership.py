@@ -166,3 +166,10 @@ def test_a_config_the_problem_refuses_makes_no_folder_and_keeps_an_old_run(tmp_p
     r = _cli("run", "humanoid-balance", "--out", str(old), "--overwrite", *bad)
     assert r.returncode == 2 and "LHipRoll" in r.stderr
     assert _tree(old) == before
+    # the missing parents --out made go too, and an optimizer's refusal is one line as well
+    r = _cli("run", "humanoid-balance", "--out", str(tmp_path / "a" / "b" / "c"), *bad)
+    assert r.returncode == 2 and not (tmp_path / "a").exists()
+    r = _cli("run", "functions", "--out", str(tmp_path / "d" / "e"), *ARGS, "--set",
+             "algorithm.name=snes", "--set", "algorithm.noise_table=1")
+    assert r.returncode == 2 and "algorithm.noise_table" in r.stderr
+    assert "Traceback" not in r.stderr and not (tmp_path / "d").exists()

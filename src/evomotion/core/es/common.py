@@ -33,6 +33,7 @@ import numpy as np
 from evomotion.core.checks import MAX_POP_SIZE, check_fields, check_number
 from evomotion.core.optimizer import MutateFn, Optimizer
 from evomotion.core.problem import GenomeSpec
+from evomotion.errors import InputError
 
 
 def check_pop_size(cfg: Any, *, even: bool, allow_zero: bool = False) -> None:
@@ -57,7 +58,7 @@ def check_noise_table(cfg: Any, dim: int | None = None) -> None:
     check_number("algorithm.noise_table", cfg.noise_table, lo=0, hi=MAX_NOISE_TABLE,
                  integer=True)
     if dim is not None and 0 < cfg.noise_table < dim:
-        raise ValueError(f"algorithm.noise_table must be 0 or at least the genome's {dim} "
+        raise InputError(f"algorithm.noise_table must be 0 or at least the genome's {dim} "
                          f"genes, got {cfg.noise_table}")
 
 

@@ -15,7 +15,7 @@
   (``|v_cmd| >= 0.05`` m/s, ``|ω_cmd| >= 0.1`` rad/s): how well a held command is walked,
   without the response to its changes and without drift during the other kinds of command.
 - **Top speeds**: each direction commanded alone at the run's range limit (forward ``vx_max``,
-  backward ``vx_min``, named ``forward_min`` where ``vx_min >= 0``; left/right ``±vy_max``,
+  backward ``vx_min``, named ``forward_min`` where ``vx_min > 0``; left/right ``±vy_max``,
   turning ``±yaw_rate_max``) for :data:`SPEED_TEST_S` in the nominal world without a push; the
   walked velocity is the mean over the last half (m/s, deg/s).
 """
@@ -148,7 +148,7 @@ def top_speeds(p, params, mean, std, tests: dict[str, tuple] | None = None
     doc), or each command of ``tests`` (name -> (vx, vy, ω)) alone."""
     cfg = p.cfg
     if tests is None:
-        slowest = "backward" if cfg.vx_min < 0 else "forward_min"  # forward-only ranges
+        slowest = "forward_min" if cfg.vx_min > 0 else "backward"  # forward-only ranges
         tests = {"forward": (cfg.vx_max, 0, 0), slowest: (cfg.vx_min, 0, 0),
                  "left": (0, cfg.vy_max, 0), "right": (0, -cfg.vy_max, 0),
                  "turn_left": (0, 0, cfg.yaw_rate_max),
