@@ -63,7 +63,8 @@ def main() -> int:
     print("|---|---|---|---|---|---|---|---|---|---|")
     for key in ("controller", "engine"):
         def m(f):  # None (a quantity never commanded) counts as nan
-            return float(np.mean([np.nan if f(r[key]) is None else f(r[key]) for r in rows]))
+            values = [f(r[key]) for r in rows]
+            return float(np.mean([np.nan if v is None else v for v in values]))
 
         def ts(name, axis):  # a forward-only run's slowest test is "forward_min"
             return m(lambda r: r["top_speeds"].get(name, r["top_speeds"].get("forward_min"))

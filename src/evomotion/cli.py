@@ -83,6 +83,8 @@ def run_cmd(
     cfg = resolve_config(s, config, overrides, preset=preset)
     top = _first_missing(Path(out) if out is not None else Path("runs"))
     out_dir = make_run_dir(s.name, out)
+    if out is None and top is None:  # runs/ was there: the named folder in it is always new
+        top = out_dir.absolute()
     try:
         res = run_study(s, cfg, out_dir, quiet=quiet, overwrite=overwrite)
     except (InputError, KeyboardInterrupt):

@@ -173,3 +173,9 @@ def test_a_config_the_problem_refuses_makes_no_folder_and_keeps_an_old_run(tmp_p
              "algorithm.name=snes", "--set", "algorithm.noise_table=1")
     assert r.returncode == 2 and "algorithm.noise_table" in r.stderr
     assert "Traceback" not in r.stderr and not (tmp_path / "d").exists()
+    # without --out: the named folder under an existing runs/ goes, runs/ stays
+    (tmp_path / "w" / "runs").mkdir(parents=True)
+    r = subprocess.run([sys.executable, "-m", "evomotion.cli", "run", "humanoid-balance",
+                        *bad], capture_output=True, text=True, timeout=120, cwd=tmp_path / "w")
+    assert r.returncode == 2 and "LHipRoll" in r.stderr
+    assert (tmp_path / "w" / "runs").is_dir() and not any((tmp_path / "w" / "runs").iterdir())

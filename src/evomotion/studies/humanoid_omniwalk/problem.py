@@ -167,8 +167,9 @@ class OmniWalkConfig:
 
     def commands(self) -> CommandDraw:
         given = tuple(float(w) for w in self.command_weights)
+        total = sum(given)
         weights = KIND_WEIGHTS if given == KIND_WEIGHTS else \
-            tuple(w / sum(given) for w in given)  # the default drawn exactly as before
+            tuple(w / total for w in given)  # the default drawn exactly as before
         return CommandDraw(self.vx_min, self.vx_max, self.vy_max, self.yaw_rate_max,
                            self.hold_min_s, self.hold_max_s, self.ramp_s, weights)
 
