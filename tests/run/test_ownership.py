@@ -179,3 +179,55 @@ def test_a_config_the_problem_refuses_makes_no_folder_and_keeps_an_old_run(tmp_p
                         *bad], capture_output=True, text=True, timeout=120, cwd=tmp_path / "w")
     assert r.returncode == 2 and "LHipRoll" in r.stderr
     assert (tmp_path / "w" / "runs").is_dir() and not any((tmp_path / "w" / "runs").iterdir())
+
+
+def test_a_missing_logger_package_refuses_before_overwrite_empties_the_old_run(tmp_path):
+    """--overwrite emptied the old run and only then loaded the loggers: a missing
+    tensorboardX refused the run after the old one was gone. A stand-in module that cannot be
+    imported plays the missing package."""
+    old = tmp_path / "old"
+    assert _cli("run", "functions", "--out", str(old), *ARGS).returncode == 0
+    before = _tree(old)
+    fake = tmp_path / "site"
+    fake.mkdir()
+    (fake / "tensorboardX.py").write_text(
+        "raise ModuleNotFoundError(\"No module named 'tensorboardX'\", name='tensorboardX')\n")
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        [str(fake), *filter(None, [os.environ.get("PYTHONPATH")])])}
+    for out, more in ((old, ["--overwrite"]), (tmp_path / "new" / "run", [])):
+        r = subprocess.run([sys.executable, "-m", "evomotion.cli", "run", "functions", "--out",
+                            str(out), *more, *ARGS, "--set", 'run.loggers=["tensorboard"]'],
+                           capture_output=True, text=True, timeout=120, env=env)
+        assert r.returncode == 2 and "tensorboardX" in r.stderr, r.stderr
+        assert "Traceback" not in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    assert _tree(old) == before
+    assert not (tmp_path / "new").exists()
+
+
+def test_a_run_the_lock_refuses_closes_the_driver_it_built(tmp_path, monkeypatch):
+    from evomotion.run import runner
+    from evomotion.run.config import resolve_config
+    from evomotion.studies import get_study
+
+    s = get_study("functions")
+    cfg = resolve_config(s, None, ["run.generations=2", "problem.dim=3",
+                                   "algorithm.pop_size=8"])
+    closed = []
+    real = runner._prepare
+
+    def prepare(*a):
+        config, problem, driver = real(*a)
+        monkeypatch.setattr(driver, "close", lambda: closed.append(True))
+        return config, problem, driver
+
+    class RefusedError(RuntimeError):
+        pass
+
+    def refuse(_out):
+        raise RefusedError("held by another run")
+
+    monkeypatch.setattr(runner, "_prepare", prepare)
+    monkeypatch.setattr(runner, "RunLock", refuse)
+    with pytest.raises(RefusedError):
+        runner.run_study(s, cfg, tmp_path / "run", quiet=True)
+    assert closed == [True]

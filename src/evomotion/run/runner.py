@@ -53,7 +53,7 @@ from evomotion.run.history import NAME as HISTORY_NAME
 from evomotion.run.history import HistoryWriter
 from evomotion.run.limits import check_memory
 from evomotion.run.lock import RunLock
-from evomotion.run.loggers import Loggers, make_loggers
+from evomotion.run.loggers import Loggers, check_loggers, make_loggers
 from evomotion.run.recorders import (
     CheckpointWriter,
     ConsoleRecorder,
@@ -111,21 +111,29 @@ def run_study(study: LoopStudy, config: Config, out_dir: Path | str | None = Non
         return _run(study, config, None, True, False, problem, evaluator, None, subscribers)
     out_dir = Path(out_dir)
     prepared = None
-    if resume:
-        check_resumable(out_dir)  # before anything is made or removed in the folder
-    else:
-        check_new_run(out_dir, overwrite)  # refused before the lock file is made
-        # a config the problem refuses is refused before the folder is made or emptied
-        with sigterm_as_interrupt():
-            prepared = _prepare(study, config, problem)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    # SIGTERM is Ctrl-C from the moment the lock names this process (a stop from the studio
-    # during the set-up ends the run cleanly, not by the signal's default)
-    with sigterm_as_interrupt(), RunLock(out_dir) as lock:
-        if not resume:
-            prepare_new_run(out_dir, study.name, overwrite)
-        return _run(study, config, out_dir, quiet, resume, problem, evaluator,
-                    lock.stale_owner, subscribers, prepared)
+    started = False
+    try:
+        if resume:
+            check_resumable(out_dir)  # before anything is made or removed in the folder
+        else:
+            check_new_run(out_dir, overwrite)  # refused before the lock file is made
+            # a config the problem refuses is refused before the folder is made or emptied
+            with sigterm_as_interrupt():
+                prepared = _prepare(study, config, problem)
+                check_loggers(config.run.loggers)  # a missing package: before emptying
+        out_dir.mkdir(parents=True, exist_ok=True)
+        # SIGTERM is Ctrl-C from the moment the lock names this process (a stop from the
+        # studio during the set-up ends the run cleanly, not by the signal's default)
+        with sigterm_as_interrupt(), RunLock(out_dir) as lock:
+            if not resume:
+                prepare_new_run(out_dir, study.name, overwrite)
+            started = True
+            return _run(study, config, out_dir, quiet, resume, problem, evaluator,
+                        lock.stale_owner, subscribers, prepared)
+    except BaseException:
+        if prepared is not None and not started:  # refused (a lock, a logger): release it
+            prepared[2].close()
+        raise
 
 
 def _run(study: LoopStudy, config: Config, out_dir: Path | None, quiet: bool, resume: bool,

@@ -108,6 +108,15 @@ class Loggers:
                 ctx.log(f"warning: logger {name!r} failed: {type(e).__name__}: {e}")
 
 
+def check_loggers(names: Iterable[str]) -> None:
+    """Refuse (one line) a logger that is unknown or whose package is missing, before a run
+    makes or empties its folder (``--overwrite`` must not remove the old run and then refuse)."""
+    names = tuple(names)
+    check_names(names)
+    for name in names:
+        _load(name)
+
+
 def make_loggers(names: Iterable[str], out_dir: Path,
                  replay: ReplayHook | None = None) -> Loggers:
     """The loggers ``names`` for the run folder ``out_dir`` (their packages imported now);
