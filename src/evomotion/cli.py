@@ -36,6 +36,9 @@ def studies_cmd() -> None:
         typer.echo(f"{'':16s}   methods: {algs} (default {default_algorithm(s)})")
         for p in (*s.presets, *s.preset_studies):
             typer.echo(f"{'':16s}   --preset {p}: {s.preset_notes.get(p, '')}")
+        for r, sections in s.robot_defaults.items():
+            keys = ", ".join(f"{sec}.{k}" for sec, v in sections.items() for k in v)
+            typer.echo(f"{'':16s}   --robot {r}: defaults of its own ({keys})")
 
 
 @app.command("run")

@@ -68,6 +68,15 @@ def test_descriptor(name):
     for preset in s.presets:
         resolve_config(s, preset=preset)
         assert s.preset_notes.get(preset)
+    from evomotion.sim.robots import bundled_robots
+
+    for robot, sections in s.robot_defaults.items():  # a bundled robot; every key applies
+        assert robot in bundled_robots()
+        cfg = resolve_config(s, overrides=[f"problem.robot={robot!r}"])
+        for section, values in sections.items():
+            for key, value in values.items():
+                got = getattr(getattr(cfg, section), key)
+                assert (list(got) if isinstance(got, tuple) else got) == value, (section, key)
 
 
 def test_run_interrupt_and_resume_are_bit_identical(name, tmp_path):

@@ -152,6 +152,9 @@ def test_form_fields_and_one_line_errors():
         ["--out", tmp, "--quiet"]
     for name in ("arm-ik", "grid-path", "quadruped-plan", "humanoid-step"):
         assert actions.form_fields(name, "paper")  # every study's schema makes a form
+    shown = {f.key: f.shown for f in actions.form_fields("humanoid-walk", robot="dm-humanoid")}
+    assert shown["problem.sway_m"] == "0.008" and shown["run.generations"] == "600"
+    assert shown["problem.robot"] == "dm-humanoid"
 
 
 def test_history_records_every_generation_and_survives_resume(tmp_path):

@@ -173,6 +173,37 @@ def test_a_preset_that_is_another_study_opens_that_studys_form(page, studio):
           20, "the open-loop walk's form")
 
 
+def test_a_robot_with_defaults_of_its_own_shows_them_in_the_form(page, studio, tmp_path):
+    """``humanoid-walk --robot dm-humanoid`` has defaults of its own (Study.robot_defaults):
+    choosing the robot rebuilds the fields with them, the command names the robot only, and
+    another robot brings the study's defaults back."""
+    base, _ = studio
+    page.goto(f"{base}/new?study=humanoid-walk")
+    page.wait_for_selector(".new-command")
+    assert _field(page, "run.generations").input_value() == "300"
+
+    def choose(robot: str) -> None:
+        page.locator(".advanced-keys").first.click()
+        page.locator('[data-key="problem.robot"]').click()
+        page.get_by_role("option", name=robot, exact=True).click()
+
+    choose("dm-humanoid")
+    _wait(lambda: _field(page, "run.generations").input_value() == "600", 20,
+          "the dm humanoid's defaults")
+    assert _field(page, "problem.sway_m").input_value() == "0.008"
+    _wait(lambda: "dm-humanoid" in page.locator(".new-command").inner_text(), 10, "command")
+    command = page.locator(".new-command").inner_text()
+    assert "sway_m" not in command and "generations" not in command
+    assert page.locator(".start-button").is_enabled()
+    page.screenshot(path=str(tmp_path / "robot-defaults.png"), full_page=True)
+    choose("op3")
+    _wait(lambda: _field(page, "run.generations").input_value() == "300", 20,
+          "the study's defaults")
+    assert _field(page, "problem.sway_m").input_value() == "0.025"
+    _wait(lambda: "op3" in page.locator(".new-command").inner_text(), 10, "command")
+    assert "dm-humanoid" not in page.locator(".new-command").inner_text()
+
+
 def test_compare_page_draws_median_and_band(page, studio):
     base, root = studio
     page.goto(f"{base}/compare?runs=functions,grid-path")

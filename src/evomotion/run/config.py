@@ -1,4 +1,5 @@
-"""Typed run configuration: dataclass defaults < study defaults < TOML file < ``--set``.
+"""Typed run configuration: dataclass defaults < study defaults < the robot's < preset < TOML
+file < ``--set``.
 
 The top level has three sections: ``[run]`` (:class:`RunSection`), ``[algorithm]`` (the
 dataclass registered for ``algorithm.name`` in :data:`evomotion.core.algorithms.ALGORITHMS`)
@@ -279,7 +280,8 @@ def resolve_config(study: ConfiguredStudy, file: Path | None = None,
                    preset: str | None = None,
                    values: dict[str, Any] | None = None) -> Config:
     """Resolve the full config of ``study`` (a :class:`~evomotion.studies.base.Study`):
-    dataclass defaults < study defaults < ``preset`` < TOML ``file`` < ``values`` (sections
+    dataclass defaults < study defaults < the robot's (``study.robot_defaults`` for the
+    configured ``problem.robot``) < ``preset`` < TOML ``file`` < ``values`` (sections
     as a dict, the Python API's ``config``) < ``overrides``; keys the study moved
     (``study.moved_keys``) are read at their new place, with a note (:mod:`.moved_keys`)."""
     layers: list[dict[str, Any]] = []  # each source alone: an old and a new key in one clash
@@ -297,6 +299,9 @@ def resolve_config(study: ConfiguredStudy, file: Path | None = None,
     for layer in layers:
         user = _merge(user, layer)
     defaults = {k: dict(v) for k, v in study.defaults.items()}
+    robot = configured_robot(user)
+    if isinstance(robot, str) and robot in study.robot_defaults:
+        defaults = _merge(defaults, {k: dict(v) for k, v in study.robot_defaults[robot].items()})
     preset = current_preset_name(study, preset)
     if preset is not None:
         presets = study.presets

@@ -231,8 +231,9 @@ class HasMeasures(Protocol):
 class ConfiguredStudy(Protocol):
     """What the config resolver reads of a study (:func:`evomotion.run.config.
     resolve_config`): its ``[problem]`` dataclass, its defaults and presets (sections of
-    overrides), the registered optimizers it accepts (``None``: all), its own methods and the
-    keys it moved (``{"problem.method": "algorithm.method"}``: old place -> new place)."""
+    overrides), its defaults per bundled robot (over the defaults), the registered optimizers
+    it accepts (``None``: all), its own methods and the keys it moved (``{"problem.method":
+    "algorithm.method"}``: old place -> new place)."""
 
     @property
     def name(self) -> str: ...
@@ -245,6 +246,9 @@ class ConfiguredStudy(Protocol):
 
     @property
     def presets(self) -> Mapping[str, Mapping[str, Mapping[str, Any]]]: ...
+
+    @property
+    def robot_defaults(self) -> Mapping[str, Mapping[str, Mapping[str, Any]]]: ...
 
     @property
     def core_algorithms(self) -> tuple[str, ...] | None: ...

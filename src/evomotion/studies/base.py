@@ -25,6 +25,9 @@ class Study:
       ``{"algorithm": {"pop_size": 100, "crossover": "blx_alpha"}, "run": {"generations": 60}}``.
     - ``presets``: named settings over the defaults (``--preset paper``: the paper's literal
       setting), same form as ``defaults``; ``preset_notes`` says in one line what each is.
+    - ``robot_defaults``: the best-known setting on another robot, ``robot -> sections``
+      (same form as ``defaults``), layered over ``defaults`` when ``problem.robot`` is that
+      bundled robot (``--robot dm-humanoid``); a preset, a file or ``--set`` still wins.
     - ``preset_studies``: presets that are another registered study, ``name -> study``
       (``humanoid-walk --preset open-loop`` runs ``humanoid-walk-open-loop``, a problem of
       another kind); ``preset_notes`` says what each is.
@@ -67,6 +70,7 @@ class Study:
     presets: dict[str, dict[str, dict[str, Any]]] = field(default_factory=dict)
     preset_notes: dict[str, str] = field(default_factory=dict)
     preset_studies: dict[str, str] = field(default_factory=dict)
+    robot_defaults: dict[str, dict[str, dict[str, Any]]] = field(default_factory=dict)
     core_algorithms: tuple[str, ...] | None = None
     algorithms: StudyAlgorithms = field(default_factory=dict)
     on_checkpoint: Callable[[RunContext], None] | None = None

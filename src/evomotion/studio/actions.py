@@ -228,14 +228,16 @@ def _kind(tp: Any) -> str:
     return {bool: "bool", int: "int", float: "float", str: "str"}.get(tp, "text")
 
 
-def form_fields(study: str, preset: str | None = None,
-                algorithm: str | None = None) -> list[FormField]:
+def form_fields(study: str, preset: str | None = None, algorithm: str | None = None,
+                robot: str | None = None) -> list[FormField]:
     """One field per key of ``[run]``, ``[algorithm]`` and ``[problem]`` with the value the
-    study resolves to under ``preset`` (and ``algorithm.name``)."""
+    study resolves to under ``preset`` (and ``algorithm.name``, and ``problem.robot``: a
+    robot with defaults of its own, ``Study.robot_defaults``, shows them)."""
     from evomotion.studies import get_study
     from evomotion.studio import form_schema as fs
 
     sets = [f"algorithm.name={algorithm!r}"] if algorithm else []
+    sets += [f"problem.robot={json.dumps(robot)}"] if robot else []
     cfg = check_new_run(study, preset, sets)
     common = fs.common_keys(get_study(study))
     out = []

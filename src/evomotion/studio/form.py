@@ -8,6 +8,7 @@ the field it names. The run starts as ``evomotion run ...`` in its own process
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 from urllib.parse import quote
 
@@ -66,7 +67,11 @@ def build(root: Path) -> None:
             values = {k: (("true" if w.value else "false") if isinstance(w.value, bool)
                           else str(w.value)) for k, w in state["inputs"].items()}
             a = alg.value if alg.value != state["alg0"] else None
-            return actions.changed_sets(state["fields"], values, a)
+            sets = actions.changed_sets(state["fields"], values, a)
+            robot = state.get("robot")  # the fields show its defaults: it is always sent
+            if robot and not any(x.startswith("problem.robot=") for x in sets):
+                sets.append(f"problem.robot={json.dumps(robot)}")
+            return sets
 
         def check() -> bool:
             for lab in state["errors"].values():
@@ -101,7 +106,7 @@ def build(root: Path) -> None:
                 actions.check_new_run(study, p, []).algorithm.name
             a = alg.value if alg.value != state["alg0"] else None
             try:
-                state["fields"] = actions.form_fields(study, p, a)
+                state["fields"] = actions.form_fields(study, p, a, state.get("robot"))
             except InputError as e:
                 error_top.set_text(f"error: {e}")
                 return
@@ -121,7 +126,26 @@ def build(root: Path) -> None:
                 with ui.expansion(f"advanced ({len(state['fields']) - len(common)} keys)",
                                   icon="tune").classes("w-full advanced-keys"):
                     _fields(ui, [f for f in state["fields"] if not f.common], state, check)
+            robot_input = state["inputs"].get("problem.robot")
+            if robot_input is not None and s.robot_defaults:
+                robot_input.on_value_change(lambda e: robot_changed(e.value))
             check()
+
+        def robot_changed(value: object) -> None:
+            """A robot with defaults of its own (``Study.robot_defaults``) shows them: the
+            fields are rebuilt for it (as for a preset), and rebuilt for the study's
+            defaults when another robot replaces it."""
+            value, old = str(value or ""), state.get("robot")
+            if value in s.robot_defaults:
+                if value != old:
+                    state["robot"] = value
+                    rebuild()
+            elif old is not None:
+                state["robot"] = None
+                rebuild()
+                w = state["inputs"].get("problem.robot")
+                if w is not None and w.value != value:
+                    w.set_value(value)
 
         async def go() -> None:
             from nicegui import run

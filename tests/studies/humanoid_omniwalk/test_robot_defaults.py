@@ -1,0 +1,43 @@
+"""``--robot dm-humanoid`` brings the dm humanoid's own defaults (``Study.robot_defaults``):
+the command line its measured runs were made with (docs/humanoid-walk.md), and the user's
+``--set``, file and preset still win."""
+
+from __future__ import annotations
+
+import dataclasses
+
+from evomotion.run.config import resolve_config
+from evomotion.studies import get_study
+
+# the command line of the measured dm humanoid runs (docs/humanoid-walk.md, "Other bipeds")
+MEASURED = ["problem.sway_m=0.008", "problem.sway_phase_rad=1.57",
+            "problem.step_height_m=0.005", "problem.perturb=false", "problem.push_max_ns=0",
+            "problem.vx_min=0.15", "problem.vx_max=0.3", "problem.vy_max=0.05",
+            "problem.yaw_rate_max=0.2", "problem.command_weights=[1, 0, 0, 0, 0]",
+            "run.generations=600"]
+
+
+def test_the_dm_humanoids_defaults_are_its_measured_command_line():
+    s = get_study("humanoid-walk")
+    robot = "problem.robot='dm-humanoid'"
+    by_default = resolve_config(s, overrides=[robot])
+    measured = resolve_config(s, overrides=[robot, *MEASURED])
+    assert dataclasses.asdict(by_default) == dataclasses.asdict(measured)
+    nao = resolve_config(s)  # the NAO and the OP3 keep the study's defaults
+    op3 = resolve_config(s, overrides=["problem.robot='op3'"])
+    for cfg in (nao, op3):
+        assert cfg.problem.perturb and cfg.run.generations == 300
+        assert cfg.problem.command_weights != by_default.problem.command_weights
+    assert by_default.problem.perturb is False and by_default.run.generations == 600
+
+
+def test_the_users_settings_win_over_the_robots(tmp_path):
+    s = get_study("humanoid-walk")
+    robot = "problem.robot='dm-humanoid'"
+    cfg = resolve_config(s, overrides=[robot, "problem.vx_max=0.25", "run.generations=7"])
+    assert cfg.problem.vx_max == 0.25 and cfg.run.generations == 7
+    assert cfg.problem.vx_min == 0.15  # the rest stays the robot's
+    f = tmp_path / "walk.toml"
+    f.write_text('[problem]\nrobot = "dm-humanoid"\nperturb = true\n')
+    cfg = resolve_config(s, f)
+    assert cfg.problem.perturb is True and cfg.problem.sway_m == 0.008
