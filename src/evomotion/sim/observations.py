@@ -29,7 +29,7 @@ frame the body frame):
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import mujoco
@@ -202,3 +202,35 @@ def _to_body(w, x, y, z, v: np.ndarray) -> np.ndarray:
 def columns_of(names: Sequence[str], channel: str) -> list[int]:
     """Columns of ``names`` (:func:`observation_names`) that belong to ``channel``."""
     return [i for i, n in enumerate(names) if n.split(":", 1)[0] == channel]
+
+
+#: the sign of each channel's items in the mirror image about the sagittal (x-z) plane:
+#: vectors flip y, angular velocities (pseudo-vectors) flip x and z, roll flips
+_MIRROR_SIGNS = {"gravity": (1.0, -1.0, 1.0), "torso_velocity": (1.0, -1.0, 1.0),
+                 "gyro": (-1.0, 1.0, -1.0), "roll_pitch": (-1.0, 1.0)}
+
+
+def observation_mirror(names: list[str] | tuple[str, ...],
+                       joint_mirror: Callable[[str], tuple[str, float]],
+                       command_signs: tuple[float, ...] = ()) -> tuple[np.ndarray, np.ndarray]:
+    """``(perm, sign)``: column ``i`` of a mirrored observation is ``sign[i] * obs[perm[i]]``
+    for the columns ``names`` (:func:`observation_names`). ``joint_mirror(joint) -> (partner,
+    sign)`` is the robot's (its ``mirror`` capability); feet named ``left``/``right`` swap; the
+    phase maps to itself (the caller shifts it by half a cycle); ``command:i`` keeps its place
+    with ``command_signs[i]`` (e.g. a walk's ``(vx, vy, ω)``: ``(1, -1, -1)``)."""
+    col = {n: i for i, n in enumerate(names)}
+    perm, sign = np.arange(len(names)), np.ones(len(names))
+    for i, name in enumerate(names):
+        channel, _, item = name.partition(":")
+        if channel in ("joint_pos", "joint_vel"):
+            partner, s = joint_mirror(item)
+            perm[i], sign[i] = col[f"{channel}:{partner}"], s
+        elif channel in _MIRROR_SIGNS:
+            sign[i] = _MIRROR_SIGNS[channel]["xyz".index(item) if channel != "roll_pitch"
+                                             else ("roll", "pitch").index(item)]
+        elif channel == "foot_contact":
+            other = item.replace("left", "\0").replace("right", "left").replace("\0", "right")
+            perm[i] = col[f"{channel}:{other}"]
+        elif channel == "command":
+            sign[i] = command_signs[int(item)]
+    return perm, sign

@@ -282,7 +282,11 @@ def write_policy_files(ctx: Any, extra: dict[str, Any] | None = None) -> None:
         if not ctx.cache.get("onnx_note"):
             ctx.log("note: policy.onnx not written (pip install 'evomotion[onnx]')")
             ctx.cache["onnx_note"] = True
-    export_policy(ctx.out_dir, problem.policy, state.best_x, state.best_obs_mean,
+    # a problem that searches other numbers than the policy's (a symmetric controller's)
+    # maps them: ``policy_params(genomes)``
+    params = problem.policy_params(state.best_x) if hasattr(problem, "policy_params") \
+        else state.best_x
+    export_policy(ctx.out_dir, problem.policy, params, state.best_obs_mean,
                   state.best_obs_std, formats)
     for name, record in (extra or {}).items():
         atomic_write_text(Path(ctx.out_dir) / name, json.dumps(record, indent=1) + "\n")

@@ -85,6 +85,7 @@ CAPABILITIES = {
     "naoqi_export": "export of motions to NAOqi (a Python script for the real robot)",
     "naoqi_policy": "export of closed-loop policies to NAOqi (a runner script for the real "
                     "robot)",
+    "mirror": "its left-right mirror of joints (mirror-symmetric policies)",
 }
 #: the walk study's gait roles per kind: required, optional; each lists one channel per leg
 #: (biped: left, right; quadruped: front left, front right, hind left, hind right), a

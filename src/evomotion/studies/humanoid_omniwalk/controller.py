@@ -23,13 +23,19 @@ declares them (the ``speed_limits`` capability); otherwise the speed excess is 0
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
 
 from evomotion.core.policies import StructuredSpec, fit_tape
+from evomotion.core.policies.mirror import (
+    MirrorBasis,
+    SignedPermutation,
+    structured_mirror,
+)
 from evomotion.sim.closed_loop import ClosedLoopResult, ClosedLoopSimulator
-from evomotion.sim.observations import ObservationSpec
+from evomotion.sim.observations import ObservationSpec, observation_mirror
 from evomotion.sim.robots import load_robot, nao
 from evomotion.sim.robots.nao.joint_limits import SPEED_LIMITS
 from evomotion.sim.rollout import ServoWork
@@ -44,13 +50,22 @@ FIT_GRID = (np.linspace(-0.2, 0.45, 6), np.linspace(-0.2, 0.2, 5), np.linspace(-
 FIT_DT_S = 0.01
 
 
+@dataclass(frozen=True)
+class Mirror:
+    """A symmetric controller's parameters ``basis.expand(z)`` and the observation's mirror
+    (:mod:`evomotion.core.policies.mirror`)."""
+
+    basis: MirrorBasis
+    observation: SignedPermutation
+
+
 class Controller:
     """The controller's simulator, policy spec and start (see the module doc)."""
 
     def __init__(self, gait: OmniGait, control_period_s: float = 0.02, harmonics: int = 3,
                  clip_obs: float = 5.0, threads: int = 1,
                  command_feedback: bool = False, feedback_start: float = 0.0,
-                 robot: str = "nao") -> None:
+                 robot: str = "nao", symmetric: bool = False) -> None:
         from evomotion.errors import InputError
 
         self.feedback_start = float(feedback_start)
@@ -97,10 +112,30 @@ class Controller:
             command_feedback=command_feedback,
             low=self.sim.lower - self.nominal[self.columns],
             high=self.sim.upper - self.nominal[self.columns])
+        #: a mirror-symmetric controller's parameters (problem.symmetric) or None
+        self.mirror = self._mirror() if symmetric else None
         self.window = max(1, int(round(self.gait.period_s / self.control_dt)))  # one cycle
         self.state0 = r.state_at(self.nominal)  # the NAO's own rule, bit for bit (build.py)
         self.speed_limits = np.array([speeds.get(j, np.inf) for j in self.driven])
         self.work = ServoWork(r.model, self.columns)
+
+    def _mirror(self) -> Mirror:
+        """The robot's left-right mirror on the driven joints (a follower is its leader) and
+        on the observation (the walk's command ``(vx, vy, ω)`` -> ``(vx, -vy, -ω)``)."""
+        from evomotion.errors import InputError
+
+        if not self.robot.has("mirror"):
+            raise InputError(f"problem.symmetric: robot {self.robot.name!r} declares no "
+                             "left-right mirror of its joints (the NAO does)")
+        joint_mirror = self.robot.capability("mirror", "humanoid-walk").joint_mirror
+        names = list(self.driven)
+        pairs = [joint_mirror(j) for j in names]
+        action = SignedPermutation(
+            np.array([names.index(self.followers.get(p, p)) for p, _ in pairs]),
+            np.array([s for _, s in pairs]))
+        obs = SignedPermutation(*observation_mirror(self.sim.observe.names, joint_mirror,
+                                                    (1.0, -1.0, -1.0)))
+        return Mirror(MirrorBasis.of(structured_mirror(self.policy, action, obs)), obs)
 
     def initial_params(self) -> np.ndarray:
         return self._fitted.copy()

@@ -35,6 +35,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from evomotion.core.checks import check_fields, check_number, check_text, inf_ok
+from evomotion.core.policies.mirror import with_mirror_image
 from evomotion.core.problem import Evaluation, GenomeSpec, Sense
 from evomotion.errors import InputError
 from evomotion.studies.episode_worlds import WorldDraw, episode_world, push_range
@@ -75,6 +76,9 @@ class OmniWalkConfig:
     #: gravity:x (forward lean); 0.1 ~ 1 m/s per unit of gravity direction on this walk, whose
     #: gravity-x std is about 0.1 (benchmarks/command_feedback_probe.py's k_x = 1)
     command_feedback_start: float = 0.0
+    #: a mirror-symmetric controller: the search runs on the parameters of controllers that
+    #: act as their own mirror image (about half; core/policies/mirror.py); the NAO only
+    symmetric: bool = False
     normalize: bool = True  # ARS V2 observation normalisation
     episodes: int = 1  # training episodes per individual and generation
     eval_episodes: int = 8  # episodes of the centre per generation (the reported return)
@@ -154,7 +158,7 @@ class OmniWalkConfig:
         check_number("problem.sway_m", self.sway_m, lo=0.0, hi=0.06)
         check_number("problem.lean_rad", self.lean_rad, lo=-0.2, hi=0.4)
         check_number("problem.sway_phase_rad", self.sway_phase_rad, lo=-math.pi, hi=math.pi)
-        for key in ("normalize", "perturb", "command_feedback"):
+        for key in ("normalize", "perturb", "command_feedback", "symmetric"):
             if not isinstance(getattr(self, key), bool):
                 raise InputError(f"problem.{key}: expected true or false, got "
                                  f"{getattr(self, key)!r}")
@@ -192,13 +196,16 @@ class OmniWalkProblem:
         threads = cfg.threads or max(1, min(os.cpu_count() or 1, 8))
         self.ctl = ctl = Controller(cfg.gait(), cfg.control_period_s, cfg.harmonics,
                                     cfg.clip_obs, threads, cfg.command_feedback,
-                                    cfg.command_feedback_start, cfg.robot)
+                                    cfg.command_feedback_start, cfg.robot, cfg.symmetric)
         self.robot, self.sim, self.policy = ctl.robot, ctl.sim, ctl.policy
         self.obs_spec, self.obs_names = ctl.obs_spec, ctl.sim.observe.names
         self.obs_dim, self.act_dim = self.sim.observation_size, self.sim.action_size
         self.control_steps, self.dt = ctl.sim.k, ctl.dt
         self.nstep = int(math.ceil(cfg.duration_s / self.dt))
+        self.mirror = ctl.mirror
         lo, hi = self.policy.genome_bounds(cfg.param_bound)
+        if self.mirror is not None:  # the box on the free numbers of a symmetric controller
+            lo, hi = lo[:self.mirror.basis.dim], hi[:self.mirror.basis.dim]
         self.genome = GenomeSpec(lo, hi)
         self.draw = WorldDraw(push_range(self.robot, cfg.push_min_ns, cfg.push_max_ns),
                               (0.2, 0.8), cfg.duration_s, cfg.perturb)
@@ -207,8 +214,15 @@ class OmniWalkProblem:
         self.normalize = cfg.normalize
 
     def initial_population(self, n: int | None, rng: np.random.Generator) -> np.ndarray:
-        """The fitted walk engine (feedback gains 0): where the search starts."""
-        return self.ctl.initial_params()[None]
+        """The fitted walk engine (feedback gains 0): where the search starts (a symmetric
+        controller: the symmetric tape nearest it)."""
+        x = self.ctl.initial_params()
+        return (x if self.mirror is None else self.mirror.basis.reduce(x))[None]
+
+    def policy_params(self, genomes: np.ndarray) -> np.ndarray:
+        """The controller parameters (``policy``'s) of ``genomes`` (the search's numbers)."""
+        g = np.asarray(genomes, dtype=np.float64)
+        return g if self.mirror is None else self.mirror.basis.expand(g)
 
     def worlds(self, seeds: np.ndarray, push_ns: float | None = None) -> list:
         cache = {int(s): episode_world(self.robot.model, self.draw, int(s), push_ns)
@@ -256,8 +270,11 @@ class OmniWalkProblem:
                                                         self.genome.dim, self.obs_dim)
         eps = EpisodeRows.of(seeds, episodes, MAX_EPISODES)
         o = eps.owner
-        m, res, _ = self.play(params[o], mean[o], std[o], eps.seeds)
+        m, res, _ = self.play(self.policy_params(params)[o], mean[o], std[o], eps.seeds)
         count, obs_mean, obs_m2 = observation_moments(res.obs_count, res.obs_sum,
                                                       res.obs_sumsq)
+        if self.mirror is not None:  # the normaliser sees each episode and its mirror image
+            count, obs_mean, obs_m2 = with_mirror_image(count, obs_mean, obs_m2,
+                                                        self.mirror.observation)
         avg = {k: eps.mean(v) for k, v in m.items()}
         return Evaluation(avg["return"], {**avg, **eps.moments(count, obs_mean, obs_m2)})

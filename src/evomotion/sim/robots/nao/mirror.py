@@ -26,6 +26,12 @@ def _sign(joint: str) -> float:
     return -1.0 if ("Roll" in joint or "Yaw" in joint) and "YawPitch" not in joint else 1.0
 
 
+def joint_mirror(joint: str) -> tuple[str, float]:
+    """The joint ``joint`` of the mirror image and the sign of its angle there (the robot's
+    ``mirror`` capability: symmetric policies, :mod:`evomotion.core.policies.mirror`)."""
+    return _partner(joint), _sign(joint)
+
+
 #: column ``i`` of a mirrored pose is column ``MIRROR_COLUMNS[i]`` of the pose times
 #: ``MIRROR_SIGNS[i]`` (order :data:`JOINTS`)
 MIRROR_COLUMNS = np.array([JOINTS.index(_partner(j)) for j in JOINTS])
