@@ -57,6 +57,7 @@ def test_run_resume_plot_studies(tmp_path):
     assert r.returncode == 0 and (tmp_path / "cmp.png").exists() and (tmp_path / "cmp.svg").exists()
     r = cli("studies")
     assert r.returncode == 0 and "functions" in r.stdout
+    assert "--robot dm-humanoid: defaults of its own (run.generations, problem.sway_m" in r.stdout
 
 
 def test_readme_commands_are_the_ci_commands():
