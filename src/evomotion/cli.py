@@ -37,8 +37,11 @@ def studies_cmd() -> None:
         for p in (*s.presets, *s.preset_studies):
             typer.echo(f"{'':16s}   --preset {p}: {s.preset_notes.get(p, '')}")
         for r, sections in s.robot_defaults.items():
+            if not r:  # the study's own robot: listed under its name
+                continue
             keys = ", ".join(f"{sec}.{k}" for sec, v in sections.items() for k in v)
-            typer.echo(f"{'':16s}   --robot {r}: defaults of its own ({keys})")
+            also = " (also without --robot)" if s.robot_defaults.get("") == sections else ""
+            typer.echo(f"{'':16s}   --robot {r}: defaults of its own ({keys}){also}")
 
 
 @app.command("run")

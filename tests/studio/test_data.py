@@ -154,7 +154,10 @@ def test_form_fields_and_one_line_errors():
         assert actions.form_fields(name, "paper")  # every study's schema makes a form
     shown = {f.key: f.shown for f in actions.form_fields("humanoid-walk", robot="dm-humanoid")}
     assert shown["problem.sway_m"] == "0.008" and shown["run.generations"] == "600"
-    assert shown["problem.robot"] == "dm-humanoid"
+    assert shown["problem.robot"] == "dm-humanoid" and shown["problem.symmetric"] == "false"
+    nao = {f.key: f.shown for f in actions.form_fields("humanoid-walk")}
+    op3 = {f.key: f.shown for f in actions.form_fields("humanoid-walk", robot="op3")}
+    assert nao["problem.symmetric"] == "true" and op3["problem.symmetric"] == "false"
 
 
 def test_history_records_every_generation_and_survives_resume(tmp_path):

@@ -27,7 +27,8 @@ class Study:
       setting), same form as ``defaults``; ``preset_notes`` says in one line what each is.
     - ``robot_defaults``: the best-known setting on another robot, ``robot -> sections``
       (same form as ``defaults``), layered over ``defaults`` when ``problem.robot`` is that
-      bundled robot (``--robot dm-humanoid``); a preset, a file or ``--set`` still wins.
+      bundled robot (``--robot dm-humanoid``; ``""``: no robot given, the study's own); a
+      preset, a file or ``--set`` still wins.
     - ``preset_studies``: presets that are another registered study, ``name -> study``
       (``humanoid-walk --preset open-loop`` runs ``humanoid-walk-open-loop``, a problem of
       another kind); ``preset_notes`` says what each is.

@@ -132,20 +132,14 @@ def build(root: Path) -> None:
             check()
 
         def robot_changed(value: object) -> None:
-            """A robot with defaults of its own (``Study.robot_defaults``) shows them: the
-            fields are rebuilt for it (as for a preset), and rebuilt for the study's
-            defaults when another robot replaces it."""
-            value, old = str(value or ""), state.get("robot")
-            if value in s.robot_defaults:
-                if value != old:
-                    state["robot"] = value
-                    rebuild()
-            elif old is not None:
-                state["robot"] = None
+            """A robot with other defaults of its own (``Study.robot_defaults``; ``""``: the
+            study's own robot) than the one shown rebuilds the fields for it, as a preset
+            does: the form shows what the run will use."""
+            value = str(value or "")
+            shown = state.get("robot") or ""
+            if s.robot_defaults.get(value) != s.robot_defaults.get(shown):
+                state["robot"] = value or None
                 rebuild()
-                w = state["inputs"].get("problem.robot")
-                if w is not None and w.value != value:
-                    w.set_value(value)
 
         async def go() -> None:
             from nicegui import run

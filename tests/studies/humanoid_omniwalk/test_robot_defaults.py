@@ -29,6 +29,10 @@ def test_the_dm_humanoids_defaults_are_its_measured_command_line():
         assert cfg.problem.perturb and cfg.run.generations == 300
         assert cfg.problem.command_weights != by_default.problem.command_weights
     assert by_default.problem.perturb is False and by_default.run.generations == 600
+    # mirror-symmetric controllers on the NAO only (its mirror capability), named or not
+    assert nao.problem.symmetric and resolve_config(
+        s, overrides=["problem.robot='nao'"]).problem.symmetric
+    assert not op3.problem.symmetric and not by_default.problem.symmetric
 
 
 def test_the_users_settings_win_over_the_robots(tmp_path):
