@@ -14,7 +14,8 @@ Every control period of the :class:`~evomotion.sim.policy_player.PolicyPlayer`:
   (gains ``K_XY`` 1/s, ``K_YAW`` 1/s) and clipped to ``SPEED_SCALE`` x the controller's
   command ranges;
 - it stops at a moment when **both feet are down** (for more than ``SETTLED_STEPS`` control
-  periods) and the soles' midpoint and mean heading are
+  periods, or for one where the gait's double support over the last two gait periods did not
+  last longer) and the soles' midpoint and mean heading are
   within ``tol_m`` / ``tol_deg`` of where the caller wants the feet (where they stay when the
   robot stops), or after ``max_s``; the caller then moves the targets to its standing pose.
   A controller that hovers around the goal without meeting the tolerances (its sideways and
@@ -46,6 +47,17 @@ SPEED_SCALE = 0.8  # of each command range: a margin below the controller's top 
 #: 2 deg while it crouched, against 0.3 cm after one more period)
 SETTLED_STEPS = 1
 WIDEN_S = 2.0  # near the goal, the tolerances grow by themselves every this many seconds
+
+
+def settle_periods(streaks: list[int]) -> int:
+    """The control periods of double support a stop waits beyond the first: ``SETTLED_STEPS``,
+    or fewer for a gait whose double support over the window never lasted longer (``streaks``:
+    its length so far at each of the last control periods; a mirror-symmetric controller's
+    lasts one period, and it hovered until ``max_s``); a window without a step (no 0: a
+    standing start) keeps ``SETTLED_STEPS``."""
+    if 0 not in streaks:
+        return SETTLED_STEPS
+    return min(SETTLED_STEPS, max(max(streaks) - 1, 0))
 
 
 def command_to(pose: np.ndarray, goal: np.ndarray, vmax: np.ndarray,
@@ -115,7 +127,11 @@ class Walker:
         per_period = max(1, round(p.period_s / p.control_dt))
         recent: list[np.ndarray] = []
         i, walked, near_s, both = 0, 0.0, 0.0, 0
+        streaks: list[int] = []  # double support's length, every control period
         while walked < max_s and not self.fallen(d):
+            down = all(d.sensordata[a] > 0 for a in self.contacts)
+            streaks = (streaks + [streaks[-1] + 1 if down and streaks else int(down)]
+                       )[-2 * per_period:]
             now = self.torso(d)
             recent = (recent + [now[:2]])[-per_period:]
             pose = np.array([*np.mean(recent, axis=0), now[2]])
@@ -130,8 +146,8 @@ class Walker:
                     near_s += k * dt
                 grow = 1.0 + max(near_s - WIDEN_S, 0.0) / WIDEN_S  # hovering: let go
                 feet = self.feet(d)
-                both = both + 1 if all(d.sensordata[a] > 0 for a in self.contacts) else 0
-                if (both > SETTLED_STEPS
+                both = both + 1 if down else 0
+                if (both > settle_periods(streaks)
                         and np.hypot(*(feet[:2] - feet_goal[:2])) < tol_m * grow
                         and abs(math.degrees(wrap(feet[2] - feet_goal[2]))) < tol_deg * grow):
                     return walked, True

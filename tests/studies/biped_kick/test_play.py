@@ -363,3 +363,15 @@ def test_a_walk_folder_of_another_study_or_a_broken_controller_is_one_line(omniw
     lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
     assert r.returncode == 2 and len(lines) == 1 and "a arm-ik run, expected a " \
         "humanoid-walk run" in lines[0], r.stderr
+
+
+def test_a_stop_waits_for_as_much_double_support_as_the_gait_has():
+    """The stop waits SETTLED_STEPS periods of double support beyond the first, or fewer for a
+    gait whose double support lasted less over the last two periods (a mirror-symmetric walk's
+    one period: it hovered until max_s and missed every play)."""
+    from evomotion.sim.walk_to_pose import SETTLED_STEPS, settle_periods
+
+    assert SETTLED_STEPS == 1
+    assert settle_periods([1, 2, 3, 0, 0, 1, 2, 0, 0, 1]) == 1  # two periods and more
+    assert settle_periods([0, 1, 0, 0, 1, 0, 0, 1]) == 0  # one period only
+    assert settle_periods([1, 2, 3, 4]) == 1  # standing, no step yet
