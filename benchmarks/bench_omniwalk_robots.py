@@ -74,7 +74,7 @@ def measure(folder: Path, worlds: int, duration_s: float) -> dict:
     rows = {"controller": (policy.params, policy.obs_mean, policy.obs_std),
             "engine": (problem.ctl.initial_params(), np.zeros(o), np.ones(o))}
     out: dict = {"robot": problem.robot.name, "period_s": problem.ctl.gait.period_s,
-                 "params": int(problem.genome.dim)}
+                 "params": int(problem.policy.n_params)}
     for name, (x, mean, std) in rows.items():
         out[name] = {"forward": forward(quiet, x, mean, std),
                      "nominal_random_survival": nominal_random(problem, x, mean, std, worlds,

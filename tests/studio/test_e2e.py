@@ -15,6 +15,8 @@ from urllib.parse import quote
 import pytest
 from studio_helpers import TOKEN, get, smoke_sets
 
+from evomotion.run.config import resolve_config
+from evomotion.run.runner import run_study
 from evomotion.run.stats import read_stats
 from evomotion.studies import STUDIES, get_study
 
@@ -202,6 +204,30 @@ def test_a_robot_with_defaults_of_its_own_shows_them_in_the_form(page, studio, t
     assert _field(page, "problem.sway_m").input_value() == "0.025"
     _wait(lambda: "op3" in page.locator(".new-command").inner_text(), 10, "command")
     assert "dm-humanoid" not in page.locator(".new-command").inner_text()
+
+
+def test_a_cloned_runs_robot_brings_its_defaults_and_the_runs_values_stay(page, studio):
+    """A dm humanoid run cloned: the form shows the dm humanoid's defaults with the run's own
+    values over them, so a value the run had that equals the NAO's default (sway 0.025 m) is
+    still sent (it was dropped, and the clone ran the robot's 0.008)."""
+    import shutil
+
+    base, root = studio
+    s = get_study("humanoid-walk")
+    name = "dm-walk-clone-source"
+    cfg = resolve_config(s, None, [*s.smoke, "run.generations=1", "run.videos=false",
+                                   "problem.robot='dm-humanoid'", "problem.sway_m=0.025"])
+    run_study(s, cfg, root / name, quiet=True)
+    try:
+        page.goto(f"{base}/new?study=humanoid-walk&clone={name}")
+        page.wait_for_selector(".clone-note")
+        _wait(lambda: "dm-humanoid" in page.locator(".new-command").inner_text(), 20,
+              "the cloned robot")
+        command = page.locator(".new-command").inner_text()
+        assert "problem.sway_m=0.025" in command and "run.generations=1" in command
+        assert _field(page, "problem.sway_phase_rad").input_value() == "1.57"  # dm's default
+    finally:
+        shutil.rmtree(root / name, ignore_errors=True)
 
 
 def test_compare_page_draws_median_and_band(page, studio):

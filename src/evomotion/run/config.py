@@ -415,6 +415,10 @@ def current_study_name(name: str, problem_keys: Any = ()) -> str:
 ADDED_KEYS: dict[str, dict[str, dict[str, Any]]] = {
     "humanoid-balance": {"problem": {"stance_width_rad": 0.0, "stance_stagger_rad": 0.0,
                                      "stance_crouch_rad": 0.0, "stance_lean_rad": 0.0}},
+    # 34: the walk's command kinds and mirror-symmetric controllers, which a robot's defaults
+    # (Study.robot_defaults) now set (a saved dm-humanoid or NAO run reruns as it ran)
+    "humanoid-walk": {"problem": {"symmetric": False,
+                                  "command_weights": [0.3, 0.15, 0.15, 0.3, 0.1]}},
 }
 
 
@@ -472,7 +476,9 @@ def config_from_run_dir(run_dir: Path) -> tuple[str, dict[str, Any]]:
 
 def configured_robot(raw: dict[str, Any]) -> Any:
     """A raw run config's ``problem.robot`` as written (``""``, the study's own robot, when
-    there is none); the caller checks what it may load."""
+    there is none); the caller checks what it may load. :func:`resolve_config` reads it from
+    the user's layers only (file, values, ``--set``): a study default or preset that set
+    ``problem.robot`` would not choose ``robot_defaults`` (none does)."""
     problem = raw.get("problem")
     return problem.get("robot", "") if isinstance(problem, dict) else ""
 

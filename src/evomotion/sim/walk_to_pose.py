@@ -128,10 +128,13 @@ class Walker:
         recent: list[np.ndarray] = []
         i, walked, near_s, both = 0, 0.0, 0.0, 0
         streaks: list[int] = []  # double support's length, every control period
+        counted = -1.0  # the time of the last period counted (a waypoint passed: no step)
         while walked < max_s and not self.fallen(d):
             down = all(d.sensordata[a] > 0 for a in self.contacts)
-            streaks = (streaks + [streaks[-1] + 1 if down and streaks else int(down)]
-                       )[-2 * per_period:]
+            if walked != counted:
+                streaks = (streaks + [streaks[-1] + 1 if down and streaks else int(down)]
+                           )[-2 * per_period:]
+                counted = walked
             now = self.torso(d)
             recent = (recent + [now[:2]])[-per_period:]
             pose = np.array([*np.mean(recent, axis=0), now[2]])

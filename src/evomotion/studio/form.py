@@ -139,6 +139,9 @@ def build(root: Path) -> None:
             shown = state.get("robot") or ""
             if s.robot_defaults.get(value) != s.robot_defaults.get(shown):
                 state["robot"] = value or None
+                problem = cloned.get("problem")
+                if isinstance(problem, dict):  # the chosen robot, not the cloned run's
+                    cloned["problem"] = {k: v for k, v in problem.items() if k != "robot"}
                 rebuild()
 
         async def go() -> None:
@@ -176,6 +179,10 @@ def build(root: Path) -> None:
         preset.on_value_change(lambda _: preset_changed())
         alg.on_value_change(lambda _: rebuild())
         start.on_click(go)
+        problem0 = cloned.get("problem")
+        robot0 = problem0.get("robot") if isinstance(problem0, dict) else None
+        if isinstance(robot0, str) and s.robot_defaults.get(robot0) != s.robot_defaults.get(""):
+            state["robot"] = robot0  # a cloned run's robot with other defaults: shown with them
         rebuild()
 
 

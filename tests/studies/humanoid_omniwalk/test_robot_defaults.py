@@ -45,3 +45,28 @@ def test_the_users_settings_win_over_the_robots(tmp_path):
     f.write_text('[problem]\nrobot = "dm-humanoid"\nperturb = true\n')
     cfg = resolve_config(s, f)
     assert cfg.problem.perturb is True and cfg.problem.sway_m == 0.008
+
+
+def test_a_saved_run_config_reruns_as_it_ran(tmp_path):
+    """A NAO or dm humanoid run saved before ``problem.symmetric`` and
+    ``problem.command_weights`` existed lacks them: ``--config`` that file runs what it ran
+    (not the robot's defaults now)."""
+    from evomotion.run.config import config_to_toml
+
+    s = get_study("humanoid-walk")
+    for robot in ("", "dm-humanoid"):
+        cfg = resolve_config(s, overrides=[f"problem.robot={robot!r}", "problem.symmetric=false",
+                                           "problem.command_weights=[0.3, 0.15, 0.15, 0.3, 0.1]"])
+        import tomllib
+
+        import tomli_w
+
+        raw = tomllib.loads(config_to_toml(cfg))
+        for key in ("symmetric", "command_weights"):
+            del raw["problem"][key]
+        f = tmp_path / f"old-{robot or 'nao'}.toml"
+        f.write_text(tomli_w.dumps(raw))
+        again = resolve_config(s, f)
+        assert again.problem.symmetric is False
+        assert tuple(again.problem.command_weights) == (0.3, 0.15, 0.15, 0.3, 0.1)
+        assert again.problem.sway_m == cfg.problem.sway_m  # the rest as saved

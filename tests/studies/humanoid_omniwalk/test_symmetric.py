@@ -44,9 +44,33 @@ def test_searched_vectors_are_controllers_that_act_as_their_own_mirror_image(pro
     basis, mirror = problem.mirror.basis, problem.mirror.observation
     assert problem.genome.dim == basis.dim and basis.dim < 0.55 * problem.policy.n_params
     names = list(problem.obs_names)
-    assert names[int(mirror.perm[names.index("foot_contact:left")])] == "foot_contact:right"
-    assert mirror.sign[names.index("gyro:z")] == -1 and mirror.sign[names.index("command:1")] \
-        == -1 and mirror.sign[names.index("gravity:x")] == 1
+    # the NAO's conventions, written out (not derived from the code under test): a column's
+    # mirror image and its sign
+    expected = {"foot_contact:left": ("foot_contact:right", 1),
+                "joint_pos:LHipRoll": ("joint_pos:RHipRoll", -1),
+                "joint_pos:RAnkleRoll": ("joint_pos:LAnkleRoll", -1),
+                "joint_pos:LKneePitch": ("joint_pos:RKneePitch", 1),
+                "joint_vel:RHipPitch": ("joint_vel:LHipPitch", 1),
+                "joint_vel:LAnkleRoll": ("joint_vel:RAnkleRoll", -1),
+                "gravity:x": ("gravity:x", 1), "gravity:y": ("gravity:y", -1),
+                "gyro:x": ("gyro:x", -1), "gyro:y": ("gyro:y", 1), "gyro:z": ("gyro:z", -1),
+                "command:0": ("command:0", 1), "command:1": ("command:1", -1),
+                "command:2": ("command:2", -1)}
+    for name, (other, sign) in expected.items():
+        i = names.index(name)
+        assert (names[int(mirror.perm[i])], mirror.sign[i]) == (other, sign), name
+    # the driven joints' mirror, read off the basis: the tape's constant of a joint and of its
+    # image are one free number (with the sign), the hip yaw-pitch motor is its own image
+    C = problem.policy.unflatten(np.arange(problem.policy.n_params, dtype=float))[0][0]
+    C = C.astype(int)
+    driven = list(problem.ctl.driven)
+    for a, b, sign in (("LHipRoll", "RHipRoll", -1), ("LKneePitch", "RKneePitch", 1),
+                       ("LShoulderPitch", "RShoulderPitch", 1),
+                       ("LShoulderRoll", "RShoulderRoll", -1),
+                       ("LHipYawPitch", "LHipYawPitch", 1)):
+        i, j = C[driven.index(a), 0], C[driven.index(b), 0]
+        assert basis.index[i] == basis.index[j] >= 0
+        assert basis.sign[i] * basis.sign[j] == sign, (a, b)
     rng = np.random.default_rng(0)
     params = np.tile(basis.expand(0.05 * rng.normal(size=basis.dim)), (6, 1))
     o = problem.obs_dim
@@ -78,7 +102,9 @@ def test_the_search_starts_at_the_symmetric_tape_nearest_the_engine(problem):
     assert np.abs(start - x).max() < 0.02  # the engine is nearly symmetric already
 
 
-def test_a_symmetric_run_exports_the_full_controller_and_resumes(tmp_path):
+def test_a_symmetric_run_exports_the_full_controller(tmp_path):
+    """(Its resume, bit for bit, is the study conformance test's: the NAO's default is
+    symmetric.)"""
     s = get_study("humanoid-walk")
     cfg = resolve_config(s, None, list(TINY))
     res = run_study(s, cfg, tmp_path / "run", quiet=True)
