@@ -206,8 +206,10 @@ def columns_of(names: Sequence[str], channel: str) -> list[int]:
 
 #: the sign of each channel's items in the mirror image about the sagittal (x-z) plane:
 #: vectors flip y, angular velocities (pseudo-vectors) flip x and z, roll flips
-_MIRROR_SIGNS = {"gravity": (1.0, -1.0, 1.0), "torso_velocity": (1.0, -1.0, 1.0),
-                 "gyro": (-1.0, 1.0, -1.0), "roll_pitch": (-1.0, 1.0)}
+_MIRROR_SIGNS = {"gravity": {"x": 1.0, "y": -1.0, "z": 1.0},
+                 "torso_velocity": {"x": 1.0, "y": -1.0, "z": 1.0},
+                 "gyro": {"x": -1.0, "y": 1.0, "z": -1.0},
+                 "roll_pitch": {"roll": -1.0, "pitch": 1.0}}
 
 
 def observation_mirror(names: list[str] | tuple[str, ...],
@@ -226,10 +228,9 @@ def observation_mirror(names: list[str] | tuple[str, ...],
             partner, s = joint_mirror(item)
             perm[i], sign[i] = col[f"{channel}:{partner}"], s
         elif channel in _MIRROR_SIGNS:
-            sign[i] = _MIRROR_SIGNS[channel]["xyz".index(item) if channel != "roll_pitch"
-                                             else ("roll", "pitch").index(item)]
-        elif channel == "foot_contact":
-            other = item.replace("left", "\0").replace("right", "left").replace("\0", "right")
+            sign[i] = _MIRROR_SIGNS[channel][item]
+        elif channel == "foot_contact":  # "left" and "right" swapped within the foot's name
+            other = "right".join(part.replace("right", "left") for part in item.split("left"))
             perm[i] = col[f"{channel}:{other}"]
         elif channel == "command":
             sign[i] = command_signs[int(item)]

@@ -120,8 +120,8 @@ def structured_mirror(spec: StructuredSpec, action: SignedPermutation,
     s_cmd = observation.sign[cmd]
     feat_sign = np.concatenate([_parity(spec.harmonics)] +
                                [s * _parity(spec.harmonics) for s in s_cmd])
-    idx = [w for w, _ in spec.unflatten(np.arange(spec.n_params, dtype=np.float64))]
-    idx = [np.asarray(w).astype(np.int64) for w in idx]
+    idx = [np.asarray(w).astype(np.int64)  # each layer's flat parameter numbers
+           for w, _ in spec.unflatten(np.arange(spec.n_params, dtype=np.float64))]
     perm = np.empty(spec.n_params, dtype=np.int64)
     sign = np.empty(spec.n_params)
     C, K = idx[0], idx[1]

@@ -70,14 +70,14 @@ STUDY = Study(
               "run": {"generations": 300, "checkpoint_every": 20},
               "problem": {"command_feedback": True, "command_feedback_start": 0.1,
                           "episodes": 2}},
-    # the dm humanoid (2026-12-06): with the NAO's defaults it learned to stand; from the
-    # engine setting that walked furthest in the scan, on forward commands alone in the
-    # nominal world, 600 generations walk 0.25 m/s at 0.3 on every seed (docs/humanoid-walk.md)
     # the NAO (its own robot, "" or "nao"): mirror-symmetric controllers (2026-12-06, ninth
     # session; 489 numbers instead of 978; needs the robot's mirror capability): every top
     # speed met on 3 seeds against 14 of 18, steady speed / yaw-rate errors 13 / 11-14 %
-    # against 15-19 / 19-20 %, survival 62 / 60 / .. % against 68 / 63 / 60 %
-    # (docs/humanoid-walk.md); --set problem.symmetric=false for the former
+    # against 15-19 / 19-20 %, survival 62 / 60 / 66 % against 68 / 63 / 60 %
+    # (docs/humanoid-walk.md); --set problem.symmetric=false for the former.
+    # The dm humanoid (2026-12-06): with the NAO's defaults it learned to stand; from the
+    # engine setting that walked furthest in the scan, on forward commands alone in the
+    # nominal world, 600 generations walk 0.23-0.25 m/s at 0.3 on every seed (the same doc)
     robot_defaults={"": NAO_DEFAULTS, "nao": NAO_DEFAULTS, "dm-humanoid": {
         "run": {"generations": 600},
         "problem": {"sway_m": 0.008, "sway_phase_rad": 1.57, "step_height_m": 0.005,
