@@ -49,7 +49,10 @@ def settings(task: str, method: str) -> list[str]:
     if method == "openai_es":  # Salimans et al. 2017's setting scaled to a 2-core budget
         return common + ["algorithm.name=openai_es", "algorithm.pop_size=40",
                          "algorithm.sigma=0.02", "algorithm.learning_rate=0.01"]
-    raise SystemExit(f"unknown method {method!r}; available: ars, openai_es")
+    if method == "cmaes":  # the study's default: CMA-ES from 0, sigma 0.1 (of the +-100 box)
+        return common + ["algorithm.name=cmaes", "algorithm.sigma0=0.0005",
+                         "algorithm.x0=center"]
+    raise SystemExit(f"unknown method {method!r}; available: ars, openai_es, cmaes")
 
 
 def one_run(task: str, method: str, seed: int, budget_s: float, workers: int,

@@ -33,15 +33,21 @@ def studies_cmd() -> None:
     for s in all_studies():
         typer.echo(f"{s.name:16s} {s.description}")
         algs = ", ".join(study_algorithms(s))
-        typer.echo(f"{'':16s}   methods: {algs} (default {default_algorithm(s)})")
+        d0, d = default_algorithm(s, ""), default_algorithm(s)  # "": no robot (env) given
+        other = f"; {d} with another problem.{s.defaults_key}" if d0 != d else ""
+        typer.echo(f"{'':16s}   methods: {algs} (default {d0}{other})")
         for p in (*s.presets, *s.preset_studies):
             typer.echo(f"{'':16s}   --preset {p}: {s.preset_notes.get(p, '')}")
+        flag = "--robot" if s.defaults_key == "robot" else f"--set problem.{s.defaults_key}="
+        sep = " " if s.defaults_key == "robot" else ""
         for r, sections in s.robot_defaults.items():
             if not r:  # the study's own robot: listed under its name
                 continue
-            keys = ", ".join(f"{sec}.{k}" for sec, v in sections.items() for k in v)
-            also = " (also without --robot)" if s.robot_defaults.get("") == sections else ""
-            typer.echo(f"{'':16s}   --robot {r}: defaults of its own ({keys}){also}")
+            keys = ", ".join(f"{sec}.{k}" + (f"={x}" if (sec, k) == ("algorithm", "name") else "")
+                             for sec, v in sections.items() for k, x in v.items())
+            also = f" (also without {flag.rstrip('=')})" \
+                if s.robot_defaults.get("") == sections else ""
+            typer.echo(f"{'':16s}   {flag}{sep}{r}: defaults of its own ({keys}){also}")
 
 
 @app.command("run")

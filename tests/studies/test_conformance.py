@@ -70,9 +70,16 @@ def test_descriptor(name):
         assert s.preset_notes.get(preset)
     from evomotion.sim.robots import bundled_robots
 
+    for alg, keys in s.algorithm_tunings.items():  # a method of the study; every key applies
+        cfg = resolve_config(s, overrides=[f"algorithm.name={alg!r}"])
+        assert {k: getattr(cfg.algorithm, k) for k in keys} == dict(keys, name=alg), alg
+    assert isinstance(s.defaults_key, str)
+    assert not s.robot_defaults or \
+        s.defaults_key in {f.name for f in dataclasses.fields(s.problem_config)}
     for robot, sections in s.robot_defaults.items():  # a bundled robot; every key applies
-        assert robot in bundled_robots() or robot == ""  # "": the study's own robot
-        cfg = resolve_config(s, overrides=[f"problem.robot={robot!r}"])
+        if s.defaults_key == "robot":  # "": the study's own robot
+            assert robot in bundled_robots() or robot == ""
+        cfg = resolve_config(s, overrides=[f"problem.{s.defaults_key}={robot!r}"] * bool(robot))
         for section, values in sections.items():
             for key, value in values.items():
                 got = getattr(getattr(cfg, section), key)

@@ -206,6 +206,35 @@ def test_a_robot_with_defaults_of_its_own_shows_them_in_the_form(page, studio, t
     assert "dm-humanoid" not in page.locator(".new-command").inner_text()
 
 
+def test_gyms_environment_picks_its_own_defaults_and_method(page, studio, tmp_path):
+    """gym's defaults are per environment (``Study.defaults_key = "env"``): Hopper-v5 runs
+    CMA-ES, another task ARS; choosing the task in the form switches the method and its
+    fields, and the command names the task only."""
+    pytest.importorskip("gymnasium")
+    base, _ = studio
+    page.goto(f"{base}/new?study=gym")
+    page.wait_for_selector(".new-command")
+    assert "cmaes" in page.locator(".new-algorithm").inner_text()
+    assert _field(page, "algorithm.sigma0").input_value() == "0.0005"
+
+    def choose(env: str) -> None:
+        page.locator(".advanced-keys").first.click()
+        page.locator('[data-key="problem.env"]').click()
+        page.get_by_role("option", name=env, exact=True).click()
+
+    choose("Walker2d-v5")
+    _wait(lambda: "ars" in page.locator(".new-algorithm").inner_text(), 20, "ARS on Walker2d")
+    _wait(lambda: _field(page, "algorithm.step_size").input_value() == "0.01", 20,
+          "ARS's tuning")
+    _wait(lambda: "Walker2d-v5" in page.locator(".new-command").inner_text(), 10, "command")
+    assert "algorithm.name" not in page.locator(".new-command").inner_text()
+    page.screenshot(path=str(tmp_path / "gym-env-defaults.png"), full_page=True)
+    choose("Hopper-v5")
+    _wait(lambda: "cmaes" in page.locator(".new-algorithm").inner_text(), 20, "CMA-ES again")
+    _wait(lambda: _field(page, "algorithm.sigma0").input_value() == "0.0005", 20, "its sigma")
+    assert page.locator(".start-button").is_enabled()
+
+
 def test_a_cloned_runs_robot_brings_its_defaults_and_the_runs_values_stay(page, studio):
     """A dm humanoid run cloned: the form shows the dm humanoid's defaults with the run's own
     values over them, so a value the run had that equals the NAO's default (sway 0.025 m) is

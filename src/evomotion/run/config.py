@@ -240,9 +240,11 @@ def study_algorithms(study: ConfiguredStudy) -> dict[str, type]:
     return out
 
 
-def default_algorithm(study: Any) -> str:
-    """The method a study runs when ``algorithm.name`` is not given."""
-    name = study.defaults.get("algorithm", {}).get("name")
+def default_algorithm(study: Any, robot: str | None = None) -> str:
+    """The method a study runs when ``algorithm.name`` is not given; with ``robot`` (the value
+    of ``problem.<study.defaults_key>``, ``""``: not given) the one its defaults choose."""
+    own = study.robot_defaults.get(robot, {}).get("algorithm", {}) if robot is not None else {}
+    name = own.get("name") or study.defaults.get("algorithm", {}).get("name")
     return name or next(iter(study_algorithms(study)))
 
 
@@ -281,9 +283,10 @@ def resolve_config(study: ConfiguredStudy, file: Path | None = None,
                    values: dict[str, Any] | None = None) -> Config:
     """Resolve the full config of ``study`` (a :class:`~evomotion.studies.base.Study`):
     dataclass defaults < study defaults < the robot's (``study.robot_defaults`` for the
-    configured ``problem.robot``) < ``preset`` < TOML ``file`` < ``values`` (sections
-    as a dict, the Python API's ``config``) < ``overrides``; keys the study moved
-    (``study.moved_keys``) are read at their new place, with a note (:mod:`.moved_keys`)."""
+    configured ``problem.robot``, or ``problem.<study.defaults_key>``) < ``preset`` < TOML
+    ``file`` < ``values`` (sections as a dict, the Python API's ``config``) < ``overrides``;
+    keys the study moved (``study.moved_keys``) are read at their new place, with a note
+    (:mod:`.moved_keys`)."""
     layers: list[dict[str, Any]] = []  # each source alone: an old and a new key in one clash
     if file is not None:
         layers.append(saved_as_now(study, load_toml(file)))
@@ -299,9 +302,12 @@ def resolve_config(study: ConfiguredStudy, file: Path | None = None,
     for layer in layers:
         user = _merge(user, layer)
     defaults = {k: dict(v) for k, v in study.defaults.items()}
-    robot = configured_robot(user)
+    robot = configured_robot(user, study.defaults_key)
+    # each method's tuning for a user who picks it: the study's, or one a layer above replaced
+    tunings = {str(k): dict(v) for k, v in study.algorithm_tunings.items()}
     if isinstance(robot, str) and robot in study.robot_defaults:
-        defaults = _merge(defaults, {k: dict(v) for k, v in study.robot_defaults[robot].items()})
+        defaults, tunings = _layer_over(
+            defaults, {k: dict(v) for k, v in study.robot_defaults[robot].items()}, tunings)
     preset = current_preset_name(study, preset)
     if preset is not None:
         presets = study.presets
@@ -309,12 +315,7 @@ def resolve_config(study: ConfiguredStudy, file: Path | None = None,
             known = [*presets, *getattr(study, "preset_studies", {})]
             raise InputError(f"--preset: unknown preset {preset!r} for study {study.name!r}; "
                              f"available: {', '.join(known) or 'none'}")
-        chosen = presets[preset]
-        p_alg = chosen.get("algorithm", {}).get("name")
-        if p_alg is not None and p_alg != defaults.get("algorithm", {}).get("name"):
-            # a preset with another algorithm: the defaults' tuning was for the other one
-            defaults = {k: v for k, v in defaults.items() if k != "algorithm"}
-        defaults = _merge(defaults, dict(chosen))
+        defaults, tunings = _layer_over(defaults, dict(presets[preset]), tunings)
     default_alg = defaults.get("algorithm", {}).get("name") or default_algorithm(study)
     user_alg = user.get("algorithm", {}) if isinstance(user.get("algorithm"), dict) else {}
     if study.moved_keys:  # the keys a study moved, read at their new place (one note each)
@@ -327,11 +328,29 @@ def resolve_config(study: ConfiguredStudy, file: Path | None = None,
         user_alg = user.get("algorithm", {}) if isinstance(user.get("algorithm"), dict) else {}
     if user_alg.get("name", default_alg) != default_alg:
         defaults.pop("algorithm", None)  # the study's tuning is for its own algorithm
+        picked = user_alg.get("name")  # any value: the section's check reports a bad one
+        if isinstance(picked, str) and picked in tunings:  # gym: ARS beside Hopper's CMA-ES
+            defaults["algorithm"] = dict(tunings[picked])
     _drop_other_operator_params(study, defaults, user_alg, default_alg)
     raw: dict[str, Any] = {"run": {}, "algorithm": {"name": default_alg}, "problem": {}}
     raw = _merge(_merge(raw, defaults), user)
     cfg = config_from_dict(study, raw)
     return dataclasses.replace(cfg, preset=preset)
+
+
+def _layer_over(defaults: dict[str, Any], layer: dict[str, Any],
+                tunings: dict[str, dict[str, Any]]
+                ) -> tuple[dict[str, Any], dict[str, dict[str, Any]]]:
+    """``layer`` (a robot's defaults, a preset) over ``defaults``; where it names another
+    algorithm, the tuning below was for the other one: dropped, and kept in ``tunings`` by
+    name for a user who picks that algorithm again."""
+    below = defaults.get("algorithm", {})
+    name = layer.get("algorithm", {}).get("name")
+    if name is not None and name != below.get("name"):
+        if below.get("name"):
+            tunings = {**tunings, str(below["name"]): dict(below)}
+        defaults = {k: v for k, v in defaults.items() if k != "algorithm"}
+    return _merge(defaults, layer), tunings
 
 
 def _sections(study: ConfiguredStudy, algorithm: str) -> dict[str, type] | None:
@@ -474,13 +493,13 @@ def config_from_run_dir(run_dir: Path) -> tuple[str, dict[str, Any]]:
     return raw["study"], raw
 
 
-def configured_robot(raw: dict[str, Any]) -> Any:
-    """A raw run config's ``problem.robot`` as written (``""``, the study's own robot, when
-    there is none); the caller checks what it may load. :func:`resolve_config` reads it from
-    the user's layers only (file, values, ``--set``): a study default or preset that set
-    ``problem.robot`` would not choose ``robot_defaults`` (none does)."""
+def configured_robot(raw: dict[str, Any], key: str = "robot") -> Any:
+    """A raw run config's ``problem.robot`` (or ``problem.<key>``) as written (``""``, the
+    study's own robot, when there is none); the caller checks what it may load.
+    :func:`resolve_config` reads it from the user's layers only (file, values, ``--set``): a
+    study default or preset that set it would not choose ``robot_defaults`` (none does)."""
     problem = raw.get("problem")
-    return problem.get("robot", "") if isinstance(problem, dict) else ""
+    return problem.get(key, "") if isinstance(problem, dict) else ""
 
 
 def study_of_run(path: str | Path) -> str | None:

@@ -28,7 +28,11 @@ class Study:
     - ``robot_defaults``: the best-known setting on another robot, ``robot -> sections``
       (same form as ``defaults``), layered over ``defaults`` when ``problem.robot`` is that
       bundled robot (``--robot dm-humanoid``; ``""``: no robot given, the study's own); a
-      preset, a file or ``--set`` still wins.
+      preset, a file or ``--set`` still wins. ``defaults_key`` names the problem key whose
+      value picks them: ``"robot"``, or another (``gym``: ``"env"``, the environment's id).
+    - ``algorithm_tunings``: ``name -> [algorithm] keys`` for a method that is not the default,
+      used when the user picks it (``gym``: CMA-ES's step size in the policy's units); a
+      default's own tuning that a robot's defaults or a preset replaced is kept the same way.
     - ``preset_studies``: presets that are another registered study, ``name -> study``
       (``humanoid-walk --preset open-loop`` runs ``humanoid-walk-open-loop``, a problem of
       another kind); ``preset_notes`` says what each is.
@@ -72,6 +76,8 @@ class Study:
     preset_notes: dict[str, str] = field(default_factory=dict)
     preset_studies: dict[str, str] = field(default_factory=dict)
     robot_defaults: dict[str, dict[str, dict[str, Any]]] = field(default_factory=dict)
+    defaults_key: str = "robot"
+    algorithm_tunings: dict[str, dict[str, Any]] = field(default_factory=dict)
     core_algorithms: tuple[str, ...] | None = None
     algorithms: StudyAlgorithms = field(default_factory=dict)
     on_checkpoint: Callable[[RunContext], None] | None = None

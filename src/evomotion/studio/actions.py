@@ -232,12 +232,13 @@ def form_fields(study: str, preset: str | None = None, algorithm: str | None = N
                 robot: str | None = None) -> list[FormField]:
     """One field per key of ``[run]``, ``[algorithm]`` and ``[problem]`` with the value the
     study resolves to under ``preset`` (and ``algorithm.name``, and ``problem.robot``: a
-    robot with defaults of its own, ``Study.robot_defaults``, shows them)."""
+    robot with defaults of its own, ``Study.robot_defaults``, shows them; gym: the
+    environment, ``Study.defaults_key``)."""
     from evomotion.studies import get_study
     from evomotion.studio import form_schema as fs
 
     sets = [f"algorithm.name={algorithm!r}"] if algorithm else []
-    sets += [f"problem.robot={json.dumps(robot)}"] if robot else []
+    sets += [f"problem.{get_study(study).defaults_key}={json.dumps(robot)}"] if robot else []
     cfg = check_new_run(study, preset, sets)
     common = fs.common_keys(get_study(study))
     out = []

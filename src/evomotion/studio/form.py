@@ -45,7 +45,10 @@ def build(root: Path) -> None:
             algs = list(study_algorithms(s))
             alg0 = (cloned.get("algorithm") or {}).get("name") \
                 if isinstance(cloned.get("algorithm"), dict) else None
-            alg = ui.select(algs, value=alg0 if alg0 in algs else default_algorithm(s),
+            problem0 = cloned.get("problem")
+            robot0 = problem0.get(s.defaults_key) if isinstance(problem0, dict) else None
+            alg = ui.select(algs, value=alg0 if alg0 in algs else
+                            default_algorithm(s, robot0 if isinstance(robot0, str) else ""),
                             label="algorithm.name").classes("w-56 new-algorithm")
             run_name = ui.input("run name (optional)", placeholder=f"{study}-YYYYmmdd-HHMMSS") \
                 .classes("w-72 new-name")
@@ -69,8 +72,8 @@ def build(root: Path) -> None:
             a = alg.value if alg.value != state["alg0"] else None
             sets = actions.changed_sets(state["fields"], values, a)
             robot = state.get("robot")  # the fields show its defaults: it is always sent
-            if robot and not any(x.startswith("problem.robot=") for x in sets):
-                sets.append(f"problem.robot={json.dumps(robot)}")
+            if robot and not any(x.startswith(f"problem.{s.defaults_key}=") for x in sets):
+                sets.append(f"problem.{s.defaults_key}={json.dumps(robot)}")
             return sets
 
         def check() -> bool:
@@ -102,7 +105,7 @@ def build(root: Path) -> None:
         def rebuild() -> None:
             fields_box.clear()
             p = preset.value or None
-            state["alg0"] = default_algorithm(s) if p is None else \
+            state["alg0"] = default_algorithm(s, state.get("robot") or "") if p is None else \
                 actions.check_new_run(study, p, []).algorithm.name
             a = alg.value if alg.value != state["alg0"] else None
             try:
@@ -126,23 +129,29 @@ def build(root: Path) -> None:
                 with ui.expansion(f"advanced ({len(state['fields']) - len(common)} keys)",
                                   icon="tune").classes("w-full advanced-keys"):
                     _fields(ui, [f for f in state["fields"] if not f.common], state, check)
-            robot_input = state["inputs"].get("problem.robot")
+            robot_input = state["inputs"].get(f"problem.{s.defaults_key}")
             if robot_input is not None and s.robot_defaults:
                 robot_input.on_value_change(lambda e: robot_changed(e.value))
             check()
 
         def robot_changed(value: object) -> None:
             """A robot with other defaults of its own (``Study.robot_defaults``; ``""``: the
-            study's own robot) than the one shown rebuilds the fields for it, as a preset
-            does: the form shows what the run will use."""
+            study's own robot; or gym's environment, ``Study.defaults_key``) than the one
+            shown rebuilds the fields for it, as a preset does: the form shows what the run
+            will use."""
             value = str(value or "")
             shown = state.get("robot") or ""
             if s.robot_defaults.get(value) != s.robot_defaults.get(shown):
                 state["robot"] = value or None
                 problem = cloned.get("problem")
                 if isinstance(problem, dict):  # the chosen robot, not the cloned run's
-                    cloned["problem"] = {k: v for k, v in problem.items() if k != "robot"}
-                rebuild()
+                    cloned["problem"] = {k: v for k, v in problem.items()
+                                         if k != s.defaults_key}
+                new = default_algorithm(s, value)  # its default method (gym: Hopper's CMA-ES)
+                if not preset.value and alg.value == default_algorithm(s, shown) != new:
+                    alg.set_value(new)  # its handler rebuilds the fields
+                else:
+                    rebuild()
 
         async def go() -> None:
             from nicegui import run
@@ -179,8 +188,6 @@ def build(root: Path) -> None:
         preset.on_value_change(lambda _: preset_changed())
         alg.on_value_change(lambda _: rebuild())
         start.on_click(go)
-        problem0 = cloned.get("problem")
-        robot0 = problem0.get("robot") if isinstance(problem0, dict) else None
         if isinstance(robot0, str) and s.robot_defaults.get(robot0) != s.robot_defaults.get(""):
             state["robot"] = robot0  # a cloned run's robot with other defaults: shown with them
         rebuild()

@@ -95,6 +95,13 @@ def choices(key: str) -> tuple[list[str], bool] | None:
         from evomotion.sim.robots import bundled_robots
 
         return ["", *bundled_robots()], True
+    if key == "problem.env":  # gym: the registered MuJoCo v5 tasks (with the gym extra)
+        try:
+            from gymnasium.envs.registration import registry
+        except ImportError:
+            return None
+        return sorted(k for k, e in registry.items() if k.endswith("-v5")
+                      and "mujoco" in str(e.entry_point)), True
     registries = {"crossover": "crossover.CROSSOVERS", "mutation": "mutation.MUTATIONS",
                   "selection": "selection.SELECTIONS", "replacement": "replacement.REPLACEMENTS"}
     if key.startswith("algorithm.") and name in registries:
