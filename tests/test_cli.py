@@ -58,6 +58,13 @@ def test_run_resume_plot_studies(tmp_path):
     r = cli("studies")
     assert r.returncode == 0 and "functions" in r.stdout
     assert "--robot dm-humanoid: defaults of its own (run.generations, problem.sway_m" in r.stdout
+    # gym's are per environment: the default one marked, another not, the method named
+    out = r.stdout.splitlines()
+    assert any("--set problem.env=Hopper-v5: defaults of its own (algorithm.name=cmaes" in x
+               and "(also without --set problem.env)" in x for x in out)
+    assert any("--set problem.env=Swimmer-v5: defaults" in x and "also without" not in x
+               for x in out)
+    assert any("(default cmaes; ars with another problem.env)" in x for x in out)
 
 
 def test_readme_commands_are_the_ci_commands():

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 from pathlib import Path
 from typing import Annotated
@@ -45,8 +46,12 @@ def studies_cmd() -> None:
                 continue
             keys = ", ".join(f"{sec}.{k}" + (f"={x}" if (sec, k) == ("algorithm", "name") else "")
                              for sec, v in sections.items() for k, x in v.items())
+            # "": the key not given; its field's default names the same one (gym's Hopper-v5)
+            # or none ("": the study's own robot, whose defaults equal the named one's)
+            unset = {f.name: f.default for f in dataclasses.fields(s.problem_config)}.get(
+                s.defaults_key, "")
             also = f" (also without {flag.rstrip('=')})" \
-                if s.robot_defaults.get("") == sections else ""
+                if s.robot_defaults.get("") == sections and unset in ("", r) else ""
             typer.echo(f"{'':16s}   {flag}{sep}{r}: defaults of its own ({keys}){also}")
 
 

@@ -1,6 +1,6 @@
-"""The gym study's defaults per environment (``Study.defaults_key = "env"``): CMA-ES on Hopper-v5,
-where it was measured best (docs/gym.md), ARS V2-t elsewhere; ``--preset paper`` and a user who
-picks ARS get the paper's ARS tuning; a saved run reruns as it ran."""
+"""The gym study's defaults per environment (``Study.defaults_key = "env"``): CMA-ES on Hopper-v5
+and Swimmer-v5, where it was measured best (docs/gym.md), ARS V2-t elsewhere; ``--preset
+paper`` and a user who picks ARS get the paper's ARS tuning; a saved run reruns as it ran."""
 
 from __future__ import annotations
 
@@ -21,7 +21,7 @@ def _alg(cfg) -> dict:
 
 def test_hopper_runs_cma_es_and_other_environments_ars():
     s = get_study("gym")
-    for over in ([], ["problem.env='Hopper-v5'"]):  # not given: Hopper-v5, the default env
+    for over in ([], ["problem.env='Hopper-v5'"], ["problem.env='Swimmer-v5'"]):  # none: Hopper
         cfg = resolve_config(s, overrides=over)
         assert cfg.algorithm.name == "cmaes"
         assert cfg.algorithm.sigma0 == 0.0005 and cfg.algorithm.x0 == "center"
