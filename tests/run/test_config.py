@@ -76,3 +76,13 @@ def test_old_preset_name_resolves_to_the_paper_preset():
         resolve_config(S, preset="seed")
     raw = {"study": "arm-ik", "preset": "seed", "run": {}, "problem": {}}
     assert config_from_dict(arm, raw).preset == "seed"  # an old run's config.toml still loads
+
+
+def test_a_bare_none_for_a_text_key_is_the_word():
+    """``--set algorithm.restarts=none``: ``none`` reads as "no value" for optional keys
+    (``run.target=none``) and as the word for a text key, where "none" is a choice."""
+    cfg = resolve_config(S, None, ["algorithm.name=cmaes", "algorithm.restarts=none",
+                                   "run.target=none"])
+    assert cfg.algorithm.restarts == "none" and cfg.run.target is None
+    with pytest.raises(InputError, match="algorithm.x0 must be one of"):
+        resolve_config(S, None, ["algorithm.name=cmaes", "algorithm.x0=none"])

@@ -194,6 +194,8 @@ def _check_type(value: Any, tp: Any, key: str, allow_inf: bool = False) -> Any:
     if tp is str and isinstance(value, str):
         check_text(key, value)
         return value
+    if tp is str and value is None:  # --set's bare "none" for a text key: the word
+        return "none"
     if (origin is dict or tp is dict) and isinstance(value, dict):
         return dict(value)
     if (origin in (tuple, list) or tp in (tuple, list)) and isinstance(value, list | tuple):
