@@ -175,6 +175,15 @@ def test_a_preset_that_is_another_study_opens_that_studys_form(page, studio):
           20, "the open-loop walk's form")
 
 
+def _chooser(page, key: str):
+    """``choose(option)``: picks ``option`` in the form's select of ``key`` (an advanced key)."""
+    def choose(option: str) -> None:
+        page.locator(".advanced-keys").first.click()
+        page.locator(f'[data-key="{key}"]').click()
+        page.get_by_role("option", name=option, exact=True).click()
+    return choose
+
+
 def test_a_robot_with_defaults_of_its_own_shows_them_in_the_form(page, studio, tmp_path):
     """``humanoid-walk --robot dm-humanoid`` has defaults of its own (Study.robot_defaults):
     choosing the robot rebuilds the fields with them, the command names the robot only, and
@@ -183,12 +192,7 @@ def test_a_robot_with_defaults_of_its_own_shows_them_in_the_form(page, studio, t
     page.goto(f"{base}/new?study=humanoid-walk")
     page.wait_for_selector(".new-command")
     assert _field(page, "run.generations").input_value() == "300"
-
-    def choose(robot: str) -> None:
-        page.locator(".advanced-keys").first.click()
-        page.locator('[data-key="problem.robot"]').click()
-        page.get_by_role("option", name=robot, exact=True).click()
-
+    choose = _chooser(page, "problem.robot")
     choose("dm-humanoid")
     _wait(lambda: _field(page, "run.generations").input_value() == "600", 20,
           "the dm humanoid's defaults")
@@ -216,12 +220,7 @@ def test_gyms_environment_picks_its_own_defaults_and_method(page, studio, tmp_pa
     page.wait_for_selector(".new-command")
     assert "cmaes" in page.locator(".new-algorithm").inner_text()
     assert _field(page, "algorithm.sigma0").input_value() == "0.0005"
-
-    def choose(env: str) -> None:
-        page.locator(".advanced-keys").first.click()
-        page.locator('[data-key="problem.env"]').click()
-        page.get_by_role("option", name=env, exact=True).click()
-
+    choose = _chooser(page, "problem.env")
     choose("Walker2d-v5")
     _wait(lambda: "ars" in page.locator(".new-algorithm").inner_text(), 20, "ARS on Walker2d")
     _wait(lambda: _field(page, "algorithm.step_size").input_value() == "0.01", 20,
