@@ -64,7 +64,7 @@ def test_run_resume_plot_studies(tmp_path):
                and "(also without --set problem.env)" in x for x in out)
     assert any("--set problem.env=Swimmer-v5: defaults" in x and "also without" not in x
                for x in out)
-    assert any("(default cmaes; ars with another problem.env)" in x for x in out)
+    assert any("(default cmaes; ars where problem.env has no defaults below)" in x for x in out)
 
 
 def test_readme_commands_are_the_ci_commands():

@@ -35,7 +35,8 @@ def studies_cmd() -> None:
         typer.echo(f"{s.name:16s} {s.description}")
         algs = ", ".join(study_algorithms(s))
         d0, d = default_algorithm(s, ""), default_algorithm(s)  # "": no robot (env) given
-        other = f"; {d} with another problem.{s.defaults_key}" if d0 != d else ""
+        other = f"; {d} where problem.{s.defaults_key} has no defaults below" \
+            if d0 != d else ""
         typer.echo(f"{'':16s}   methods: {algs} (default {d0}{other})")
         for p in (*s.presets, *s.preset_studies):
             typer.echo(f"{'':16s}   --preset {p}: {s.preset_notes.get(p, '')}")
@@ -48,8 +49,8 @@ def studies_cmd() -> None:
                              for sec, v in sections.items() for k, x in v.items())
             # "": the key not given; its field's default names the same one (gym's Hopper-v5)
             # or none ("": the study's own robot, whose defaults equal the named one's)
-            unset = {f.name: f.default for f in dataclasses.fields(s.problem_config)}.get(
-                s.defaults_key, "")
+            unset = {f.name: f.default for f in dataclasses.fields(s.problem_config)
+                     if f.default is not dataclasses.MISSING}.get(s.defaults_key, "")
             also = f" (also without {flag.rstrip('=')})" \
                 if s.robot_defaults.get("") == sections and unset in ("", r) else ""
             typer.echo(f"{'':16s}   {flag}{sep}{r}: defaults of its own ({keys}){also}")

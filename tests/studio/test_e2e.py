@@ -228,9 +228,25 @@ def test_gyms_environment_picks_its_own_defaults_and_method(page, studio, tmp_pa
     _wait(lambda: "Walker2d-v5" in page.locator(".new-command").inner_text(), 10, "command")
     assert "algorithm.name" not in page.locator(".new-command").inner_text()
     page.screenshot(path=str(tmp_path / "gym-env-defaults.png"), full_page=True)
+
+    def preset(label: str) -> None:
+        page.locator(".new-preset").click()
+        page.get_by_role("option", name=label).click()
+
+    preset("paper: ARS V2-t")  # the paper's ARS, then the defaults again: Walker2d's method
+    _wait(lambda: "ars" in page.locator(".new-algorithm").inner_text(), 20, "the paper's ARS")
+    preset("default (best known)")
+    _wait(lambda: _field(page, "algorithm.step_size").input_value() == "0.01", 20,
+          "Walker2d's defaults")
+    assert "ars" in page.locator(".new-algorithm").inner_text()
+    assert "algorithm.name" not in page.locator(".new-command").inner_text()
     choose("Hopper-v5")
     _wait(lambda: "cmaes" in page.locator(".new-algorithm").inner_text(), 20, "CMA-ES again")
     _wait(lambda: _field(page, "algorithm.sigma0").input_value() == "0.0005", 20, "its sigma")
+    choose("Swimmer-v5")  # the same defaults as Hopper's: kept through a rebuild
+    page.locator(".new-algorithm").click()
+    page.get_by_role("option", name="snes", exact=True).click()
+    _wait(lambda: "Swimmer-v5" in page.locator(".new-command").inner_text(), 20, "Swimmer kept")
     assert page.locator(".start-button").is_enabled()
 
 

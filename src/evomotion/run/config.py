@@ -328,12 +328,13 @@ def resolve_config(study: ConfiguredStudy, file: Path | None = None,
         for layer in layers:
             user = _merge(user, layer)
         user_alg = user.get("algorithm", {}) if isinstance(user.get("algorithm"), dict) else {}
+    tuned = default_alg  # the method whose tuning ``defaults`` holds
     if user_alg.get("name", default_alg) != default_alg:
         defaults.pop("algorithm", None)  # the study's tuning is for its own algorithm
         picked = user_alg.get("name")  # any value: the section's check reports a bad one
         if isinstance(picked, str) and picked in tunings:  # gym: ARS beside Hopper's CMA-ES
-            defaults["algorithm"] = dict(tunings[picked])
-    _drop_other_operator_params(study, defaults, user_alg, default_alg)
+            defaults["algorithm"], tuned = dict(tunings[picked]), picked
+    _drop_other_operator_params(study, defaults, user_alg, tuned)
     raw: dict[str, Any] = {"run": {}, "algorithm": {"name": default_alg}, "problem": {}}
     raw = _merge(_merge(raw, defaults), user)
     cfg = config_from_dict(study, raw)

@@ -105,8 +105,7 @@ def build(root: Path) -> None:
         def rebuild() -> None:
             fields_box.clear()
             p = preset.value or None
-            state["alg0"] = default_algorithm(s, state.get("robot") or "") if p is None else \
-                actions.check_new_run(study, p, []).algorithm.name
+            state["alg0"] = method_of(p)
             a = alg.value if alg.value != state["alg0"] else None
             try:
                 state["fields"] = actions.form_fields(study, p, a, state.get("robot"))
@@ -134,6 +133,15 @@ def build(root: Path) -> None:
                 robot_input.on_value_change(lambda e: robot_changed(e.value))
             check()
 
+        def method_of(p: str | None) -> str:
+            """The method a run of preset ``p`` (None: the defaults) gets on the chosen robot
+            (gym: environment), whose defaults may choose it."""
+            robot = state.get("robot") or ""
+            if p is None:
+                return default_algorithm(s, robot)
+            sets = [f"problem.{s.defaults_key}={json.dumps(robot)}"] if robot else []
+            return str(actions.check_new_run(study, p, sets).algorithm.name)
+
         def robot_changed(value: object) -> None:
             """A robot with other defaults of its own (``Study.robot_defaults``; ``""``: the
             study's own robot; or gym's environment, ``Study.defaults_key``) than the one
@@ -141,14 +149,14 @@ def build(root: Path) -> None:
             will use."""
             value = str(value or "")
             shown = state.get("robot") or ""
+            old = method_of(preset.value or None)
+            state["robot"] = value or None  # kept by the next rebuild, whatever rebuilds
+            problem = cloned.get("problem")
+            if isinstance(problem, dict):  # the chosen robot, not the cloned run's
+                cloned["problem"] = {k: v for k, v in problem.items() if k != s.defaults_key}
             if s.robot_defaults.get(value) != s.robot_defaults.get(shown):
-                state["robot"] = value or None
-                problem = cloned.get("problem")
-                if isinstance(problem, dict):  # the chosen robot, not the cloned run's
-                    cloned["problem"] = {k: v for k, v in problem.items()
-                                         if k != s.defaults_key}
-                new = default_algorithm(s, value)  # its default method (gym: Hopper's CMA-ES)
-                if not preset.value and alg.value == default_algorithm(s, shown) != new:
+                new = method_of(preset.value or None)  # its method (gym: Hopper's CMA-ES)
+                if alg.value == old != new:
                     alg.set_value(new)  # its handler rebuilds the fields
                 else:
                     rebuild()
@@ -179,7 +187,7 @@ def build(root: Path) -> None:
             if p in s.preset_studies:
                 ui.navigate.to(f"/new?study={quote(s.preset_studies[p])}")
                 return
-            name = actions.check_new_run(study, p, []).algorithm.name
+            name = method_of(p)
             if alg.value != name:
                 alg.set_value(name)  # its handler rebuilds the fields
             else:
