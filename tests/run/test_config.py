@@ -86,3 +86,14 @@ def test_a_bare_none_for_a_text_key_is_the_word():
     assert cfg.algorithm.restarts == "none" and cfg.run.target is None
     with pytest.raises(InputError, match="algorithm.x0 must be one of"):
         resolve_config(S, None, ["algorithm.name=cmaes", "algorithm.x0=none"])
+
+
+def test_a_preset_of_another_method_keeps_the_defaults_tuning_for_a_user_who_picks_it():
+    """``humanoid-repertoire --preset map_elites --set algorithm.name=cma_me``: the study's
+    CMA-ME tuning (its defaults), not CMA-ME's bare dataclass defaults."""
+    rep = get_study("humanoid-repertoire")
+    by_default = resolve_config(rep)
+    back = resolve_config(rep, preset="map_elites", overrides=["algorithm.name=cma_me"])
+    assert by_default.algorithm.name == "cma_me"
+    assert back.algorithm == by_default.algorithm
+    assert back.problem == resolve_config(rep, preset="map_elites").problem
