@@ -42,15 +42,15 @@ def studies_cmd() -> None:
             typer.echo(f"{'':16s}   --preset {p}: {s.preset_notes.get(p, '')}")
         flag = "--robot" if s.defaults_key == "robot" else f"--set problem.{s.defaults_key}="
         sep = " " if s.defaults_key == "robot" else ""
+        # "": the key not given; its field's default names the same one (gym's Hopper-v5)
+        # or none ("": the study's own robot, whose defaults equal the named one's)
+        unset = {f.name: f.default for f in dataclasses.fields(s.problem_config)
+                 if f.default is not dataclasses.MISSING}.get(s.defaults_key, "")
         for r, sections in s.robot_defaults.items():
             if not r:  # the study's own robot: listed under its name
                 continue
             keys = ", ".join(f"{sec}.{k}" + (f"={x}" if (sec, k) == ("algorithm", "name") else "")
                              for sec, v in sections.items() for k, x in v.items())
-            # "": the key not given; its field's default names the same one (gym's Hopper-v5)
-            # or none ("": the study's own robot, whose defaults equal the named one's)
-            unset = {f.name: f.default for f in dataclasses.fields(s.problem_config)
-                     if f.default is not dataclasses.MISSING}.get(s.defaults_key, "")
             also = f" (also without {flag.rstrip('=')})" \
                 if s.robot_defaults.get("") == sections and unset in ("", r) else ""
             typer.echo(f"{'':16s}   {flag}{sep}{r}: defaults of its own ({keys}){also}")

@@ -228,6 +228,14 @@ def _kind(tp: Any) -> str:
     return {bool: "bool", int: "int", float: "float", str: "str"}.get(tp, "text")
 
 
+def robot_sets(study: str, robot: str | None) -> list[str]:
+    """The ``--set`` naming ``robot`` (gym: the environment; the study's ``defaults_key``),
+    none for no robot."""
+    from evomotion.studies import get_study
+
+    return [f"problem.{get_study(study).defaults_key}={json.dumps(robot)}"] if robot else []
+
+
 def form_fields(study: str, preset: str | None = None, algorithm: str | None = None,
                 robot: str | None = None) -> list[FormField]:
     """One field per key of ``[run]``, ``[algorithm]`` and ``[problem]`` with the value the
@@ -238,7 +246,7 @@ def form_fields(study: str, preset: str | None = None, algorithm: str | None = N
     from evomotion.studio import form_schema as fs
 
     sets = [f"algorithm.name={algorithm!r}"] if algorithm else []
-    sets += [f"problem.{get_study(study).defaults_key}={json.dumps(robot)}"] if robot else []
+    sets += robot_sets(study, robot)
     cfg = check_new_run(study, preset, sets)
     common = fs.common_keys(get_study(study))
     out = []

@@ -8,7 +8,6 @@ the field it names. The run starts as ``evomotion run ...`` in its own process
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from urllib.parse import quote
 
@@ -71,9 +70,9 @@ def build(root: Path) -> None:
                           else str(w.value)) for k, w in state["inputs"].items()}
             a = alg.value if alg.value != state["alg0"] else None
             sets = actions.changed_sets(state["fields"], values, a)
-            robot = state.get("robot")  # the fields show its defaults: it is always sent
-            if robot and not any(x.startswith(f"problem.{s.defaults_key}=") for x in sets):
-                sets.append(f"problem.{s.defaults_key}={json.dumps(robot)}")
+            # the robot's defaults are what the fields show: it is always sent
+            if not any(x.startswith(f"problem.{s.defaults_key}=") for x in sets):
+                sets += actions.robot_sets(study, state.get("robot"))
             return sets
 
         def check() -> bool:
@@ -136,11 +135,10 @@ def build(root: Path) -> None:
         def method_of(p: str | None) -> str:
             """The method a run of preset ``p`` (None: the defaults) gets on the chosen robot
             (gym: environment), whose defaults may choose it."""
-            robot = state.get("robot") or ""
             if p is None:
-                return default_algorithm(s, robot)
-            sets = [f"problem.{s.defaults_key}={json.dumps(robot)}"] if robot else []
-            return str(actions.check_new_run(study, p, sets).algorithm.name)
+                return default_algorithm(s, state.get("robot") or "")
+            return str(actions.check_new_run(study, p, actions.robot_sets(
+                study, state.get("robot"))).algorithm.name)
 
         def robot_changed(value: object) -> None:
             """A robot with other defaults of its own (``Study.robot_defaults``; ``""``: the

@@ -18,6 +18,11 @@ from evomotion.studies.gym.problem import GymConfig, GymProblem
 from evomotion.studies.policy_search import POLICY_OPTIMIZERS, policy_algorithms  # noqa: F401 (tests read it here)
 from evomotion.studies.view import lazy
 
+#: ARS V2-t on Hopper (Mania et al. 2018; the RL-zoo setting of their code): alpha 0.01,
+#: N 8 directions, b 4, nu 0.025; the default elsewhere and ``--preset paper``
+PAPER_ARS = {"name": "ars", "pop_size": 16, "step_size": 0.01, "noise_std": 0.025,
+             "top_directions": 4}
+
 #: CMA-ES on Hopper-v5 and Swimmer-v5 (docs/gym.md): from the zero policy (the box's centre),
 #: sigma 0.1 (of the +-100 box, problem.param_bound), IPOP restarts; lambda 14 for Hopper's
 #: 33 weights, 12 for Swimmer's 16
@@ -29,10 +34,7 @@ STUDY = Study(
                 "CMA-ES).",
     problem_config=GymConfig,
     make_problem=GymProblem,
-    # ARS V2-t on Hopper (Mania et al. 2018; the RL-zoo setting of their code): alpha 0.01,
-    # N 8 directions, b 4, nu 0.025
-    defaults={"algorithm": {"name": "ars", "pop_size": 16, "step_size": 0.01,
-                            "noise_std": 0.025, "top_directions": 4},
+    defaults={"algorithm": dict(PAPER_ARS),
               # episodes in evaluation processes, one per core (mj_step holds the GIL)
               "run": {"generations": 1000, "checkpoint_every": 10, "evaluator": "process"}},
     # per environment (problem.env; "": not given, Hopper-v5): what was measured best there
@@ -40,8 +42,7 @@ STUDY = Study(
                     for env in ("", "Hopper-v5", "Swimmer-v5")},
     defaults_key="env",
     algorithm_tunings={"cmaes": dict(HOPPER_CMAES)},  # picked on another env: the same sigma
-    presets={"paper": {"algorithm": {"name": "ars", "pop_size": 16, "step_size": 0.01,
-                                     "noise_std": 0.025, "top_directions": 4}}},
+    presets={"paper": {"algorithm": dict(PAPER_ARS)}},
     preset_notes={"paper": "ARS V2-t with the paper's Hopper hyperparameters (alpha 0.01, "
                            "N 8, b 4, nu 0.025)"},
     core_algorithms=(),
