@@ -178,9 +178,18 @@ def test_a_preset_that_is_another_study_opens_that_studys_form(page, studio):
 def _chooser(page, key: str):
     """``choose(option)``: picks ``option`` in the form's select of ``key`` (an advanced key)."""
     def choose(option: str) -> None:
+        from playwright.sync_api import TimeoutError as PlaywrightTimeout
+
         page.locator(".advanced-keys").first.click()
-        page.locator(f'[data-key="{key}"]').click()
-        page.get_by_role("option", name=option, exact=True).click()
+        item = page.get_by_role("option", name=option, exact=True)
+        for _ in range(3):  # a click during the expansion's animation opens no menu (CI load)
+            page.locator(f'[data-key="{key}"]').click()
+            try:
+                item.wait_for(state="visible", timeout=10_000)
+                break
+            except PlaywrightTimeout:
+                continue
+        item.click()
     return choose
 
 
