@@ -57,13 +57,23 @@ def chromium():
         browser.close()
 
 
+def _nicegui_echart_race(text: str) -> bool:
+    """NiceGUI's echart disposes ``this.chart`` in ``beforeUnmount``, which its async
+    ``mounted`` sets only after a timer: a chart replaced before that (a study view redrawn
+    while a loaded browser is slow) logs this TypeError (zauberzeug/nicegui#4427). Nothing is
+    lost: the replacement chart draws."""
+    return "reading 'dispose'" in text and "echart.js" in text and "beforeUnmount" in text
+
+
 @pytest.fixture
 def page(chromium, studio):
-    """A page whose console errors and uncaught exceptions fail the test."""
+    """A page whose console errors and uncaught exceptions fail the test (but NiceGUI's own
+    echart unmount race, :func:`_nicegui_echart_race`)."""
     context = chromium.new_context(viewport={"width": 1300, "height": 1000})
     pg = context.new_page()
     errors: list[str] = []
-    pg.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    pg.on("console", lambda m: errors.append(m.text)
+          if m.type == "error" and not _nicegui_echart_race(m.text) else None)
     pg.on("pageerror", lambda e: errors.append(f"uncaught: {e}"))
     base, _ = studio
     pg.goto(f"{base}/?token={TOKEN}")  # sets the token cookie

@@ -48,6 +48,32 @@ def _status(page) -> str:
         return f"page unreadable: {type(e).__name__}"
 
 
+def _run_state(out: Path) -> str:
+    """A run folder's lock, its process's state and the tails of its log and stderr (for a
+    timeout's message)."""
+    from evomotion.run.lock import LOCK_NAME
+    from evomotion.studio.actions import STDERR_NAME
+
+    parts = []
+    for name, n in ((LOCK_NAME, 300), ("log.txt", 300), (STDERR_NAME, 600)):
+        try:
+            parts.append(f"{name}: {(out / name).read_text(errors='replace')[-n:]!r}")
+        except OSError as e:
+            parts.append(f"{name}: {type(e).__name__}")
+    try:
+        pid = json.loads((out / LOCK_NAME).read_text())["pid"]
+        status = Path(f"/proc/{pid}/status").read_text().splitlines()
+        parts += [x for x in status if x.split(":")[0] in ("State", "SigPnd", "ShdPnd",
+                                                            "SigBlk", "SigIgn", "SigCgt")]
+        import shutil
+        if shutil.which("py-spy"):  # where the process is (a debugging aid, not a dependency)
+            parts.append(subprocess.run(["py-spy", "dump", "--pid", str(pid)],
+                                        capture_output=True, text=True).stdout[-3000:])
+    except (OSError, ValueError, KeyError, TypeError) as e:
+        parts.append(f"process: {type(e).__name__}")
+    return "; ".join(parts)
+
+
 def _wait(cond, timeout=30.0, what="condition"):
     end = time.time() + timeout
     while time.time() < end:
@@ -113,7 +139,7 @@ def test_live_run_grows_then_stop_and_resume_from_the_page(page, studio):
         assert "running" in page.locator(".run-status").inner_text()
         page.locator(".stop-button").click()
         _wait(lambda: "interrupted" in page.locator(".run-status").inner_text(), 90,
-              lambda: f"the stop ({_status(page)})")
+              lambda: f"the stop ({_status(page)}; {_run_state(out)})")
         assert proc.wait(30) == 130
         assert "stopped: interrupted" in (out / "log.txt").read_text()
         stopped_at = _rows(page)
@@ -122,7 +148,7 @@ def test_live_run_grows_then_stop_and_resume_from_the_page(page, studio):
         _wait(lambda: _rows(page) > stopped_at, 60, "the resumed run to go on")
         page.locator(".stop-button").click()
         _wait(lambda: "interrupted" in page.locator(".run-status").inner_text(), 90,
-              lambda: f"the second stop ({_status(page)})")
+              lambda: f"the second stop ({_status(page)}; {_run_state(out)})")
     finally:
         if proc.poll() is None:
             proc.kill()
@@ -168,28 +194,47 @@ def test_a_preset_that_is_another_study_opens_that_studys_form(page, studio):
     base, _ = studio
     page.goto(f"{base}/new?study=humanoid-walk")
     page.wait_for_selector(".new-command")
-    page.locator(".new-preset").click()
-    page.get_by_role("option", name="open-loop: the study humanoid-walk-open-loop").click()
+    _pick(page, page.locator(".new-preset"), "open-loop: the study humanoid-walk-open-loop",
+          rebuilds=False, exact=False)  # it opens another page
     page.wait_for_url("**/new?study=humanoid-walk-open-loop")
     _wait(lambda: "run humanoid-walk-open-loop" in page.locator(".new-command").inner_text(),
           20, "the open-loop walk's form")
 
 
-def _chooser(page, key: str):
-    """``choose(option)``: picks ``option`` in the form's select of ``key`` (an advanced key)."""
-    def choose(option: str) -> None:
-        from playwright.sync_api import TimeoutError as PlaywrightTimeout
+def _build(page) -> int:
+    """How many times the new-run form built its fields (its ``data-build``)."""
+    return int(page.locator(".new-fields").get_attribute("data-build") or 0)
 
-        page.locator(".advanced-keys").first.click()
-        item = page.get_by_role("option", name=option, exact=True)
-        for _ in range(3):  # a click during the expansion's animation opens no menu (CI load)
-            page.locator(f'[data-key="{key}"]').click()
-            try:
-                item.wait_for(state="visible", timeout=10_000)
-                break
-            except PlaywrightTimeout:
-                continue
-        item.click()
+
+def _pick(page, select, option: str, rebuilds: bool = True, exact: bool = True) -> None:
+    """Picks ``option`` in the form's ``select``. A click during an animation under CI load
+    opens no menu: it clicks again. With ``rebuilds``, waits for the rebuild of the fields that
+    the pick causes to land, so the next click finds the new fields, not ones being replaced."""
+    from playwright.sync_api import TimeoutError as PlaywrightTimeout
+
+    n = _build(page) if rebuilds else 0
+    item = page.get_by_role("option", name=option, exact=exact)
+    for _ in range(3):
+        select.click()
+        try:
+            item.wait_for(state="visible", timeout=10_000)
+            break
+        except PlaywrightTimeout:
+            continue
+    item.click()
+    if rebuilds:
+        _wait(lambda: _build(page) > n, 30, f"the form to rebuild for {option}")
+
+
+def _chooser(page, key: str):
+    """``choose(option, rebuilds=True)``: picks ``option`` in the select of ``key``, an
+    advanced key (the expansion is opened first where it is closed)."""
+    def choose(option: str, rebuilds: bool = True) -> None:
+        select = page.locator(f'[data-key="{key}"]')
+        if not select.is_visible():
+            page.locator(".advanced-keys").first.click()
+            select.wait_for(state="visible", timeout=10_000)
+        _pick(page, select, option, rebuilds)
     return choose
 
 
@@ -239,8 +284,7 @@ def test_gyms_environment_picks_its_own_defaults_and_method(page, studio, tmp_pa
     page.screenshot(path=str(tmp_path / "gym-env-defaults.png"), full_page=True)
 
     def preset(label: str) -> None:
-        page.locator(".new-preset").click()
-        page.get_by_role("option", name=label).click()
+        _pick(page, page.locator(".new-preset"), label, exact=False)
 
     preset("paper: ARS V2-t")  # the paper's ARS, then the defaults again: Walker2d's method
     _wait(lambda: "ars" in page.locator(".new-algorithm").inner_text(), 20, "the paper's ARS")
@@ -252,9 +296,8 @@ def test_gyms_environment_picks_its_own_defaults_and_method(page, studio, tmp_pa
     choose("Hopper-v5")
     _wait(lambda: "cmaes" in page.locator(".new-algorithm").inner_text(), 20, "CMA-ES again")
     _wait(lambda: _field(page, "algorithm.sigma0").input_value() == "0.0005", 20, "its sigma")
-    choose("Swimmer-v5")  # the same defaults as Hopper's: kept through a rebuild
-    page.locator(".new-algorithm").click()
-    page.get_by_role("option", name="snes", exact=True).click()
+    choose("Swimmer-v5", rebuilds=False)  # the same defaults as Hopper's: no rebuild, and
+    _pick(page, page.locator(".new-algorithm"), "snes")  # kept through the next one
     _wait(lambda: "Swimmer-v5" in page.locator(".new-command").inner_text(), 20, "Swimmer kept")
     assert page.locator(".start-button").is_enabled()
 
@@ -429,8 +472,7 @@ def test_metrics_tab_plots_any_column_with_log_scale(page, studio):
     page.goto(f"{base}/run?name=functions")
     page.get_by_role("tab", name="metrics").click()
     page.wait_for_selector(".metrics-chart canvas")
-    page.locator(".metric-pick").click()
-    page.get_by_role("option", name="evals_per_s").click()
+    _pick(page, page.locator(".metric-pick"), "evals_per_s", rebuilds=False, exact=False)
     page.keyboard.press("Escape")
     _wait(lambda: "evals_per_s" in page.locator(".metric-pick").inner_text(), 10, "the pick")
     page.locator(".metric-log").click()
@@ -456,8 +498,7 @@ def test_compare_groups_by_a_config_key_shows_the_diff_and_writes_the_url(page, 
         _wait(lambda: "run.seed" in page.locator(".compare-diff").inner_text(), 20,
               "the diff table")
         assert "7" in page.locator(".compare-diff").inner_text()
-        page.locator(".compare-by").click()
-        page.get_by_role("option", name="study", exact=True).click()
+        _pick(page, page.locator(".compare-by"), "study", rebuilds=False)
         _wait(lambda: "1 group:" in page.locator(".compare-note").inner_text(), 20,
               "one group by study")
         _wait(lambda: page.evaluate("location.search") ==
@@ -658,11 +699,14 @@ def test_drive_the_walk_controller_live_from_the_keyboard(page, studio):
         _wait(lambda: number("x") > 0.2, 20, lambda: f"walking forward ({status()})")
         page.keyboard.up("w")
         assert "FELL" not in status()
-        a = number("t")
-        page.wait_for_timeout(1000)
-        assert 0.6 < number("t") - a < 1.4  # real time
         page.keyboard.press("r")
+        pressed = time.monotonic()
         _wait(lambda: 0 <= number("t") < 0.6 and abs(number("x")) < 0.05, 10, "the restart")
+        page.wait_for_timeout(2000)
+        # real time: never ahead of the wall clock since the restart, and not far behind it
+        # (a loaded server lags, then catches up at most 4 ticks a tick)
+        wall = time.monotonic() - pressed
+        assert 0.4 * wall < number("t") <= wall + 0.05, (number("t"), wall)
         # the on-screen joystick pushed fully up: the forward command at its largest
         pad = page.locator(".drive-joystick")
         pad.scroll_into_view_if_needed()

@@ -59,7 +59,7 @@ def build(root: Path) -> None:
         name_error = ui.label().classes("text-red-700 text-xs name-error")
         run_name.on_value_change(lambda _: check())
         run_tags.on_value_change(lambda _: check())
-        fields_box = ui.column().classes("w-full")
+        fields_box = ui.column().classes("w-full new-fields")
         error_top = ui.label().classes("text-red-700 form-error")
         command = ui.code("", language="bash").classes("w-full new-command")
         start = ui.button("start run", icon="rocket_launch").classes("start-button")
@@ -103,6 +103,8 @@ def build(root: Path) -> None:
 
         def rebuild() -> None:
             fields_box.clear()
+            state["builds"] = state.get("builds", 0) + 1  # the page's data-build: a test (or
+            fields_box.props(f'data-build={state["builds"]}')  # a script) sees a rebuild land
             p = preset.value or None
             state["alg0"] = method_of(p)
             a = alg.value if alg.value != state["alg0"] else None
