@@ -39,7 +39,9 @@ def studies_cmd() -> None:
             if d0 != d else ""
         typer.echo(f"{'':16s}   methods: {algs} (default {d0}{other})")
         for p in (*s.presets, *s.preset_studies):
-            typer.echo(f"{'':16s}   --preset {p}: {s.preset_notes.get(p, '')}")
+            keyed = ", ".join(s.robot_presets.get(p, {}))  # its own setting on these
+            per = f" (a setting of its own on problem.{s.defaults_key} {keyed})" if keyed else ""
+            typer.echo(f"{'':16s}   --preset {p}: {s.preset_notes.get(p, '')}{per}")
         flag = "--robot" if s.defaults_key == "robot" else f"--set problem.{s.defaults_key}="
         sep = " " if s.defaults_key == "robot" else ""
         # "": the key not given; its field's default names the same one (gym's Hopper-v5)

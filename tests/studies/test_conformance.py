@@ -76,14 +76,20 @@ def test_descriptor(name):
     assert isinstance(s.defaults_key, str)
     assert not s.robot_defaults or \
         s.defaults_key in {f.name for f in dataclasses.fields(s.problem_config)}
-    for robot, sections in s.robot_defaults.items():  # a bundled robot; every key applies
+    keyed = [(None, r, sections) for r, sections in s.robot_defaults.items()]
+    for preset, by_robot in s.robot_presets.items():  # a preset's setting on a robot
+        assert preset in s.presets, preset
+        keyed += [(preset, r, sections) for r, sections in by_robot.items()]
+    for preset, robot, sections in keyed:  # a bundled robot; every key applies
         if s.defaults_key == "robot":  # "": the study's own robot
             assert robot in bundled_robots() or robot == ""
-        cfg = resolve_config(s, overrides=[f"problem.{s.defaults_key}={robot!r}"] * bool(robot))
+        cfg = resolve_config(s, preset=preset,
+                             overrides=[f"problem.{s.defaults_key}={robot!r}"] * bool(robot))
         for section, values in sections.items():
             for key, value in values.items():
                 got = getattr(getattr(cfg, section), key)
-                assert (list(got) if isinstance(got, tuple) else got) == value, (section, key)
+                assert (list(got) if isinstance(got, tuple) else got) == value, \
+                    (preset, robot, section, key)
 
 
 def test_run_interrupt_and_resume_are_bit_identical(name, tmp_path):

@@ -277,8 +277,8 @@ def test_gyms_environment_picks_its_own_defaults_and_method(page, studio, tmp_pa
     choose = _chooser(page, "problem.env")
     choose("Walker2d-v5")
     _wait(lambda: "ars" in page.locator(".new-algorithm").inner_text(), 20, "ARS on Walker2d")
-    _wait(lambda: _field(page, "algorithm.step_size").input_value() == "0.01", 20,
-          "ARS's tuning")
+    _wait(lambda: _field(page, "algorithm.step_size").input_value() == "0.03", 20,
+          "the paper's ARS of Walker2d")
     _wait(lambda: "Walker2d-v5" in page.locator(".new-command").inner_text(), 10, "command")
     assert "algorithm.name" not in page.locator(".new-command").inner_text()
     page.screenshot(path=str(tmp_path / "gym-env-defaults.png"), full_page=True)
@@ -286,10 +286,16 @@ def test_gyms_environment_picks_its_own_defaults_and_method(page, studio, tmp_pa
     def preset(label: str) -> None:
         _pick(page, page.locator(".new-preset"), label, exact=False)
 
-    preset("paper: ARS V2-t")  # the paper's ARS, then the defaults again: Walker2d's method
+    preset("paper: ARS with")  # the paper's ARS of each task, then the defaults again
     _wait(lambda: "ars" in page.locator(".new-algorithm").inner_text(), 20, "the paper's ARS")
+    assert _field(page, "algorithm.step_size").input_value() == "0.03"  # Walker2d's, not Hopper's
+    choose("Swimmer-v5")  # the paper's Swimmer: V1-t, one direction, not normalised
+    _wait(lambda: _field(page, "algorithm.pop_size").input_value() == "2", 20, "Swimmer's ARS")
+    assert _field(page, "algorithm.step_size").input_value() == "0.02"
+    choose("Walker2d-v5")
+    _wait(lambda: _field(page, "algorithm.pop_size").input_value() == "80", 20, "Walker2d's")
     preset("default (best known)")
-    _wait(lambda: _field(page, "algorithm.step_size").input_value() == "0.01", 20,
+    _wait(lambda: _field(page, "algorithm.top_directions").input_value() == "30", 20,
           "Walker2d's defaults")
     assert "ars" in page.locator(".new-algorithm").inner_text()
     assert "algorithm.name" not in page.locator(".new-command").inner_text()

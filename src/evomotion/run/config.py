@@ -285,7 +285,8 @@ def resolve_config(study: ConfiguredStudy, file: Path | None = None,
                    values: dict[str, Any] | None = None) -> Config:
     """Resolve the full config of ``study`` (a :class:`~evomotion.studies.base.Study`):
     dataclass defaults < study defaults < the robot's (``study.robot_defaults`` for the
-    configured ``problem.robot``, or ``problem.<study.defaults_key>``) < ``preset`` < TOML
+    configured ``problem.robot``, or ``problem.<study.defaults_key>``) < ``preset`` (and its
+    setting on that robot, ``study.robot_presets``) < TOML
     ``file`` < ``values`` (sections as a dict, the Python API's ``config``) < ``overrides``;
     keys the study moved (``study.moved_keys``) are read at their new place, with a note
     (:mod:`.moved_keys`)."""
@@ -318,6 +319,10 @@ def resolve_config(study: ConfiguredStudy, file: Path | None = None,
             raise InputError(f"--preset: unknown preset {preset!r} for study {study.name!r}; "
                              f"available: {', '.join(known) or 'none'}")
         defaults, tunings = _layer_over(defaults, dict(presets[preset]), tunings)
+        keyed = study.robot_presets.get(preset, {})  # the preset's setting on this robot
+        if isinstance(robot, str) and robot in keyed:
+            defaults, tunings = _layer_over(
+                defaults, {k: dict(v) for k, v in keyed[robot].items()}, tunings)
     default_alg = defaults.get("algorithm", {}).get("name") or default_algorithm(study)
     user_alg = user.get("algorithm", {}) if isinstance(user.get("algorithm"), dict) else {}
     if study.moved_keys:  # the keys a study moved, read at their new place (one note each)

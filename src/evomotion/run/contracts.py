@@ -254,6 +254,9 @@ class ConfiguredStudy(Protocol):
     def defaults_key(self) -> str: ...
 
     @property
+    def robot_presets(self) -> Mapping[str, Mapping[str, Mapping[str, Mapping[str, Any]]]]: ...
+
+    @property
     def algorithm_tunings(self) -> Mapping[str, Mapping[str, Any]]: ...
 
     @property

@@ -30,6 +30,9 @@ class Study:
       bundled robot (``--robot dm-humanoid``; ``""``: no robot given, the study's own); a
       preset, a file or ``--set`` still wins. ``defaults_key`` names the problem key whose
       value picks them: ``"robot"``, or another (``gym``: ``"env"``, the environment's id).
+    - ``robot_presets``: a preset's setting on another robot (``gym``: environment), ``preset
+      -> robot -> sections``, layered over that preset when ``problem.<defaults_key>`` names
+      the robot (``gym --preset paper``: the paper's hyperparameters of each task).
     - ``algorithm_tunings``: ``name -> [algorithm] keys`` for a method that is not the default,
       used when the user picks it (``gym``: CMA-ES's step size in the policy's units); a
       default's own tuning that a robot's defaults or a preset replaced is kept the same way.
@@ -77,6 +80,7 @@ class Study:
     preset_studies: dict[str, str] = field(default_factory=dict)
     robot_defaults: dict[str, dict[str, dict[str, Any]]] = field(default_factory=dict)
     defaults_key: str = "robot"
+    robot_presets: dict[str, dict[str, dict[str, dict[str, Any]]]] = field(default_factory=dict)
     algorithm_tunings: dict[str, dict[str, Any]] = field(default_factory=dict)
     core_algorithms: tuple[str, ...] | None = None
     algorithms: StudyAlgorithms = field(default_factory=dict)

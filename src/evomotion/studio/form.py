@@ -130,7 +130,7 @@ def build(root: Path) -> None:
                                   icon="tune").classes("w-full advanced-keys"):
                     _fields(ui, [f for f in state["fields"] if not f.common], state, check)
             robot_input = state["inputs"].get(f"problem.{s.defaults_key}")
-            if robot_input is not None and s.robot_defaults:
+            if robot_input is not None and (s.robot_defaults or s.robot_presets):
                 robot_input.on_value_change(lambda e: robot_changed(e.value))
             check()
 
@@ -154,7 +154,9 @@ def build(root: Path) -> None:
             problem = cloned.get("problem")
             if isinstance(problem, dict):  # the chosen robot, not the cloned run's
                 cloned["problem"] = {k: v for k, v in problem.items() if k != s.defaults_key}
-            if s.robot_defaults.get(value) != s.robot_defaults.get(shown):
+            keyed = s.robot_presets.get(preset.value or "", {})  # the preset's on it
+            if (s.robot_defaults.get(value), keyed.get(value)) != \
+                    (s.robot_defaults.get(shown), keyed.get(shown)):
                 new = method_of(preset.value or None)  # its method (gym: Hopper's CMA-ES)
                 if alg.value == old != new:
                     alg.set_value(new)  # its handler rebuilds the fields

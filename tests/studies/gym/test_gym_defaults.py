@@ -1,6 +1,8 @@
 """The gym study's defaults per environment (``Study.defaults_key = "env"``): CMA-ES on Hopper-v5
-and Swimmer-v5, where it was measured best (docs/gym.md), ARS V2-t elsewhere; ``--preset
-paper`` and a user who picks ARS get the paper's ARS tuning; a saved run reruns as it ran."""
+and Swimmer-v5, where it was measured best (docs/gym.md), ARS V2-t with the paper's setting
+of the task elsewhere; ``--preset paper`` is the paper's setting of each task
+(``Study.robot_presets``); a user who picks ARS gets an ARS tuning; a saved run reruns as it
+ran."""
 
 from __future__ import annotations
 
@@ -26,8 +28,39 @@ def test_hopper_runs_cma_es_and_other_environments_ars():
         assert cfg.algorithm.name == "cmaes"
         assert cfg.algorithm.sigma0 == 0.0005 and cfg.algorithm.x0 == "center"
         assert cfg.problem.param_bound == 100.0  # sigma 0.1 in the policy's units
-    for env in ("Walker2d-v5", "HalfCheetah-v5", "Ant-v5"):
-        assert _alg(resolve_config(s, overrides=[f"problem.env={env!r}"])) == PAPER_ARS
+    # the paper's hyperparameters of the task where it ran ARS (measured best there)
+    for env, n, b in (("HalfCheetah-v5", 32, 4), ("Walker2d-v5", 40, 30), ("Ant-v5", 60, 20),
+                      ("Humanoid-v5", 230, 230)):
+        cfg = resolve_config(s, overrides=[f"problem.env={env!r}"])
+        assert cfg.algorithm.name == "ars" and cfg.problem.normalize, env
+        assert (cfg.algorithm.pop_size, cfg.algorithm.top_directions) == (2 * n, b), env
+    # an environment the paper did not run: its Hopper setting
+    cfg = resolve_config(s, overrides=["problem.env='InvertedPendulum-v5'"])
+    assert _alg(cfg) == PAPER_ARS
+
+
+def test_the_paper_preset_is_the_papers_setting_of_each_task():
+    """``--preset paper``: Mania et al. 2018's hyperparameters of the task (alpha, N, b, nu;
+    V1-t without normalisation on Swimmer), Hopper's on another environment; a user's key
+    still wins."""
+    s = get_study("gym")
+    paper = {"Swimmer-v5": (0.02, 1, 1, 0.01, False), "Hopper-v5": (0.01, 8, 4, 0.025, True),
+             "HalfCheetah-v5": (0.02, 32, 4, 0.03, True),
+             "Walker2d-v5": (0.03, 40, 30, 0.025, True),
+             "Ant-v5": (0.015, 60, 20, 0.025, True),
+             "Humanoid-v5": (0.02, 230, 230, 0.0075, True)}
+    for env, (alpha, n, b, nu, norm) in paper.items():
+        cfg = resolve_config(s, preset="paper", overrides=[f"problem.env={env!r}"])
+        a = cfg.algorithm
+        assert (a.name, a.step_size, a.pop_size, a.top_directions, a.noise_std,
+                cfg.problem.normalize) == ("ars", alpha, 2 * n, b, nu, norm), env
+    assert _alg(resolve_config(s, preset="paper", overrides=["problem.env='Pusher-v5'"])) \
+        == PAPER_ARS
+    cfg = resolve_config(s, preset="paper", overrides=["problem.env='Swimmer-v5'",
+                                                       "problem.normalize=true",
+                                                       "algorithm.pop_size=8"])
+    assert cfg.problem.normalize and cfg.algorithm.pop_size == 8
+    assert cfg.algorithm.step_size == 0.02
 
 
 def test_picking_ars_on_hopper_gets_the_papers_tuning():
