@@ -74,6 +74,23 @@ def _run_state(out: Path) -> str:
     return "; ".join(parts)
 
 
+def _act(page, button: str, answer: str) -> None:
+    """Click ``button`` until the page's action message says ``answer`` (the studio confirms
+    each action: a click that a loaded browser lost, its socket reconnecting, is clicked
+    again; a confirmed action is never repeated)."""
+    def said() -> bool:
+        return answer in page.locator(".action-message").inner_text()
+
+    for _ in range(3):
+        page.locator(button).click()
+        try:
+            _wait(said, 20, answer)
+            return
+        except AssertionError:
+            continue
+    raise AssertionError(f"{button}: no {answer!r} ({_status(page)})")
+
+
 def _wait(cond, timeout=30.0, what="condition"):
     end = time.time() + timeout
     while time.time() < end:
@@ -137,16 +154,16 @@ def test_live_run_grows_then_stop_and_resume_from_the_page(page, studio):
         first = _rows(page)
         _wait(lambda: _rows(page) >= first + 3, what="the curve to grow without a reload")
         assert "running" in page.locator(".run-status").inner_text()
-        page.locator(".stop-button").click()
+        _act(page, ".stop-button", "stop sent to process")
         _wait(lambda: "interrupted" in page.locator(".run-status").inner_text(), 90,
               lambda: f"the stop ({_status(page)}; {_run_state(out)})")
         assert proc.wait(30) == 130
         assert "stopped: interrupted" in (out / "log.txt").read_text()
         stopped_at = _rows(page)
-        page.locator(".resume-button").click()
+        _act(page, ".resume-button", "resumed in process")
         _wait(lambda: "running" in page.locator(".run-status").inner_text(), 60, "resume")
         _wait(lambda: _rows(page) > stopped_at, 60, "the resumed run to go on")
-        page.locator(".stop-button").click()
+        _act(page, ".stop-button", "stop sent to process")
         _wait(lambda: "interrupted" in page.locator(".run-status").inner_text(), 90,
               lambda: f"the second stop ({_status(page)}; {_run_state(out)})")
     finally:
@@ -548,7 +565,7 @@ def test_clone_a_run_name_it_and_extend_it_from_the_page(page, studio):
         assert (run / "tags.txt").read_text() == "cloned\nextended\n"
         last = int(read_stats(run / "stats.csv")["generation"][-1])
         page.locator(".extend-to input").fill(str(last + 2))
-        page.locator(".extend-button").click()
+        _act(page, ".extend-button", "extending in process")
         _wait(lambda: int(read_stats(run / "stats.csv")["generation"][-1]) == last + 2, 60,
               lambda: f"the extended run ({page.locator('.action-message').inner_text()})")
         assert "resumed at generation" in (run / "log.txt").read_text()

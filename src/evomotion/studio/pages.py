@@ -268,18 +268,25 @@ def build(root: Path) -> None:
                     st.last("evals_per_s"), seen["status"] == "running") +
                     f", {len(st.rows)} rows")
 
-        def act(fn) -> None:
+        def act(fn, done: str) -> None:
+            """Run the action; its confirmation (``done`` with the process id) or its one-line
+            error under the buttons: a click always answers."""
             try:
-                fn(root, name)
-                msg.set_text("")
+                got = fn(root, name)
+                pid = got if isinstance(got, int) else getattr(got, "pid", "?")
+                msg.classes(replace="text-slate-700 action-message")
+                msg.set_text(done.format(pid=pid))
             except InputError as e:
+                msg.classes(replace="text-red-700 action-message")
                 msg.set_text(str(e))
             status()
 
-        stop_b.on_click(lambda: act(actions.stop_run))
-        resume_b.on_click(lambda: act(actions.resume_run))
+        stop_b.on_click(lambda: act(actions.stop_run, "stop sent to process {pid}: it "
+                                    "checkpoints and ends"))
+        resume_b.on_click(lambda: act(actions.resume_run, "resumed in process {pid}"))
         extend_b.on_click(lambda: act(lambda r, n: actions.extend_run(
-            r, n, int(more.value) if isinstance(more.value, int | float) else -1)))
+            r, n, int(more.value) if isinstance(more.value, int | float) else -1),
+            "extending in process {pid}"))
         xaxis.on_value_change(lambda _: redraw())
         with ui.tabs().classes("w-full") as tabs:
             t_view = ui.tab("study view")
