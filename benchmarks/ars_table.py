@@ -126,6 +126,7 @@ def main() -> None:
         if task not in TASKS:
             raise SystemExit(f"unknown task {task!r}; available: {', '.join(TASKS)}")
         for method in a.methods.split(","):
+            settings(task, method)  # an unknown method: refused before any run
             cases += [(task, method, a.first_seed + s) for s in range(a.seeds)]
     runs = []
     with concurrent.futures.ThreadPoolExecutor(max(1, a.jobs)) as pool:

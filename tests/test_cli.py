@@ -65,6 +65,11 @@ def test_run_resume_plot_studies(tmp_path):
     assert any("--set problem.env=Swimmer-v5: defaults" in x and "also without" not in x
                for x in out)
     assert any("(default cmaes; ars where problem.env has no defaults below)" in x for x in out)
+    # --preset paper's own setting per task: listed where it differs from the preset's own
+    paper = [x.strip() for x in out if x.strip().startswith("with --set problem.env=")]
+    assert any(x.startswith("with --set problem.env=Swimmer-v5: its own") and
+               "problem.normalize" in x for x in paper)
+    assert not any("Hopper-v5" in x for x in paper)  # the preset's own setting: not repeated
 
 
 def test_readme_commands_are_the_ci_commands():

@@ -38,12 +38,15 @@ def studies_cmd() -> None:
         other = f"; {d} where problem.{s.defaults_key} has no defaults below" \
             if d0 != d else ""
         typer.echo(f"{'':16s}   methods: {algs} (default {d0}{other})")
-        for p in (*s.presets, *s.preset_studies):
-            keyed = ", ".join(s.robot_presets.get(p, {}))  # its own setting on these
-            per = f" (a setting of its own on problem.{s.defaults_key} {keyed})" if keyed else ""
-            typer.echo(f"{'':16s}   --preset {p}: {s.preset_notes.get(p, '')}{per}")
         flag = "--robot" if s.defaults_key == "robot" else f"--set problem.{s.defaults_key}="
         sep = " " if s.defaults_key == "robot" else ""
+        for p in (*s.presets, *s.preset_studies):
+            typer.echo(f"{'':16s}   --preset {p}: {s.preset_notes.get(p, '')}")
+            for r, sections in s.robot_presets.get(p, {}).items():  # its own on these
+                if sections != s.presets.get(p):
+                    keys = ", ".join(f"{sec}.{k}" for sec, v in sections.items() for k in v
+                                     if k != "name")
+                    typer.echo(f"{'':16s}     with {flag}{sep}{r}: its own ({keys})")
         # "": the key not given; its field's default names the same one (gym's Hopper-v5)
         # or none ("": the study's own robot, whose defaults equal the named one's)
         unset = {f.name: f.default for f in dataclasses.fields(s.problem_config)

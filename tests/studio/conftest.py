@@ -74,7 +74,8 @@ def page(chromium, studio):
     errors: list[str] = []
     pg.on("console", lambda m: errors.append(m.text)
           if m.type == "error" and not _nicegui_echart_race(m.text) else None)
-    pg.on("pageerror", lambda e: errors.append(f"uncaught: {e}"))
+    pg.on("pageerror", lambda e: errors.append(f"uncaught: {e}")
+          if not _nicegui_echart_race(f"{e} {getattr(e, 'stack', '')}") else None)
     base, _ = studio
     pg.goto(f"{base}/?token={TOKEN}")  # sets the token cookie
     yield pg

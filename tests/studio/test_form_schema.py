@@ -59,6 +59,11 @@ def test_every_run_key_is_documented_and_registries_are_selects():
     # common: the run's budget and what the paper preset sets; the rest is advanced
     assert fields["run.seed"].common and fields["problem.intervals"].common
     assert not fields["run.chunks_per_worker"].common
+    # a preset's own setting on an environment counts too (gym's paper Swimmer: V1, no
+    # normalisation), and the fields show that setting
+    gym = {f.key: f for f in actions.form_fields("gym", "paper", None, "Swimmer-v5")}
+    assert gym["problem.normalize"].common and gym["problem.normalize"].shown == "false"
+    assert gym["algorithm.pop_size"].shown == "2"
 
 
 def test_every_error_of_the_form_at_once_under_its_field():

@@ -142,6 +142,12 @@ def build(root: Path) -> None:
             return str(actions.check_new_run(study, p, actions.robot_sets(
                 study, state.get("robot"))).algorithm.name)
 
+        def layers(robot: str, p: str | None) -> tuple:
+            """What the fields of ``robot`` under preset ``p`` are made of: its defaults and
+            the preset's own setting on it (the preset's, where it has none of its own)."""
+            own = s.robot_presets.get(p or "", {})
+            return s.robot_defaults.get(robot), own.get(robot, s.presets.get(p or ""))
+
         def robot_changed(value: object) -> None:
             """A robot with other defaults of its own (``Study.robot_defaults``; ``""``: the
             study's own robot; or gym's environment, ``Study.defaults_key``) than the one
@@ -154,9 +160,7 @@ def build(root: Path) -> None:
             problem = cloned.get("problem")
             if isinstance(problem, dict):  # the chosen robot, not the cloned run's
                 cloned["problem"] = {k: v for k, v in problem.items() if k != s.defaults_key}
-            keyed = s.robot_presets.get(preset.value or "", {})  # the preset's on it
-            if (s.robot_defaults.get(value), keyed.get(value)) != \
-                    (s.robot_defaults.get(shown), keyed.get(shown)):
+            if layers(value, preset.value) != layers(shown, preset.value):
                 new = method_of(preset.value or None)  # its method (gym: Hopper's CMA-ES)
                 if alg.value == old != new:
                     alg.set_value(new)  # its handler rebuilds the fields
@@ -198,7 +202,7 @@ def build(root: Path) -> None:
         preset.on_value_change(lambda _: preset_changed())
         alg.on_value_change(lambda _: rebuild())
         start.on_click(go)
-        if isinstance(robot0, str) and s.robot_defaults.get(robot0) != s.robot_defaults.get(""):
+        if isinstance(robot0, str) and layers(robot0, preset0) != layers("", preset0):
             state["robot"] = robot0  # a cloned run's robot with other defaults: shown with them
         rebuild()
 

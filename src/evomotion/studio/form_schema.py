@@ -114,9 +114,12 @@ def choices(key: str) -> tuple[list[str], bool] | None:
 
 
 def common_keys(study: Any) -> set[str]:
-    """:data:`COMMON` and every key a preset of ``study`` sets."""
+    """:data:`COMMON` and every key a preset of ``study`` sets (on any robot or environment,
+    ``Study.robot_presets``)."""
     keys = set(COMMON)
-    for preset in getattr(study, "presets", {}).values():
+    keyed = [layer for by_robot in getattr(study, "robot_presets", {}).values()
+             for layer in by_robot.values()]
+    for preset in [*getattr(study, "presets", {}).values(), *keyed]:
         for sec, table in (preset or {}).items():
             if isinstance(table, dict):
                 keys.update(f"{sec}.{k}" for k in table if k != "name")

@@ -283,10 +283,10 @@ def build(root: Path) -> None:
 
         stop_b.on_click(lambda: act(actions.stop_run, "stop sent to process {pid}: it "
                                     "checkpoints and ends"))
-        resume_b.on_click(lambda: act(actions.resume_run, "resumed in process {pid}"))
+        resume_b.on_click(lambda: act(actions.resume_run, "resume started in process {pid}"))
         extend_b.on_click(lambda: act(lambda r, n: actions.extend_run(
             r, n, int(more.value) if isinstance(more.value, int | float) else -1),
-            "extending in process {pid}"))
+            "extension started in process {pid}"))
         xaxis.on_value_change(lambda _: redraw())
         with ui.tabs().classes("w-full") as tabs:
             t_view = ui.tab("study view")

@@ -54,7 +54,8 @@ HOPPER_CMAES = {"name": "cmaes", "sigma0": 0.0005, "x0": "center"}
 #: (docs/gym.md): CMA-ES on Hopper and Swimmer, the paper's ARS on the other four tasks
 ENV_DEFAULTS = {**{env: {"algorithm": dict(HOPPER_CMAES)}
                    for env in ("", "Hopper-v5", "Swimmer-v5")},
-                **{env: sections for env, sections in PAPER_ARS_BY_ENV.items()
+                **{env: {sec: dict(keys) for sec, keys in sections.items()}  # copies
+                   for env, sections in PAPER_ARS_BY_ENV.items()
                    if env not in ("Swimmer-v5", "Hopper-v5")}}
 
 STUDY = Study(
