@@ -248,8 +248,8 @@ def _pick(page, select, option: str, rebuilds: bool = True, exact: bool = True) 
 
 
 def _chooser(page, key: str):
-    """``choose(option, rebuilds=True)``: picks ``option`` in the select of ``key``, an
-    advanced key (the expansion is opened first where it is closed)."""
+    """``choose(option, rebuilds=True)``: picks ``option`` in the select of ``key`` (under
+    "advanced" the expansion is opened first)."""
     def choose(option: str, rebuilds: bool = True) -> None:
         select = page.locator(f'[data-key="{key}"]')
         if not select.is_visible():

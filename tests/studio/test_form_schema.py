@@ -64,6 +64,7 @@ def test_every_run_key_is_documented_and_registries_are_selects():
     gym = {f.key: f for f in actions.form_fields("gym", "paper", None, "Swimmer-v5")}
     assert gym["problem.normalize"].common and gym["problem.normalize"].shown == "false"
     assert gym["algorithm.pop_size"].shown == "2"
+    assert gym["problem.env"].common  # the key that picks the defaults: shown first
 
 
 def test_every_error_of_the_form_at_once_under_its_field():

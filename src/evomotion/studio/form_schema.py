@@ -114,9 +114,12 @@ def choices(key: str) -> tuple[list[str], bool] | None:
 
 
 def common_keys(study: Any) -> set[str]:
-    """:data:`COMMON` and every key a preset of ``study`` sets (on any robot or environment,
-    ``Study.robot_presets``)."""
+    """:data:`COMMON`, the key that picks the robot's own defaults (``problem.robot``; gym's
+    ``problem.env``: ``Study.defaults_key``) where it has any, and every key a preset of
+    ``study`` sets (on any robot or environment, ``Study.robot_presets``)."""
     keys = set(COMMON)
+    if getattr(study, "robot_defaults", None) or getattr(study, "robot_presets", None):
+        keys.add(f"problem.{getattr(study, 'defaults_key', 'robot')}")
     keyed = [layer for by_robot in getattr(study, "robot_presets", {}).values()
              for layer in by_robot.values()]
     for preset in [*getattr(study, "presets", {}).values(), *keyed]:
