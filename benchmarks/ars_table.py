@@ -46,14 +46,14 @@ def settings(task: str, method: str) -> list[str]:
         return env
     if method == "ars":  # the paper's setting of the task
         return [*env, "--preset", "paper"]
+    # the other methods see what ARS's rows saw: V1 (not normalised) on Swimmer, V2 elsewhere
+    norm = ["--set", f"problem.normalize={'false' if task == 'Swimmer' else 'true'}"]
     if method == "openai_es":  # Salimans et al. 2017's setting scaled to a 2-core budget
         return [*env, "--set", "algorithm.name=openai_es", "--set", "algorithm.pop_size=40",
-                "--set", "algorithm.sigma=0.02", "--set", "algorithm.learning_rate=0.01",
-                "--set", f"problem.normalize={'false' if task == 'Swimmer' else 'true'}"]
+                "--set", "algorithm.sigma=0.02", "--set", "algorithm.learning_rate=0.01", *norm]
     if method == "cmaes":  # the study's default: CMA-ES from 0, sigma 0.1 (of the +-100 box)
         return [*env, "--set", "algorithm.name=cmaes", "--set", "algorithm.sigma0=0.0005",
-                "--set", "algorithm.x0=center",
-                "--set", f"problem.normalize={'false' if task == 'Swimmer' else 'true'}"]
+                "--set", "algorithm.x0=center", *norm]
     raise SystemExit(f"unknown method {method!r}; available: default, ars, openai_es, cmaes")
 
 
