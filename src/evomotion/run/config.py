@@ -242,9 +242,18 @@ def study_algorithms(study: ConfiguredStudy) -> dict[str, type]:
     return out
 
 
+def defaults_entry(study: Any, robot: Any) -> Any:
+    """The key of ``study.robot_defaults`` and ``robot_presets`` that ``robot`` (a value of
+    ``problem.<study.defaults_key>``) reads: ``study.defaults_alias(robot)`` (gym: any version
+    of a task reads its v5 id's) or ``robot`` itself."""
+    alias = getattr(study, "defaults_alias", None)
+    return alias(robot) if alias is not None and isinstance(robot, str) else robot
+
+
 def default_algorithm(study: Any, robot: str | None = None) -> str:
     """The method a study runs when ``algorithm.name`` is not given; with ``robot`` (the value
     of ``problem.<study.defaults_key>``, ``""``: not given) the one its defaults choose."""
+    robot = defaults_entry(study, robot)
     own = study.robot_defaults.get(robot, {}).get("algorithm", {}) if robot is not None else {}
     name = own.get("name") or study.defaults.get("algorithm", {}).get("name")
     return name or next(iter(study_algorithms(study)))
@@ -305,7 +314,7 @@ def resolve_config(study: ConfiguredStudy, file: Path | None = None,
     for layer in layers:
         user = _merge(user, layer)
     defaults = {k: dict(v) for k, v in study.defaults.items()}
-    robot = configured_robot(user, study.defaults_key)
+    robot = defaults_entry(study, configured_robot(user, study.defaults_key))
     # each method's tuning for a user who picks it: the study's, or one a layer above replaced
     tunings = {str(k): dict(v) for k, v in study.algorithm_tunings.items()}
     if isinstance(robot, str) and robot in study.robot_defaults:

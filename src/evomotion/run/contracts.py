@@ -257,6 +257,9 @@ class ConfiguredStudy(Protocol):
     def robot_presets(self) -> Mapping[str, Mapping[str, Mapping[str, Mapping[str, Any]]]]: ...
 
     @property
+    def defaults_alias(self) -> Callable[[str], str] | None: ...
+
+    @property
     def algorithm_tunings(self) -> Mapping[str, Mapping[str, Any]]: ...
 
     @property

@@ -33,6 +33,9 @@ class Study:
     - ``robot_presets``: a preset's setting on another robot (``gym``: environment), ``preset
       -> robot -> sections``, layered over that preset when ``problem.<defaults_key>`` names
       the robot (``gym --preset paper``: the paper's hyperparameters of each task).
+    - ``defaults_alias``: the key of ``robot_defaults`` and ``robot_presets`` a value of
+      ``problem.<defaults_key>`` reads (``gym``: any version of a task, ``Walker2d-v4``, reads
+      its v5 id's); ``None``: the value itself.
     - ``algorithm_tunings``: ``name -> [algorithm] keys`` for a method that is not the default,
       used when the user picks it (``gym``: CMA-ES's step size in the policy's units); a
       default's own tuning that a robot's defaults or a preset replaced is kept the same way.
@@ -81,6 +84,7 @@ class Study:
     robot_defaults: dict[str, dict[str, dict[str, Any]]] = field(default_factory=dict)
     defaults_key: str = "robot"
     robot_presets: dict[str, dict[str, dict[str, dict[str, Any]]]] = field(default_factory=dict)
+    defaults_alias: Callable[[str], str] | None = None
     algorithm_tunings: dict[str, dict[str, Any]] = field(default_factory=dict)
     core_algorithms: tuple[str, ...] | None = None
     algorithms: StudyAlgorithms = field(default_factory=dict)

@@ -19,7 +19,7 @@ from evomotion.studio.tags import parse_tags
 def build(root: Path) -> None:
     from nicegui import ui
 
-    from evomotion.run.config import default_algorithm, study_algorithms
+    from evomotion.run.config import default_algorithm, defaults_entry, study_algorithms
     from evomotion.studies import STUDIES, get_study
     from evomotion.studio.pages import header
 
@@ -145,7 +145,7 @@ def build(root: Path) -> None:
         def layers(robot: str, p: str | None) -> tuple:
             """What the fields of ``robot`` under preset ``p`` are made of: its defaults and
             the preset's own setting on it (the preset's, where it has none of its own)."""
-            own = s.robot_presets.get(p or "", {})
+            own, robot = s.robot_presets.get(p or "", {}), defaults_entry(s, robot)
             return s.robot_defaults.get(robot), own.get(robot, s.presets.get(p or ""))
 
         def robot_changed(value: object) -> None:

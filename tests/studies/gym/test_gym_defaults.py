@@ -92,3 +92,28 @@ def test_a_saved_ars_run_reruns_as_it_ran(tmp_path):
     assert tomllib.loads(f.read_text())["algorithm"]["name"] == "ars"
     again = resolve_config(s, f)
     assert dataclasses.asdict(again.algorithm) == dataclasses.asdict(old.algorithm)
+
+
+def test_another_version_of_a_task_gets_its_settings():
+    """The settings are per task (``Study.defaults_alias``): ``Walker2d-v4`` gets Walker2d's
+    defaults and paper setting, ``Swimmer-v4`` Swimmer's, Hopper's other versions its CMA-ES;
+    an unknown task or a malformed id keeps its own (Hopper's ARS setting)."""
+    from evomotion.studies.gym.study import v5_id
+
+    s = get_study("gym")
+    for env in ("Walker2d-v4", "Walker2d-v5"):
+        cfg = resolve_config(s, overrides=[f"problem.env={env!r}"])
+        assert (cfg.algorithm.name, cfg.algorithm.pop_size, cfg.algorithm.top_directions) \
+            == ("ars", 80, 30), env
+        assert cfg.problem.env == env
+    cfg = resolve_config(s, preset="paper", overrides=["problem.env='Swimmer-v4'"])
+    assert (cfg.algorithm.pop_size, cfg.problem.normalize) == (2, False)
+    assert resolve_config(s, overrides=["problem.env='Hopper-v4'"]).algorithm.name == "cmaes"
+    for env in ("Walker2d-vX", "Walker2d", "Walker2d-v", "Walker3d-v4", "walker2d-v4"):
+        assert v5_id(env) == env
+        assert _alg(resolve_config(s, overrides=[f"problem.env={env!r}"])) == PAPER_ARS, env
+    assert v5_id("Ant-v4") == v5_id("Ant-v12") == "Ant-v5"
+    from evomotion.run.config import default_algorithm
+
+    assert default_algorithm(s, "Swimmer-v4") == "cmaes"
+    assert default_algorithm(s, "HalfCheetah-v4") == default_algorithm(s, "Pusher-v4") == "ars"
