@@ -7,16 +7,21 @@ gait's steps (what any command can make them do).
 
 Every world gets one push of the given size, at ``humanoid-walk compare``'s unseen world seeds
 (shifted, ``--seed``), under a random command schedule (the run's own draw) or, for the engine,
-no command. Then the same episodes with an **oracle**: from the push's physics step on, for
-``hold`` s, the command is replaced by a walk at ``speed`` m/s along the push's direction in the
-robot's frame at the push (no turn; no ramp, at once; ``vx``, ``vy`` clipped to ``--clip``
-m/s), i.e. a command that knows what the IMU only hints at. Two controllers:
+no command. Then the same episodes with an **oracle**: from the control step that holds the
+push on (up to one control period before it), for ``hold`` s, the command is replaced by a walk
+at ``speed`` m/s along the push's direction in the robot's frame at the push (no turn; no ramp,
+at once; ``vx``, ``vy`` clipped to ``--clip`` m/s: the default 0.45 clips nothing, so the
+0.3 and 0.45 m/s oracles may command more than the walk's trained ranges, backward 0.2 m/s and
+sideways 0.2 m/s), i.e. a command that knows what the IMU only hints at. Two controllers:
 
 - ``controller``: the run's evolved controller, in perturbed worlds (as it trained) and in the
-  nominal world;
+  nominal world (the same seeds draw other pushes there: directions and times are drawn after
+  the perturbations, so the two rows are not paired);
 - ``engine``: the walk engine it was fitted to (``omni_gait``, online leg IK, no feedback),
   standing-in-place command, nominal world: can the gait's steps, told where to go, catch a
-  push at all?
+  push at all? Without RUN only the engine is measured, at the study's engine settings; with
+  ``--engine KEY=VALUE`` (``problem`` keys: ``period_s``, ``step_height_m``, ...) the engine
+  rows use those over the run's (or the study's) settings; the controller rows never do.
 
 Output: one markdown table of survival (episodes not fallen by the end).
 """
@@ -43,13 +48,14 @@ class Probe:
         from evomotion.studies.humanoid_omniwalk.compare import load_run
         from evomotion.studies.humanoid_omniwalk.problem import OmniWalkConfig, OmniWalkProblem
 
-        if run is None:  # the engine alone, at the study's settings or ``engine``'s
-            cfg = OmniWalkConfig(duration_s=duration_s, **(engine or {}))
+        if run is None:  # the engine alone, at the study's settings
+            cfg = OmniWalkConfig(duration_s=duration_s)
         else:
             problem, self.policy, _ = load_run(run, duration_s)
             problem.sim.close()
             cfg = problem.cfg
-        self.problem = OmniWalkProblem(dataclasses.replace(cfg, perturb=perturb))
+        self.problem = OmniWalkProblem(dataclasses.replace(cfg, perturb=perturb,
+                                                           **(engine or {})))
         ctl = self.problem.ctl
         names = list(ctl.sim.observe.names)
         self._phase = names.index("phase:sin"), names.index("phase:cos")
@@ -104,7 +110,7 @@ def measure(run: str | None, worlds: int, duration_s: float, pushes: list[float]
     rows = []
     whom = [("controller", True), ("controller", False)] if run is not None else []
     for who, perturb in [*whom, ("engine", False)]:
-        probe = Probe(None if who == "engine" and engine else run, duration_s, perturb, engine)
+        probe = Probe(run, duration_s, perturb, engine if who == "engine" else None)
         p = probe.problem
         C = int(np.ceil(p.nstep / p.control_steps))
         cmds = schedules(p.command_draw, seeds, np.arange(C) * p.ctl.control_dt)
@@ -144,8 +150,10 @@ def main(argv: list[str] | None = None) -> int:
     if a.worlds < 1 or a.duration <= 0 or a.seed < 0 or a.clip <= 0 or min(a.pushes) < 0:
         ap.error("expected --worlds >= 1, --duration > 0, --seed >= 0, --clip > 0, pushes >= 0")
     from evomotion.errors import InputError
+    from evomotion.studies.humanoid_omniwalk.problem import OmniWalkConfig
 
     try:
+        OmniWalkConfig(**engine).validate()  # before minutes of the controller's rows
         rows = measure(a.run, a.worlds, a.duration, a.pushes, a.seed, a.clip, engine)
     except InputError as e:
         ap.error(str(e))
