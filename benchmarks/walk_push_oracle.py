@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import math
 import sys
 
 import numpy as np
@@ -68,26 +69,32 @@ class Probe:
         return ctl.engine(phase, obs[:, self._command])[:, ctl.columns] - \
             ctl.nominal[ctl.columns]
 
-    def play(self, who: str, seeds: np.ndarray, push: float, commands: np.ndarray):
-        """(survived[n], torso track) of ``who`` ("controller" or "engine")."""
+    def play(self, who: str, seeds: np.ndarray, push: float, worlds: list,
+             commands: np.ndarray | None = None):
+        """(survived[n], torso track, the commands played) of ``who`` ("controller" or
+        "engine") in ``worlds`` (``seeds``' with ``push``); ``commands`` None: the run's
+        schedules of ``seeds`` (the controller) or standing in place (the engine)."""
         from evomotion.sim.closed_loop import ClosedLoopResult
 
         p, n = self.problem, len(seeds)
-        if who == "controller":
+        if who == "controller":  # the problem's own play: it builds the same worlds
             pol = self.policy
-            _, res, _ = p.play(np.tile(pol.params, (n, 1)), np.tile(pol.obs_mean, (n, 1)),
-                               np.tile(pol.obs_std, (n, 1)), seeds, push, commands=commands)
+            _, res, commands = p.play(np.tile(pol.params, (n, 1)), np.tile(pol.obs_mean, (n, 1)),
+                                      np.tile(pol.obs_std, (n, 1)), seeds, push,
+                                      commands=commands)
         else:
-            res = p.ctl.sim.run(self.engine, p.worlds(seeds, push), p.nstep, commands=commands,
+            if commands is None:
+                commands = np.zeros((n, math.ceil(p.nstep / p.control_steps), 3))
+            res = p.ctl.sim.run(self.engine, worlds, p.nstep, commands=commands,
                                 initial_state=p.ctl.state0)
-        assert isinstance(res, ClosedLoopResult)
-        return res.fall_step >= p.nstep, res.torso
+        assert isinstance(res, ClosedLoopResult) and commands is not None
+        return res.fall_step >= p.nstep, res.torso, commands
 
-    def oracle(self, seeds, push, commands, torso, speed, hold, clip) -> np.ndarray:
+    def oracle(self, worlds, commands, torso, speed, hold, clip) -> np.ndarray:
         """``commands`` with the oracle's walk along the push from its control step."""
         from evomotion.studies.humanoid_omniwalk.commands import torso_yaw
 
-        ws, dt, n = self.problem.worlds(seeds, push), self.problem.ctl.control_dt, len(seeds)
+        ws, dt, n = worlds, self.problem.ctl.control_dt, len(worlds)
         at = np.minimum((np.array([w.push_time_s for w in ws]) / dt).astype(int),
                         torso.shape[1] - 1)
         push_dir = np.array([np.arctan2(w.push_ns[1], w.push_ns[0]) for w in ws])
@@ -103,7 +110,6 @@ class Probe:
 
 def measure(run: str | None, worlds: int, duration_s: float, pushes: list[float], seed: int,
             clip: float, engine: dict | None = None) -> list[list[str]]:
-    from evomotion.studies.humanoid_omniwalk.commands import schedules
     from evomotion.studies.humanoid_omniwalk.compare import EVAL_SEED_BASE, MAX_WORLDS
 
     seeds = EVAL_SEED_BASE + seed * MAX_WORLDS + np.arange(worlds)
@@ -111,19 +117,15 @@ def measure(run: str | None, worlds: int, duration_s: float, pushes: list[float]
     whom = [("controller", True), ("controller", False)] if run is not None else []
     for who, perturb in [*whom, ("engine", False)]:
         probe = Probe(run, duration_s, perturb, engine if who == "engine" else None)
-        p = probe.problem
-        C = int(np.ceil(p.nstep / p.control_steps))
-        cmds = schedules(p.command_draw, seeds, np.arange(C) * p.ctl.control_dt)
-        if who == "engine":
-            cmds = np.zeros_like(cmds)
         for push in pushes:
-            up, torso = probe.play(who, seeds, push, cmds)
+            ws = probe.problem.worlds(seeds, push)  # once per push: the oracles read them
+            up, torso, cmds = probe.play(who, seeds, push, ws)
             row = [who, "perturbed" if perturb else "nominal", f"{push:g}", f"{up.mean():.0%}"]
             for speed, hold in ORACLES:
-                cc = probe.oracle(seeds, push, cmds, torso, speed, hold, clip)
-                row.append(f"{probe.play(who, seeds, push, cc)[0].mean():.0%}")
+                cc = probe.oracle(ws, cmds, torso, speed, hold, clip)
+                row.append(f"{probe.play(who, seeds, push, ws, cc)[0].mean():.0%}")
             rows.append(row)
-        p.sim.close()
+        probe.problem.sim.close()
     return rows
 
 
