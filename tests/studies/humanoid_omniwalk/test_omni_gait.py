@@ -70,3 +70,18 @@ def test_targets_stay_in_the_nao_joint_ranges():
     q = targets(OmniGait(), rng.uniform(0, 3, 200), cmd)
     lo, hi = np.array([JOINT_RANGES[j] for j in nao.JOINTS]).T
     assert np.all(q >= lo) and np.all(q <= hi) and np.isfinite(q).all()
+
+
+def test_foot_offsets_move_each_foot_by_exactly_its_offset():
+    """``foot_offsets`` (a footstep adjustment) moves each ankle by its own (x, y) in the walk
+    frame, the other foot untouched; zero offsets are the plain engine, bit for bit."""
+    p = np.array([0.1, 0.3, 0.6, 0.9])
+    cmd = np.tile([0.2, 0.05, 0.0], (4, 1))
+    plain = targets(FLAT, p, cmd)
+    assert np.array_equal(targets(FLAT, p, cmd, np.zeros((4, 2, 2))), plain)
+    off = np.zeros((4, 2, 2))
+    off[:, 0] = [0.04, -0.02]  # the left foot only
+    moved = targets(FLAT, p, cmd, off)
+    np.testing.assert_allclose(_ankle(moved, LEFT, True) - _ankle(plain, LEFT, True),
+                               np.tile([0.04, -0.02, 0.0], (4, 1)), atol=1e-9)
+    np.testing.assert_array_equal(moved[:, RIGHT[1:]], plain[:, RIGHT[1:]])

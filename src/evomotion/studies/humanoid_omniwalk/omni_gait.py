@@ -72,9 +72,13 @@ def foot_offset(p: np.ndarray, w: float) -> tuple[np.ndarray, np.ndarray]:
     return u, lift
 
 
-def targets(gait: OmniGait, phase: np.ndarray, command: np.ndarray) -> np.ndarray:
+def targets(gait: OmniGait, phase: np.ndarray, command: np.ndarray,
+            foot_offsets: np.ndarray | None = None) -> np.ndarray:
     """Joint targets ``[T, 22]`` (``nao.JOINTS`` order, rad, clipped to the NAO's ranges) at
-    ``phase[T]`` (cycles) for ``command[T, 3]`` (vx m/s, vy m/s, ω rad/s)."""
+    ``phase[T]`` (cycles) for ``command[T, 3]`` (vx m/s, vy m/s, ω rad/s); ``foot_offsets[T,
+    2, 2]`` (left, right; x, y; m, walk frame) move the feet from where the engine puts them
+    (a footstep adjustment: ``benchmarks/walk_capture_step.py`` places the swing foot by the
+    capture point)."""
     phi = np.asarray(phase, float)
     dx, dy, dpsi = np.moveaxis(gait.travel(command), -1, 0)
     w = gait.swing_fraction
@@ -84,11 +88,13 @@ def targets(gait: OmniGait, phase: np.ndarray, command: np.ndarray) -> np.ndarra
     sway = -gait.sway_m * np.cos(2 * np.pi * (phi - 0.5 * w) + gait.sway_phase_rad)
     out = np.broadcast_to(nao.pose_vector(), phi.shape + (len(nao.JOINTS),)).copy()
     lean = np.swapaxes(rot_y(np.full(phi.shape, gait.lean_rad)), -1, -2)  # walk -> torso
-    for s, u, lift, leg in ((1.0, u_l, lift_l, nao.LEFT_LEG), (-1.0, u_r, lift_r,
-                                                                nao.RIGHT_LEG)):
+    off = (np.zeros(phi.shape + (2, 2)) if foot_offsets is None
+           else np.asarray(foot_offsets, float))
+    for f, (s, u, lift, leg) in enumerate(((1.0, u_l, lift_l, nao.LEFT_LEG),
+                                           (-1.0, u_r, lift_r, nao.RIGHT_LEG))):
         yaw = s * 0.5 * rel_yaw
-        x = gait.x_offset_m + u * dx
-        y = s * (nao.HIP_OFFSET_Y_M + gait.width_m) + u * dy + sway
+        x = gait.x_offset_m + u * dx + off[..., f, 0]
+        y = s * (nao.HIP_OFFSET_Y_M + gait.width_m) + u * dy + sway + off[..., f, 1]
         c, sn = np.cos(yaw), np.sin(yaw)
         pos = np.stack([c * x - sn * y, sn * x + c * y,
                         -(nao.HIP_OFFSET_Z_M + gait.leg_height_m) + lift * gait.step_height_m],
