@@ -119,10 +119,11 @@ def test_compare_prints_both_controllers_and_the_top_speeds(run_dir):
     text = compare_command(run_dir, worlds=2, duration_s=1.0)
     assert "| evolved controller |" in text and "| walk engine (open loop" in text
     assert "| forward [0.45, 0.0, 0.0] |" in text
+    assert "| stand [0.0, 0.0, 0.0] | vx " in text and " cm/s, " in text  # the creep
     res = json.loads(compare_command(run_dir, worlds=2, duration_s=1.0, json_out=True))
     assert 0 <= res["controller"]["survival"] <= 1
     assert set(res["engine"]["top_speeds"]) == {"forward", "backward", "left", "right",
-                                                "turn_left", "turn_right"}
+                                                "turn_left", "turn_right", "stand"}
 
 
 def test_bad_input_is_one_line(run_dir, tmp_path):

@@ -17,7 +17,9 @@
 - **Top speeds**: each direction commanded alone at the run's range limit (forward ``vx_max``,
   backward ``vx_min``, named ``forward_min`` where ``vx_min > 0``; left/right ``±vy_max``,
   turning ``±yaw_rate_max``) for :data:`SPEED_TEST_S` in the nominal world without a push; the
-  walked velocity is the mean over the last half (m/s, deg/s).
+  walked velocity is the mean over the last half (m/s, deg/s). ``stand``, the zero command,
+  gives the walk's **creep**: how fast it drifts while told to step in place (what a go-to-pose
+  loop such as ``biped-kick play``'s must stop against).
 """
 
 from __future__ import annotations
@@ -152,7 +154,7 @@ def top_speeds(p, params, mean, std, tests: dict[str, tuple] | None = None
         tests = {"forward": (cfg.vx_max, 0, 0), slowest: (cfg.vx_min, 0, 0),
                  "left": (0, cfg.vy_max, 0), "right": (0, -cfg.vy_max, 0),
                  "turn_left": (0, 0, cfg.yaw_rate_max),
-                 "turn_right": (0, 0, -cfg.yaw_rate_max)}
+                 "turn_right": (0, 0, -cfg.yaw_rate_max), "stand": (0, 0, 0)}
     C = math.ceil(p.nstep / p.control_steps)
     t = np.arange(C) * p.ctl.control_dt
     ramp = np.clip(t / cfg.ramp_s, 0.0, 1.0)[None, :, None]
@@ -225,6 +227,9 @@ def table(res: dict[str, Any]) -> str:
         def fmt(r: dict) -> str:
             s = (f"{r['yaw_rate_dps']:.0f} deg/s" if name.startswith("turn") else
                  f"vx {r['vx_mps']:.2f}, vy {r['vy_mps']:.2f} m/s")
+            if name == "stand":  # the creep: finer, and its turning too
+                s = (f"vx {100 * r['vx_mps']:.1f}, vy {100 * r['vy_mps']:.1f} cm/s, "
+                     f"{r['yaw_rate_dps']:.1f} deg/s")
             return s + (" (fell)" if r["fell"] else "")
         lines.append(f"| {name} {c['command']} | {fmt(c)} | {fmt(e)} |")
     return "\n".join(lines)
