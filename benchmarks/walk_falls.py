@@ -30,7 +30,7 @@ SIDES = ("forward", "backward", "left", "right")
 def _episodes(problem, policy, seeds: np.ndarray, push_t: np.ndarray, push_ns: float | None,
               batch: int = 20):
     """(survived[n], time up (s)[n], heading (rad)[n] at each world's push time ``push_t``)."""
-    from evomotion.studies.humanoid_omniwalk.commands import torso_yaw
+    from evomotion.studies.humanoid_omniwalk.commands import heading_at
 
     up, t_up, heading = [], [], []
     for a in range(0, len(seeds), batch):
@@ -38,9 +38,7 @@ def _episodes(problem, policy, seeds: np.ndarray, push_t: np.ndarray, push_ns: f
         n = len(s)
         m, res, _ = problem.play(np.tile(policy.params, (n, 1)), np.tile(policy.obs_mean, (n, 1)),
                                  np.tile(policy.obs_std, (n, 1)), s, push_ns)
-        c = np.minimum((push_t[a:a + n] / problem.ctl.control_dt).astype(int),
-                       res.torso.shape[1] - 1)
-        heading.append(torso_yaw(res.torso[np.arange(n), c, 3:7]))
+        heading.append(heading_at(res.torso, push_t[a:a + n], problem.ctl.control_dt))
         up.append(m["survived"] >= 1)
         t_up.append(m["time_up_s"])
     return np.concatenate(up), np.concatenate(t_up), np.concatenate(heading)
@@ -85,8 +83,11 @@ def measure(run: str, worlds: int, duration_s: float, seed: int,
 
 
 def table(r: dict) -> str:
-    sizes = " / ".join(f"{100 * v[1]:.0f} % of {v[0]}" for v in r["by_size"].values())
-    sides = " / ".join(f"{100 * v[1]:.0f} % of {v[0]}" for v in r["by_side"].values())
+    def share(v) -> str:  # (count, survival); "– of 0" where no world had such a push
+        return f"{100 * v[1]:.0f} % of {v[0]}" if v[0] else "– of 0"
+
+    sizes = " / ".join(share(v) for v in r["by_size"].values())
+    sides = " / ".join(share(v) for v in r["by_side"].values())
     return "\n".join([
         f"{r['run']}: {r['worlds']} worlds x {r['duration_s']:g} s", "",
         "| run's pushes | no push | falls within 2 s of the push / before it / all | "

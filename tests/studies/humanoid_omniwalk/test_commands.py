@@ -9,6 +9,7 @@ from hypothesis import strategies as st
 from evomotion.studies.humanoid_omniwalk.commands import (
     CommandDraw,
     command_schedule,
+    heading_at,
     schedules,
     tracking,
 )
@@ -98,3 +99,12 @@ def test_command_weights_are_checked_and_normalised():
         assert "\n" not in str(e.value)
     with pytest.raises(InputError, match="problem.vx_min"):
         OmniWalkConfig(vx_min=0.5, vx_max=0.45).validate()
+
+
+def test_heading_at_reads_the_control_step_holding_each_time():
+    """Yaw ``ψ_c = 0.1 c`` at control step ``c`` (quaternion about z): times inside step 3 read
+    0.3, times past the record read its last row."""
+    yaw = 0.1 * np.arange(6)
+    torso = np.zeros((2, 6, 7))
+    torso[..., 3], torso[..., 6] = np.cos(yaw / 2), np.sin(yaw / 2)
+    np.testing.assert_allclose(heading_at(torso, np.array([0.061, 9.0]), 0.02), [0.3, 0.5])

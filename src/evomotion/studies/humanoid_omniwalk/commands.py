@@ -91,6 +91,13 @@ def torso_yaw(quat: np.ndarray) -> np.ndarray:
     return np.arctan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
 
 
+def heading_at(torso: np.ndarray, times_s: np.ndarray, control_dt_s: float) -> np.ndarray:
+    """The torso's yaw (rad) ``[n]`` at ``times_s[n]`` from a closed loop's ``torso[n, C + 1,
+    7]`` record (one row per control step; the step holding the time, the last at most)."""
+    c = np.minimum((np.asarray(times_s) / control_dt_s).astype(int), torso.shape[1] - 1)
+    return torso_yaw(torso[np.arange(len(c)), c, 3:7])
+
+
 @dataclass(frozen=True)
 class Tracking:
     """Per window end ``c = window .. C`` (arrays ``[n, C + 1 − window]``): the walked ``vx``,
