@@ -12,21 +12,24 @@ towards the sole's edge at ``r`` from the ankle) is then capturable in ``N`` ste
 ``d ≤ d_N`` with
 
     d_0 = r,    d_N = (d_{N−1} − r + l) e^{−ω Δt} + r,
-    d_∞ = (l − r) e^{−ω Δt} / (1 − e^{−ω Δt}) + r.
+    d_∞ = l e^{−ω Δt} / (1 − e^{−ω Δt}) + r.
 
 A push ``J`` (N s) on the whole robot of mass ``m`` changes the CoM velocity by ``J / m`` and
-puts the capture point ``J / (m ω)`` beyond the CoM. The assumptions favour the robot: the CoM
-over the stance ankle at the push (only its offset in the nominal pose, none of the gait's
-sway), the first step landing ``Δt`` after the push (the walk's swing may have just begun),
-infinitely many steps, each axis alone (a push is caught if both of its components are: the
-reachable steps taken as a box), the reach ``l`` the same forward, backward and sideways (no
-leg crossing considered), the centre of pressure at the sole's edge (the model's ankle pitch
-torque limit, 6.4 N m, allows it: ``m g r`` ≤ 5.5 N m). Two reaches: one leg's
-``√((L1 + L2)² − h²)`` at the walk's hip height ``h`` (the swing leg stretched, the stance leg
-under the body) and twice that (both legs stretched, the loosest). What the model leaves out
-can favour the robot too (the legs' compliance and the feet's friction take some of the push;
-the torso turns), so measured survival may lie above the one-leg rows: an estimate, not a
-bound. ``benchmarks/walk_capture_step.py`` measures the engine stepping to the capture point.
+puts the capture point ``J / (m ω)`` beyond the CoM. Assumptions that favour the robot:
+infinitely many steps; each axis alone (a push is caught if both of its components are: the
+reachable steps taken as a box); the same reach ``l`` forward, backward and sideways, no leg
+crossing considered; sideways, the CoM over the stance ankle and the sole's outer edge beyond
+it for either direction (the inner edge is nearer; a push towards the stance leg's side needs
+the other foot to cross or two steps); the centre of pressure at the sole's edge (the model's
+ankle pitch torque limit, 6.4 N m, allows it: ``m g r`` ≤ 5.7 N m from the ankle). Along x the
+CoM is where the nominal pose has it (5 mm ahead of the ankles), with none of the gait's sway.
+Neither favourable nor not: the first step lands ``Δt`` after the push with the full reach (a
+swing under way may land sooner, but with less reach). Two reaches: one leg's ``√((L1 + L2)²
+− h²)`` at the walk's hip height ``h`` (the swing leg stretched, the stance leg under the body)
+and twice that (both legs stretched, the loosest). What the model leaves out can favour the
+robot too (the legs' compliance and the feet's friction take some of the push; the torso
+turns): an estimate, not a bound. ``benchmarks/walk_capture_step.py`` measures the engine
+stepping to the capture point.
 
 Output: a markdown table, one row per reach and step time: the largest capturable push
 forward, backward and sideways (N s), the share of directions in which a push of 2, 3, 4 and
@@ -49,7 +52,7 @@ def d_infinity(r: float, reach: float, omega: float, dt: float) -> float:
     """``d_∞`` (m): the largest capturable capture-point distance (module doc, ``l`` the
     ``reach``)."""
     e = math.exp(-omega * dt)
-    return (reach - r) * e / (1.0 - e) + r
+    return reach * e / (1.0 - e) + r  # the fixed point of d = (d - r + reach) e + r
 
 
 def nao_geometry() -> dict:
@@ -108,8 +111,8 @@ def uniform_share(geo: dict, legs: int, dt: float, push_max: float) -> float:
 
 
 def step_time_for(geo: dict, legs: int, share: float, push_max: float) -> float:
-    """The longest step time (s) at which ``share`` of ``U(0, push_max)`` pushes are caught
-    (bisection; the share falls as the step time grows)."""
+    """The longest step time (s, searched in 0.001-1 s) at which ``share`` of ``U(0,
+    push_max)`` pushes are caught (bisection: the share falls as the step time grows)."""
     lo, hi = 1e-3, 1.0
     for _ in range(50):
         mid = 0.5 * (lo + hi)

@@ -13,12 +13,12 @@ period ``T`` (the engine steps every ``T / 2`` s):
 - ``engine``: the plain engine (``benchmarks/walk_push_oracle.py``'s engine row);
 - ``capture step``: every control step (20 ms), the swing foot's landing point moves to
   ``gain x Δv / ω`` from where the engine puts it (``omni_gait.targets``' ``foot_offsets``),
-  ``Δv`` the torso's horizontal velocity less the nominal stepping's at the same phase (a
-  table from 8 unpushed cycles), ``ω = √(g / 0.243 m)`` (the model's CoM height): the
-  capture point's offset caused by the push (Pratt et al. 2006). The swing foot blends from
-  its lift-off offset to it along the swing's cosine; the stance foot keeps its offset until
-  it lifts. Offsets are clipped to ±0.1 m forward and to 0.08 m outward, 0.01 m inward (no
-  crossing); larger bounds changed nothing (50 worlds, 2026-12-06).
+  ``Δv`` the torso's x/y velocity (in its own, leaning frame) less the nominal stepping's at
+  the same phase (a table from 8 unpushed cycles), ``ω = √(g / 0.243 m)`` (the model's CoM
+  height): the capture point's offset caused by the push (Pratt et al. 2006). The swing foot
+  blends from its lift-off offset to it along the swing's cosine; the stance foot keeps its
+  offset until it lifts. Offsets are clipped to ±0.1 m forward and to 0.08 m outward, 0.01 m
+  inward (no crossing); 0.07 or 0.13 m forward changed nothing (50 worlds, 2026-12-06).
 
 ``benchmarks/push_capturability.py`` gives the linear inverted pendulum's estimate of what any
 stepping at that pace could catch. Output: a markdown table of survival (no fall by the end).

@@ -76,9 +76,10 @@ def targets(gait: OmniGait, phase: np.ndarray, command: np.ndarray,
             foot_offsets: np.ndarray | None = None) -> np.ndarray:
     """Joint targets ``[T, 22]`` (``nao.JOINTS`` order, rad, clipped to the NAO's ranges) at
     ``phase[T]`` (cycles) for ``command[T, 3]`` (vx m/s, vy m/s, ω rad/s); ``foot_offsets[T,
-    2, 2]`` (left, right; x, y; m, walk frame) move the feet from where the engine puts them
-    (a footstep adjustment: ``benchmarks/walk_capture_step.py`` places the swing foot by the
-    capture point)."""
+    2, 2]`` (left, right; x, y; m) move the feet from where the engine puts them, added before
+    each foot's turning yaw rotates it (the walk frame when not turning). A footstep
+    adjustment: ``benchmarks/walk_capture_step.py`` places the swing foot by the capture
+    point."""
     phi = np.asarray(phase, float)
     dx, dy, dpsi = np.moveaxis(gait.travel(command), -1, 0)
     w = gait.swing_fraction
