@@ -45,6 +45,8 @@ import sys
 
 import numpy as np
 
+from markdown_table import markdown_table
+
 G = 9.81
 
 
@@ -151,10 +153,8 @@ def main(argv: list[str] | None = None) -> int:
           f"{geo['reach_m']:.3f} m; the walk steps every {geo['step_s']:.2f} s")
     head = ["step reach (m)", "step time (s)", "forward (N s)", "backward", "sideways",
             "2 N s", "3 N s", "4 N s", "5 N s", f"U(0, {a.push_max:g}) N s"]
-    print("| " + " | ".join(head) + " |\n|" + "---|" * len(head))
-    for legs in (1, 2):
-        for dt in steps:
-            print("| " + " | ".join(table(geo, legs, dt, a.push_max)) + " |")
+    print(markdown_table(head, [table(geo, legs, dt, a.push_max) for legs in (1, 2)
+                                for dt in steps]))
     print(f"95 % of pushes U(0, {a.push_max:g}) N s caught at steps of at most "
           f"{step_time_for(geo, 1, 0.95, a.push_max):.3f} s (one leg's reach), "
           f"{step_time_for(geo, 2, 0.95, a.push_max):.3f} s (both legs')")

@@ -32,6 +32,8 @@ import sys
 
 import numpy as np
 
+from markdown_table import markdown_table
+
 COM_HEIGHT_M = 0.243  # the NAO model's CoM in the walk's nominal pose (push_capturability.py)
 REACH_X_M, OUT_Y_M, IN_Y_M = 0.10, 0.08, 0.01
 
@@ -153,9 +155,7 @@ def main(argv: list[str] | None = None) -> int:
         ap.error(str(e))
     head = ["period (s)", "engine"] + [f"{p:g} N s" for p in a.pushes]
     print(f"{a.worlds} nominal worlds x {a.duration:g} s, stepping in place, one push each")
-    print("| " + " | ".join(head) + " |\n|" + "---|" * len(head))
-    for r in rows:
-        print("| " + " | ".join(r) + " |")
+    print(markdown_table(head, rows))
     return 0
 
 

@@ -35,6 +35,8 @@ import sys
 
 import numpy as np
 
+from markdown_table import markdown_table
+
 #: the walk engine's settings ``--engine`` may change (problem keys, omni_gait.py)
 ENGINE_KEYS = ("period_s", "swing_fraction", "step_height_m", "leg_height_m", "width_m",
                "sway_m", "lean_rad")
@@ -163,9 +165,7 @@ def main(argv: list[str] | None = None) -> int:
                                                       for s, h in ORACLES]
     print(f"{a.run or 'engine'} {engine or ''}: {a.worlds} worlds x {a.duration:g} s, "
           f"oracle |v| clipped to {a.clip:g}")
-    print("| " + " | ".join(head) + " |\n|" + "---|" * len(head))
-    for r in rows:
-        print("| " + " | ".join(r) + " |")
+    print(markdown_table(head, rows))
     return 0
 
 
