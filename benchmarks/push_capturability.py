@@ -18,15 +18,17 @@ A push ``J`` (N s) on the whole robot of mass ``m`` changes the CoM velocity by 
 puts the capture point ``J / (m ω)`` beyond the CoM. Assumptions that favour the robot:
 infinitely many steps; each axis alone (a push is caught if both of its components are: the
 reachable steps taken as a box); the same reach ``l`` forward, backward and sideways, no leg
-crossing considered; sideways, the CoM over the stance ankle and the sole's outer edge beyond
-it for either direction (the inner edge is nearer; a push towards the stance leg's side needs
-the other foot to cross or two steps); the centre of pressure at the sole's edge (the model's
-ankle pitch torque limit, 6.4 N m, allows it: ``m g r`` ≤ 5.7 N m from the ankle). Along x the
-CoM is where the nominal pose has it (5 mm ahead of the ankles), with none of the gait's sway.
-Neither favourable nor not: the first step lands ``Δt`` after the push with the full reach (a
-swing under way may land sooner, but with less reach). Two reaches: one leg's ``√((L1 + L2)²
-− h²)`` at the walk's hip height ``h`` (the swing leg stretched, the stance leg under the body)
-and twice that (both legs stretched, the loosest). What the model leaves out can favour the
+crossing considered (a push towards the stance leg's side would need the other foot to cross,
+or two steps); the centre of pressure at the sole's edge (the model's ankle pitch torque
+limit, 6.4 N m, allows it: ``m g r`` ≤ 5.7 N m from the ankle). Along x the CoM is where the
+nominal pose has it (5 mm ahead of the ankles), with none of the gait's sway. Either way:
+sideways, the CoM over the stance ankle and the sole's outer edge beyond it, for either
+direction (in the gait the CoM is inboard of the stance ankle, 0.079 m in the nominal double
+support: more room against a push towards the stance side, less towards the swing side); the
+first step landing ``Δt`` after the push with the full reach (a swing under way may land
+sooner, but with less reach). Two reaches: one leg's ``√((L1 + L2)² − h²)`` at the walk's
+hip height ``h`` (the swing leg stretched, the stance leg under the body) and twice that (both
+legs stretched, the loosest). What the model leaves out can favour the
 robot too (the legs' compliance and the feet's friction take some of the push; the torso
 turns): an estimate, not a bound. ``benchmarks/walk_capture_step.py`` measures the engine
 stepping to the capture point.
