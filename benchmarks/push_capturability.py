@@ -151,7 +151,8 @@ def main(argv: list[str] | None = None) -> int:
     omega = math.sqrt(G / geo["com_height_m"])
     print(f"NAO model: mass {geo['mass_kg']:.2f} kg, CoM {geo['com_height_m']:.3f} m high "
           f"(ω {omega:.2f} 1/s), sole edges from the CoM: front {geo['front_m']:.3f}, back "
-          f"{geo['back_m']:.3f}, outer {geo['outer_m']:.3f} m; one leg's reach "
+          f"{geo['back_m']:.3f}, outer {geo['outer_m']:.3f} m (from the ankle, the CoM over it)"
+          f"; one leg's reach "
           f"{geo['reach_m']:.3f} m; the walk steps every {geo['step_s']:.2f} s")
     head = ["step reach (m)", "step time (s)", "forward (N s)", "backward", "sideways",
             "2 N s", "3 N s", "4 N s", "5 N s", f"U(0, {a.push_max:g}) N s"]
