@@ -42,7 +42,8 @@ class CaptureStep:
     """The engine's policy with capture-point foot placement (module doc); ``gain`` 0 is the
     plain engine. State per world: each foot's offset, its offset at lift-off, swinging."""
 
-    def __init__(self, problem, sim, n: int, gain: float, v_nominal: np.ndarray | None) -> None:
+    def __init__(self, problem, sim, n: int, gain: float, v_nominal: np.ndarray | None,
+                 record: bool = False) -> None:
         self.ctl, self.gain, self.v_nominal = problem.ctl, float(gain), v_nominal
         names = list(sim.observe.names)
         self.iv = [names.index(f"torso_velocity:{a}") for a in "xy"]
@@ -51,7 +52,8 @@ class CaptureStep:
         self.omega = math.sqrt(9.81 / COM_HEIGHT_M)
         self.offset, self.lift_off = np.zeros((n, 2, 2)), np.zeros((n, 2, 2))
         self.swinging = np.zeros((n, 2), bool)
-        self.seen: list[tuple[np.ndarray, np.ndarray]] = []  # (phase, velocity) per step
+        #: (phase, velocity) per control step, kept only when ``record`` (nominal_velocity)
+        self.seen: list[tuple[np.ndarray, np.ndarray]] | None = [] if record else None
 
     def __call__(self, rows: np.ndarray, obs: np.ndarray) -> np.ndarray:
         from evomotion.studies.humanoid_omniwalk.omni_gait import targets
@@ -59,7 +61,8 @@ class CaptureStep:
         ctl, gait = self.ctl, self.ctl.gait
         phase = np.arctan2(obs[:, self.iph[0]], obs[:, self.iph[1]]) / (2 * np.pi) % 1.0
         v = obs[:, self.iv]
-        self.seen.append((phase, v))
+        if self.seen is not None:
+            self.seen.append((phase, v))
         dv = np.zeros_like(v)
         if self.v_nominal is not None:
             nb = len(self.v_nominal)
@@ -105,11 +108,12 @@ def nominal_velocity(p, sim, cycles: int = 8) -> np.ndarray:
     """The unpushed engine's torso velocity ``[bins, 2]`` by phase (one bin per control step
     of a cycle; the first two cycles left out)."""
     nb = int(round(p.ctl.gait.period_s / p.ctl.control_dt))
-    eng = CaptureStep(p, sim, 1, 0.0, None)
+    eng = CaptureStep(p, sim, 1, 0.0, None, record=True)
     sim.run(eng, 1, int(cycles * p.ctl.gait.period_s / p.dt), commands=np.zeros((1, 3)),
             initial_state=p.ctl.state0)
-    phase = np.array([s[0][0] for s in eng.seen])[2 * nb:]
-    v = np.array([s[1][0] for s in eng.seen])[2 * nb:]
+    seen = eng.seen or []
+    phase = np.array([s[0][0] for s in seen])[2 * nb:]
+    v = np.array([s[1][0] for s in seen])[2 * nb:]
     b = np.round(phase * nb).astype(int) % nb
     return np.array([v[b == i].mean(axis=0) for i in range(nb)])
 

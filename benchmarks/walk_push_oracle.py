@@ -94,11 +94,11 @@ class Probe:
 
     def oracle(self, worlds, commands, torso, speed, hold, clip) -> np.ndarray:
         """``commands`` with the oracle's walk along the push from its control step."""
-        from evomotion.studies.humanoid_omniwalk.commands import heading_at
+        from evomotion.studies.humanoid_omniwalk.commands import control_step_at, heading_at
 
         ws, dt = worlds, self.problem.ctl.control_dt
         push_t = np.array([w.push_time_s for w in ws])
-        at = np.minimum((push_t / dt).astype(int), torso.shape[1] - 1)
+        at = control_step_at(push_t, dt, torso.shape[1])
         push_dir = np.array([np.arctan2(w.push_ns[1], w.push_ns[0]) for w in ws])
         rel = push_dir - heading_at(torso, push_t, dt)
         walk = np.clip(speed * np.stack([np.cos(rel), np.sin(rel)], axis=1), -clip, clip)

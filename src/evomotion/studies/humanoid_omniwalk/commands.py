@@ -91,10 +91,15 @@ def torso_yaw(quat: np.ndarray) -> np.ndarray:
     return np.arctan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
 
 
+def control_step_at(times_s: np.ndarray, control_dt_s: float, count: int) -> np.ndarray:
+    """The control step ``[n]`` holding each of ``times_s[n]``, at most ``count − 1``."""
+    return np.minimum((np.asarray(times_s) / control_dt_s).astype(int), count - 1)
+
+
 def heading_at(torso: np.ndarray, times_s: np.ndarray, control_dt_s: float) -> np.ndarray:
     """The torso's yaw (rad) ``[n]`` at ``times_s[n]`` from a closed loop's ``torso[n, C + 1,
     7]`` record (one row per control step; the step holding the time, the last at most)."""
-    c = np.minimum((np.asarray(times_s) / control_dt_s).astype(int), torso.shape[1] - 1)
+    c = control_step_at(times_s, control_dt_s, torso.shape[1])
     return torso_yaw(torso[np.arange(len(c)), c, 3:7])
 
 
