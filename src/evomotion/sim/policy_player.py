@@ -61,6 +61,10 @@ class PolicyPlayer:
         info = read_json(jpath, "controller description (policy.json)", MAX_JSON_BYTES)
         if not isinstance(info, dict):
             raise FileFormatError(jpath, None, "a JSON object")
+        if info.get("layers"):
+            raise InputError(f"{jpath}: the controller acts with layers on top of its policy "
+                             f"({', '.join(map(str, info['layers']))}), which this player "
+                             "does not run; expected a plain policy")
         self.policy = read_policy_npz(folder / "policy.npz")
         names = info.get("observations")
         if not isinstance(names, list) or len(names) != self.policy.spec.obs_dim:

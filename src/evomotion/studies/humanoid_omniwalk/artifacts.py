@@ -17,6 +17,12 @@ def policy_info(problem: Any) -> dict[str, Any]:
     ctl, cfg, sim = problem.ctl, problem.cfg, problem.sim
     model = problem.robot.model
     joints = [model.joint(int(model.actuator_trnid[int(c), 0])).name for c in sim.columns]
+    layers = {"capture_step": {
+        "gain": cfg.capture_gain, "com_height_m": ctl.com_height_m,
+        "note": "capture-point foot placement by leg odometry on top of the policy "
+                "(evomotion.studies.humanoid_omniwalk.capture_step); not in policy.py, "
+                "policy.onnx or naoqi/: they play the policy without it"}} \
+        if cfg.capture_gain else {}
     return {
         "robot": problem.robot.name, "policy": problem.policy.kind,
         "files": {"npz": "policy.npz", "py": "policy.py", "onnx": "policy.onnx"},
@@ -41,6 +47,7 @@ def policy_info(problem: Any) -> dict[str, Any]:
         "nominal_pose_all_actuators": {model.actuator(i).name: float(sim.nominal[i])
                                        for i in range(model.nu)},
         "foot_contact_order": list(problem.robot.feet),
+        **({"layers": layers} if layers else {}),
     }
 
 
@@ -62,6 +69,10 @@ def write_naoqi(ctx: Any) -> None:
     p = ctx.problem
     npz = ctx.out_dir / "policy.npz" if ctx.out_dir is not None else None
     if p is None or npz is None or not npz.is_file() or not p.robot.has("naoqi_policy"):
+        return
+    if p.cfg.capture_gain:
+        ctx.log("naoqi/ not written: the runner does not run the capture step "
+                "(problem.capture_gain) this controller was evolved with")
         return
     info = policy_info(p)
     export = p.robot.capability("naoqi_policy", "humanoid-walk's NAOqi export")

@@ -171,14 +171,23 @@ def top_speeds(p, params, mean, std, tests: dict[str, tuple] | None = None
     return out
 
 
-def compare(run: str | Path, worlds: int = 100, duration_s: float = 60.0, seed: int = 0
-            ) -> dict[str, Any]:
+def compare(run: str | Path, worlds: int = 100, duration_s: float = 60.0, seed: int = 0,
+            capture_gain: float | None = None) -> dict[str, Any]:
+    """The run's controller and its engine (module doc); ``capture_gain`` replaces the run's
+    (``problem.capture_gain``, :mod:`.capture_step`) for both."""
     from evomotion.core.checks import check_number
+    from evomotion.studies.humanoid_omniwalk.problem import OmniWalkProblem
 
     check_number("--worlds", worlds, lo=1, hi=MAX_WORLDS, integer=True)
     check_number("--duration", duration_s, lo=0.5, hi=600.0)
     check_number("--seed", seed, lo=0, hi=2**20, integer=True)
+    if capture_gain is not None:
+        check_number("--capture-gain", capture_gain, lo=0.0, hi=3.0)
     problem, policy, folder = load_run(run, duration_s)
+    if capture_gain is not None and capture_gain != problem.cfg.capture_gain:
+        problem.sim.close()
+        problem = OmniWalkProblem(dataclasses.replace(problem.cfg,
+                                                      capture_gain=float(capture_gain)))
     seeds = EVAL_SEED_BASE + int(seed) * MAX_WORLDS + np.arange(int(worlds))
     engine = problem.ctl.initial_params()
     o = problem.obs_dim
@@ -187,7 +196,8 @@ def compare(run: str | Path, worlds: int = 100, duration_s: float = 60.0, seed: 
     out: dict[str, Any] = {"run": str(folder), "robot": problem.robot.name,
                            "worlds": int(worlds), "seed": int(seed),
                            "duration_s": float(duration_s),
-                           "push_ns": list(problem.draw.push_ns)}
+                           "push_ns": list(problem.draw.push_ns),
+                           "capture_gain": problem.cfg.capture_gain}
     quiet = quiet_problem(problem)
     for name, (x, mean, std) in rows.items():
         out[name] = _summary(_play(problem, x, mean, std, seeds))
@@ -205,12 +215,15 @@ def table(res: dict[str, Any]) -> str:
     lo, hi = res["push_ns"]
     robot = {"nao": "NAO", "op3": "OP3"}.get(res.get("robot", "nao"), res.get("robot"))
     lines = [f"{robot}, {res['worlds']} unseen perturbed worlds, {res['duration_s']:g} s of random "
-             f"commands each, one push U({lo:g}, {hi:g}) N s (seed {res['seed']})", "",
+             f"commands each, one push U({lo:g}, {hi:g}) N s (seed {res['seed']})"
+             + (f", capture step gain {res['capture_gain']:g}" if res.get("capture_gain")
+                else ""), "",
              "| controller | survival | time up (s) | speed error (m/s) | relative | steady | "
              "yaw-rate error (deg/s) | relative | steady | power (W) |",
              "|---|---|---|---|---|---|---|---|---|---|"]
-    for key, name in (("controller", "evolved controller"), ("engine", "walk engine (open "
-                                                                       "loop, the start)")):
+    engine = ("walk engine (the start) + capture step" if res.get("capture_gain") else
+              "walk engine (open loop, the start)")
+    for key, name in (("controller", "evolved controller"), ("engine", engine)):
         r = res[key]
         lines.append(f"| {name} | {100 * r['survival']:.0f} % | {r['time_up_s']:.1f} | "
                      f"{r['speed_error_mps']:.3f} | {_pct(r['relative_speed_error'])} | "
@@ -236,6 +249,6 @@ def table(res: dict[str, Any]) -> str:
 
 
 def compare_command(run: Path, worlds: int = 100, duration_s: float = 60.0, seed: int = 0,
-                    json_out: bool = False) -> str:
-    res = compare(run, worlds, duration_s, seed)
+                    json_out: bool = False, capture_gain: float | None = None) -> str:
+    res = compare(run, worlds, duration_s, seed, capture_gain)
     return json.dumps(res, indent=1) if json_out else table(res)

@@ -39,6 +39,7 @@ from evomotion.sim.observations import ObservationSpec, observation_mirror
 from evomotion.sim.robots import load_robot, nao
 from evomotion.sim.robots.nao.joint_limits import SPEED_LIMITS
 from evomotion.sim.rollout import ServoWork
+from evomotion.studies.humanoid_omniwalk.capture_step import CaptureStep, com_height
 from evomotion.studies.humanoid_omniwalk.ik_gait import IKGait
 from evomotion.studies.humanoid_omniwalk.omni_gait import OmniGait, targets
 
@@ -65,7 +66,8 @@ class Controller:
     def __init__(self, gait: OmniGait, control_period_s: float = 0.02, harmonics: int = 3,
                  clip_obs: float = 5.0, threads: int = 1,
                  command_feedback: bool = False, feedback_start: float = 0.0,
-                 robot: str = "nao", symmetric: bool = False) -> None:
+                 robot: str = "nao", symmetric: bool = False,
+                 capture_gain: float = 0.0) -> None:
         from evomotion.errors import InputError
 
         self.feedback_start = float(feedback_start)
@@ -118,6 +120,12 @@ class Controller:
         self.state0 = r.state_at(self.nominal)  # the NAO's own rule, bit for bit (build.py)
         self.speed_limits = np.array([speeds.get(j, np.inf) for j in self.driven])
         self.work = ServoWork(r.model, self.columns)
+        #: the capture step's gain (:mod:`.capture_step`; 0: none) and the CoM height it uses
+        self.capture_gain = float(capture_gain)
+        if self.capture_gain and not self.closed_form:
+            raise InputError(f"problem.capture_gain: the capture step needs the NAO's leg "
+                             f"kinematics; robot {r.name!r} has none (set it to 0)")
+        self.com_height_m = com_height(r, self.state0) if self.capture_gain else 0.0
 
     def _mirror(self) -> Mirror:
         """The robot's left-right mirror on the driven joints (a follower is its leader) and
@@ -161,11 +169,16 @@ class Controller:
     def run(self, params: np.ndarray, mean: np.ndarray, std: np.ndarray, worlds: list,
             nstep: int, commands: np.ndarray) -> ClosedLoopResult:
         """Episode ``i``: ``params[i]`` with its normaliser in ``worlds[i]`` under
-        ``commands[i]`` (``[n, C, 3]``), from the engine's standing pose."""
+        ``commands[i]`` (``[n, C, 3]``), from the engine's standing pose (with the capture
+        step on top where ``capture_gain``)."""
         spec = self.policy
+        layer = (CaptureStep(self, list(self.sim.observe.names), len(params),
+                             self.capture_gain, self.com_height_m)
+                 if self.capture_gain else None)
 
         def policy(rows: np.ndarray, obs: np.ndarray) -> np.ndarray:
-            return spec.act(params[rows], obs, mean[rows], std[rows])
+            act = spec.act(params[rows], obs, mean[rows], std[rows])
+            return act if layer is None else layer(rows, obs, act)
 
         return self.sim.run(policy, worlds, nstep, commands=commands,
                             initial_state=self.state0, record_states=True,

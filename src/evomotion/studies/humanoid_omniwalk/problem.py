@@ -79,6 +79,9 @@ class OmniWalkConfig:
     #: a mirror-symmetric controller: the search runs on the parameters of controllers that
     #: act as their own mirror image (about half; core/policies/mirror.py); the NAO only
     symmetric: bool = False
+    #: capture-point foot placement from leg odometry on top of the controller, the swing
+    #: foot moved by this times the capture point's offset (capture_step.py); 0 off; the NAO
+    capture_gain: float = 0.0
     normalize: bool = True  # ARS V2 observation normalisation
     episodes: int = 1  # training episodes per individual and generation
     eval_episodes: int = 8  # episodes of the centre per generation (the reported return)
@@ -148,6 +151,7 @@ class OmniWalkConfig:
             check_number(f"problem.{key}", getattr(self, key), lo=0.0, hi=100.0, lo_open=True)
         for key in ("yaw_share", "energy_weight", "speed_weight", "fall_weight"):
             check_number(f"problem.{key}", getattr(self, key), lo=0.0, hi=1000.0)
+        check_number("problem.capture_gain", self.capture_gain, lo=0.0, hi=3.0)
         check_number("problem.param_bound", self.param_bound, lo=1e-6, hi=1e6)
         check_number("problem.threads", self.threads, lo=0, hi=1024, integer=True)
         check_number("problem.period_s", self.period_s, lo=0.2, hi=1.5)
@@ -196,7 +200,8 @@ class OmniWalkProblem:
         threads = cfg.threads or max(1, min(os.cpu_count() or 1, 8))
         self.ctl = ctl = Controller(cfg.gait(), cfg.control_period_s, cfg.harmonics,
                                     cfg.clip_obs, threads, cfg.command_feedback,
-                                    cfg.command_feedback_start, cfg.robot, cfg.symmetric)
+                                    cfg.command_feedback_start, cfg.robot, cfg.symmetric,
+                                    cfg.capture_gain)
         self.robot, self.sim, self.policy = ctl.robot, ctl.sim, ctl.policy
         self.obs_spec, self.obs_names = ctl.obs_spec, ctl.sim.observe.names
         self.obs_dim, self.act_dim = self.sim.observation_size, self.sim.action_size

@@ -36,12 +36,15 @@ def compare_cmd(run: Path = typer.Argument(..., help="a humanoid-walk run folder
                 duration: float = typer.Option(60.0, "--duration", help="seconds of random "
                                                "commands per world (0.5 to 600)"),
                 seed: int = typer.Option(0, "--seed", help="seed of the worlds (>= 0)"),
+                capture_gain: float = typer.Option(None, "--capture-gain", help="the capture "
+                                                   "step's gain over the run's (0 to 3; 0 "
+                                                   "none; the NAO)"),
                 json_out: bool = typer.Option(False, "--json", help="JSON on stdout")) -> None:
     """The evolved controller beside the walk engine it started from, on the same worlds."""
     from evomotion.studies.humanoid_omniwalk.compare import compare_command
 
     typer.echo(compare_command(run, worlds=worlds, duration_s=duration, seed=seed,
-                               json_out=json_out))
+                               json_out=json_out, capture_gain=capture_gain))
 
 
 

@@ -1,0 +1,167 @@
+"""The capture step (capture_step.py): leg odometry reads the torso's velocity, the swing foot
+lands at the clipped capture-point offset, gain 0 changes nothing, other robots are refused."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from evomotion.errors import InputError
+from evomotion.sim.closed_loop import ClosedLoopSimulator
+from evomotion.sim.observations import ObservationSpec
+from evomotion.studies.humanoid_omniwalk.capture_step import (
+    DEADBAND_MPS,
+    REACH_X_M,
+    CaptureStep,
+)
+from evomotion.studies.humanoid_omniwalk.controller import CHANNELS
+from evomotion.studies.humanoid_omniwalk.problem import OmniWalkConfig, OmniWalkProblem
+from evomotion.studies.policy_search import policy_rows
+
+
+@pytest.fixture(scope="module")
+def problem():
+    return OmniWalkProblem(OmniWalkConfig(duration_s=3.0, threads=1, capture_gain=1.0))
+
+
+def _reading(ctl) -> ClosedLoopSimulator:
+    """The controller's simulator with the torso's true velocity appended."""
+    r = ctl.robot
+    spec = ObservationSpec((*CHANNELS, "torso_velocity"), phase_period_s=ctl.gait.period_s,
+                           command_size=3)
+    return ClosedLoopSimulator(r, spec, ctl.sim.k, 1, columns=ctl.columns, nominal=ctl.nominal,
+                               followers=[(r.joints.index(a), r.joints.index(b))
+                                          for a, b in ctl.followers.items()])
+
+
+def test_leg_odometry_reads_the_torsos_velocity(problem):
+    """The fitted engine walking forward at 0.3 m/s, then sideways at 0.15, nominal world:
+    after the first cycle, eq. (1)'s mean velocity within 2 cm/s of the true one and each
+    axis correlated above 0.85 with it, control step by control step (measured 0.92-0.95;
+    this engine sways 0.33 m/s sideways and its mean |error| is 2.5-6 cm/s)."""
+    ctl = problem.ctl
+    sim = _reading(ctl)
+    names = list(sim.observe.names)
+    true_cols = [names.index(f"torso_velocity:{a}") for a in "xy"]
+    x = ctl.initial_params()
+    od = problem.obs_dim
+    seen = []
+    for command in ((0.3, 0.0, 0.0), (0.0, 0.15, 0.0)):
+        layer = CaptureStep(ctl, names, 1, 0.0, ctl.com_height_m)
+
+        def policy(rows, obs, layer=layer):
+            act = problem.policy.act(x[None], obs[:, :od], np.zeros((1, od)), np.ones((1, od)))
+            est = layer.velocity_of(rows, obs, layer.phase(obs))
+            seen.append((est[0], obs[0, true_cols]))
+            return layer(rows, obs, act)
+
+        res = sim.run(policy, 1, int(2.0 / problem.dt), commands=np.array([command]),
+                      initial_state=ctl.state0)
+        assert not res.fell[0]
+    sim.close()
+    half = len(seen) // 2
+    for part in (seen[ctl.window:half], seen[half + ctl.window:]):
+        est, true = (np.array(a) for a in zip(*part, strict=True))
+        np.testing.assert_allclose(est.mean(axis=0), true.mean(axis=0), atol=0.02)
+        for axis in range(2):
+            assert np.corrcoef(est[:, axis], true[:, axis])[0, 1] > 0.85
+
+
+def test_gain_zero_returns_the_action_unchanged(problem):
+    ctl = problem.ctl
+    names = list(ctl.sim.observe.names)
+    rng = np.random.default_rng(0)
+    obs = rng.normal(size=(5, len(names)))
+    act = rng.normal(size=(5, ctl.columns.size))
+    layer = CaptureStep(ctl, names, 5, 0.0, ctl.com_height_m)
+    assert np.array_equal(layer(np.arange(5), obs, act), act)
+
+
+def test_the_swing_foot_lands_at_the_clipped_capture_point(problem):
+    """A constant velocity offset (an oracle column, a fixed sway of 0): over one cycle each
+    foot ends its swing at ``gain Δv / ω₀`` (``|Δv|`` less the dead band; x clipped to
+    REACH_X_M, y outward only) and keeps it while it stands."""
+    ctl = problem.ctl
+    names = [*ctl.sim.observe.names, "torso_velocity:x", "torso_velocity:y"]
+    vcols = [len(names) - 2, len(names) - 1]
+    omega = math.sqrt(9.81 / ctl.com_height_m)
+    dv = np.array([[0.3, 0.0], [2.0, 0.3]])  # 0.3 m/s forward; far beyond reach, to the left
+    layer = CaptureStep(ctl, names, 2, 1.0, ctl.com_height_m, velocity=vcols,
+                        sway=np.zeros((ctl.window, 2)))
+    obs = np.zeros((2, len(names)))
+    obs[:, vcols] = dv
+    action = np.zeros((2, ctl.columns.size))
+    outs = []
+    for c in range(2 * ctl.window):
+        phase = c * ctl.control_dt / ctl.gait.period_s
+        obs[:, names.index("phase:sin")] = math.sin(2 * math.pi * phase)
+        obs[:, names.index("phase:cos")] = math.cos(2 * math.pi * phase)
+        outs.append(layer(np.arange(2), obs, action))
+    size = np.linalg.norm(dv, axis=1, keepdims=True)
+    shrunk = dv * (size - DEADBAND_MPS) / size  # the dead band taken off |Δv|
+    want_x = np.minimum(shrunk[:, 0] / omega, REACH_X_M)
+    np.testing.assert_allclose(layer.offset[:, :, 0], np.stack([want_x, want_x], 1),
+                               atol=1e-12)
+    assert layer.offset[0, :, 1] == pytest.approx([0.0, 0.0], abs=1e-12)
+    assert layer.offset[1, 0, 1] == pytest.approx(min(shrunk[1, 1] / omega, 0.08))  # outward
+    assert layer.offset[1, 1, 1] == pytest.approx(0.01)  # right foot: inward, clipped
+    assert np.abs(outs[-1]).max() > 0.05  # the legs really moved
+
+
+def test_a_run_with_the_capture_step_is_reproducible_and_independent_of_neighbours(problem):
+    """Each row's episodes carry their own layer state: a row scores the same alone and
+    beside others, twice; the layer changes the score against the same problem without it."""
+    x0 = problem.initial_population(None, np.random.default_rng(0))
+    g = x0 + 0.002 * np.random.default_rng(2).standard_normal((3, problem.genome.dim))
+    rows = policy_rows(g, np.zeros(problem.obs_dim), np.ones(problem.obs_dim), 11, 2)
+    ev = problem.evaluate(rows)
+    np.testing.assert_array_equal(problem.evaluate(rows).fitness, ev.fitness)
+    np.testing.assert_array_equal(problem.evaluate(rows[1:2]).fitness, ev.fitness[1:2])
+    plain = OmniWalkProblem(OmniWalkConfig(duration_s=3.0, threads=1))
+    assert not np.array_equal(plain.evaluate(rows).fitness, ev.fitness)
+
+
+def test_the_capture_step_is_refused_off_the_nao_and_out_of_range():
+    with pytest.raises(InputError, match="problem.capture_gain"):
+        OmniWalkConfig(capture_gain=-0.1).validate()
+    with pytest.raises(InputError, match="problem.capture_gain: the capture step needs"):
+        OmniWalkProblem(OmniWalkConfig(robot="op3", capture_gain=0.5, threads=1))
+
+
+def test_a_run_with_the_capture_step_says_so_and_its_players_refuse_it(tmp_path):
+    """policy.json records the layer; no naoqi/ (the runner lacks it); the policy player,
+    which would walk the policy alone, refuses the folder in one line."""
+    import json
+
+    import mujoco
+
+    from evomotion.run.config import resolve_config
+    from evomotion.run.runner import run_study
+    from evomotion.sim.policy_player import PolicyPlayer
+    from evomotion.studies import get_study
+    from evomotion.studies.humanoid_omniwalk.compare import compare, compare_command
+
+    s = get_study("humanoid-walk")
+    out = tmp_path / "run"
+    tiny = ("problem.duration_s=1.0", "problem.eval_episodes=1", "problem.episodes=1",
+            "problem.threads=1", "algorithm.pop_size=4", "algorithm.top_directions=0",
+            "run.generations=1", "run.videos=false", "problem.capture_gain=0.7")
+    run_study(s, resolve_config(s, None, list(tiny)), out, quiet=True)
+    info = json.loads((out / "policy.json").read_text())
+    assert info["layers"]["capture_step"]["gain"] == 0.7
+    assert not (out / "naoqi").exists()
+    assert "naoqi/ not written: the runner does not run the capture step" in \
+        (out / "log.txt").read_text()
+    model = mujoco.MjModel.from_xml_string("<mujoco/>")
+    with pytest.raises(InputError, match="layers on top of its policy \\(capture_step\\)"):
+        PolicyPlayer(out, model)
+    # compare runs it (the run's gain, or --capture-gain over it) and says so
+    text = compare_command(out, worlds=1, duration_s=1.0)
+    assert ", capture step gain 0.7" in text and "| walk engine (the start) + capture step" in text
+    res = json.loads(compare_command(out, worlds=1, duration_s=1.0, json_out=True,
+                                     capture_gain=0.0))
+    assert res["capture_gain"] == 0.0
+    with pytest.raises(InputError, match="--capture-gain"):
+        compare(out, worlds=1, duration_s=1.0, capture_gain=-1.0)
