@@ -93,12 +93,24 @@ def test_the_swing_foot_lands_at_the_clipped_capture_point(problem):
     obs = np.zeros((2, len(names)))
     obs[:, vcols] = dv
     action = np.zeros((2, ctl.columns.size))
-    outs = []
+    outs, offsets, phases = [], [], []
     for c in range(2 * ctl.window):
         phase = c * ctl.control_dt / ctl.gait.period_s
         obs[:, names.index("phase:sin")] = math.sin(2 * math.pi * phase)
         obs[:, names.index("phase:cos")] = math.cos(2 * math.pi * phase)
         outs.append(layer(np.arange(2), obs, action))
+        offsets.append(layer.offset.copy())
+        phases.append(phase % 1.0)
+    off, ph = np.array(offsets), np.array(phases)  # [T, 2 worlds, 2 feet, 2]
+    w = ctl.gait.swing_fraction
+    for f in range(2):  # the left foot swings at phase [0, w), the right half a cycle later
+        standing = (ph + 0.5 * f) % 1.0 >= w
+        first = np.argmax(standing)  # a stance foot keeps its offset until it lifts again
+        run = first + np.argmax(~standing[first:]) if (~standing[first:]).any() else len(ph)
+        assert np.array_equal(off[first:run, :, f], np.broadcast_to(off[first, :, f],
+                                                                   off[first:run, :, f].shape))
+        swing_x = off[~standing, 0, f, 0]  # it gets there along the swing, not at once
+        assert np.any((swing_x > 1e-4) & (swing_x < swing_x.max() - 1e-4))
     size = np.linalg.norm(dv, axis=1, keepdims=True)
     shrunk = dv * (size - DEADBAND_MPS) / size  # the dead band taken off |Δv|
     want_x = np.minimum(shrunk[:, 0] / omega, REACH_X_M)
@@ -165,3 +177,25 @@ def test_a_run_with_the_capture_step_says_so_and_its_players_refuse_it(tmp_path)
     assert res["capture_gain"] == 0.0
     with pytest.raises(InputError, match="--capture-gain"):
         compare(out, worlds=1, duration_s=1.0, capture_gain=-1.0)
+
+
+def test_the_online_layer_waits_its_warm_up_cycles(problem):
+    """Learning the sway online, the layer moves no foot in its first WARMUP_CYCLES cycles,
+    however large the velocity it reads (an oracle column of 1 m/s)."""
+    from evomotion.studies.humanoid_omniwalk.capture_step import WARMUP_CYCLES
+
+    ctl = problem.ctl
+    names = [*ctl.sim.observe.names, "torso_velocity:x", "torso_velocity:y"]
+    layer = CaptureStep(ctl, names, 1, 1.0, ctl.com_height_m, velocity=[len(names) - 2,
+                                                                         len(names) - 1])
+    obs = np.zeros((1, len(names)))
+    obs[0, -2] = 1.0
+    action = np.zeros((1, ctl.columns.size))
+    moved = []
+    for c in range((WARMUP_CYCLES + 1) * ctl.window):
+        phase = c * ctl.control_dt / ctl.gait.period_s
+        obs[0, names.index("phase:sin")] = math.sin(2 * math.pi * phase)
+        obs[0, names.index("phase:cos")] = math.cos(2 * math.pi * phase)
+        moved.append(np.abs(layer(np.arange(1), obs, action)).max())
+    assert max(moved[:WARMUP_CYCLES * ctl.window]) == 0.0
+    assert max(moved[WARMUP_CYCLES * ctl.window:]) > 0.01

@@ -20,8 +20,8 @@ def policy_info(problem: Any) -> dict[str, Any]:
     layers = {"capture_step": {
         "gain": cfg.capture_gain, "com_height_m": ctl.com_height_m,
         "note": "capture-point foot placement by leg odometry on top of the policy "
-                "(evomotion.studies.humanoid_omniwalk.capture_step); not in policy.py, "
-                "policy.onnx or naoqi/: they play the policy without it"}} \
+                "(evomotion.studies.humanoid_omniwalk.capture_step); not in policy.py or "
+                "policy.onnx (they play the policy without it); no naoqi/ is written"}} \
         if cfg.capture_gain else {}
     return {
         "robot": problem.robot.name, "policy": problem.policy.kind,
