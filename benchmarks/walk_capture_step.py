@@ -70,16 +70,11 @@ class Play:
 
 
 def reading(ctl, channels: tuple[str, ...]):
-    """A simulator of ``ctl``'s robot, joints and control period reading ``channels``."""
-    from evomotion.sim.closed_loop import ClosedLoopSimulator
+    """``ctl``'s simulator reading ``channels`` (its threads)."""
     from evomotion.sim.observations import ObservationSpec
 
-    r = ctl.robot
     spec = ObservationSpec(channels, phase_period_s=ctl.gait.period_s, command_size=3)
-    return ClosedLoopSimulator(r, spec, ctl.sim.k, ctl.sim.nthread, columns=ctl.columns,
-                               nominal=ctl.nominal,
-                               followers=[(r.joints.index(a), r.joints.index(b))
-                                          for a, b in ctl.followers.items()])
+    return ctl.simulator(spec, ctl.sim.nthread)
 
 
 def nominal_velocity(p, sim, base=None, cycles: int = 8) -> np.ndarray:
@@ -109,15 +104,9 @@ def oracle(p, sim, n: int, gain: float, v_nominal: np.ndarray, deadband_mps: flo
     from evomotion.studies.humanoid_omniwalk.capture_step import CaptureStep
 
     names = list(sim.observe.names)
-    return CaptureStep(p.ctl, names, n, gain, p.ctl.com_height_m or _com(p),
+    return CaptureStep(p.ctl, names, n, gain, p.ctl.com_height_m,
                        velocity=[names.index(f"torso_velocity:{a}") for a in "xy"],
                        sway=v_nominal, deadband_mps=deadband_mps)
-
-
-def _com(p) -> float:
-    from evomotion.studies.humanoid_omniwalk.capture_step import com_height
-
-    return com_height(p.robot, p.ctl.state0)
 
 
 def measure(worlds: int, duration_s: float, pushes, periods, gain: float, seed: int):
@@ -183,7 +172,7 @@ def measure_run(run: str, worlds: int, duration_s: float, pushes, gain: float, s
                   f"+ capture step, true velocity (gain {gain:g})":
                       lambda: oracle(p, sim, worlds, gain, v_nominal, DEADBAND_MPS),
                   f"+ capture step, leg odometry (gain {gain:g})":
-                      lambda: CaptureStep(p.ctl, names, worlds, gain, _com(p))}
+                      lambda: CaptureStep(p.ctl, names, worlds, gain, p.ctl.com_height_m)}
         for name, layer in layers.items():
             rows.append([world, name] + [survival(p, sim, seeds, push, commands, base, layer())
                                          for push in pushes])

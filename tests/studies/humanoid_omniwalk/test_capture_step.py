@@ -28,12 +28,9 @@ def problem():
 
 def _reading(ctl) -> ClosedLoopSimulator:
     """The controller's simulator with the torso's true velocity appended."""
-    r = ctl.robot
     spec = ObservationSpec((*CHANNELS, "torso_velocity"), phase_period_s=ctl.gait.period_s,
                            command_size=3)
-    return ClosedLoopSimulator(r, spec, ctl.sim.k, 1, columns=ctl.columns, nominal=ctl.nominal,
-                               followers=[(r.joints.index(a), r.joints.index(b))
-                                          for a, b in ctl.followers.items()])
+    return ctl.simulator(spec, 1)
 
 
 def test_leg_odometry_reads_the_torsos_velocity(problem):

@@ -71,16 +71,15 @@ class LegOdometry:
         self.swing_fraction = float(swing_fraction)
 
     def __call__(self, obs: np.ndarray, phase: np.ndarray, hip_yaw_pitch: np.ndarray,
-                 hip_yaw_pitch_rate: np.ndarray | None = None) -> np.ndarray:
-        """``v[n, 2]`` (m/s, torso frame x, y) of ``obs[n, o]`` at gait ``phase[n]``."""
+                 hip_yaw_pitch_rate: np.ndarray) -> np.ndarray:
+        """``v[n, 2]`` (m/s, torso frame x, y) of ``obs[n, o]`` at gait ``phase[n]``, the hip
+        yaw-pitch at ``hip_yaw_pitch[n]`` (rad) moving at ``hip_yaw_pitch_rate[n]`` (rad/s)."""
         from evomotion.sim.robots.nao.leg_ik import leg_fk
 
         w, eps, est = obs[:, self.gyro], 1e-4, []
         for f in range(2):
             q = np.concatenate([hip_yaw_pitch[:, None], obs[:, self.pos[f]]], axis=1)
-            rate = (np.zeros(len(obs)) if hip_yaw_pitch_rate is None
-                    else hip_yaw_pitch_rate)
-            dq = np.concatenate([rate[:, None], obs[:, self.vel[f]]], axis=1)
+            dq = np.concatenate([hip_yaw_pitch_rate[:, None], obs[:, self.vel[f]]], axis=1)
             p0, _ = leg_fk(q, left=f == 0)
             p1, _ = leg_fk(q + eps * dq, left=f == 0)
             est.append(-(np.cross(w, p0) + (p1 - p0) / eps))

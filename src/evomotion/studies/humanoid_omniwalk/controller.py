@@ -101,10 +101,8 @@ class Controller:
         self.nominal = self.engine(phases, np.zeros((48, 3))).mean(axis=0)
         self.obs_spec = ObservationSpec(CHANNELS, phase_period_s=self.gait.period_s,
                                         command_size=3)
-        self.sim = ClosedLoopSimulator(r, self.obs_spec, int(round(k)), threads,
-                                       columns=self.columns, nominal=self.nominal,
-                                       followers=[(r.joints.index(f), r.joints.index(lead))
-                                                  for f, lead in self.followers.items()])
+        self.steps_per_control = int(round(k))
+        self.sim = self.simulator(self.obs_spec, threads)
         names = list(self.sim.observe.names)
         self.policy = StructuredSpec(
             self.sim.observation_size, self.columns.size,
@@ -120,12 +118,26 @@ class Controller:
         self.state0 = r.state_at(self.nominal)  # the NAO's own rule, bit for bit (build.py)
         self.speed_limits = np.array([speeds.get(j, np.inf) for j in self.driven])
         self.work = ServoWork(r.model, self.columns)
-        #: the capture step's gain (:mod:`.capture_step`; 0: none) and the CoM height it uses
+        #: the capture step's gain (:mod:`.capture_step`; 0: none)
         self.capture_gain = float(capture_gain)
         if self.capture_gain and not self.closed_form:
             raise InputError(f"problem.capture_gain: the capture step needs the NAO's leg "
                              f"kinematics; robot {r.name!r} has none (set it to 0)")
-        self.com_height_m = com_height(r, self.state0) if self.capture_gain else 0.0
+
+    def simulator(self, spec: ObservationSpec, threads: int) -> ClosedLoopSimulator:
+        """A closed-loop simulator of this controller's robot, joints, followers, nominal
+        pose and control period reading ``spec`` (``self.sim`` reads :data:`CHANNELS`;
+        benchmarks and tests read more, e.g. the torso's true velocity)."""
+        r = self.robot
+        return ClosedLoopSimulator(r, spec, self.steps_per_control, threads,
+                                   columns=self.columns, nominal=self.nominal,
+                                   followers=[(r.joints.index(f), r.joints.index(lead))
+                                              for f, lead in self.followers.items()])
+
+    @cached_property
+    def com_height_m(self) -> float:
+        """The CoM's height (m) in the standing pose ``state0`` (the capture step's ω₀)."""
+        return com_height(self.robot, self.state0)
 
     def _mirror(self) -> Mirror:
         """The robot's left-right mirror on the driven joints (a follower is its leader) and
