@@ -81,7 +81,8 @@ def targets(gait: OmniGait, phase: np.ndarray, command: np.ndarray,
     adjustment: ``benchmarks/walk_capture_step.py`` places the swing foot by the capture
     point."""
     phi = np.asarray(phase, float)
-    dx, dy, dpsi = np.moveaxis(gait.travel(command), -1, 0)
+    travel = gait.travel(command)
+    dx, dy, dpsi = travel[..., 0], travel[..., 1], travel[..., 2]
     w = gait.swing_fraction
     u_l, lift_l = foot_offset(np.mod(phi, 1.0), w)
     u_r, lift_r = foot_offset(np.mod(phi + 0.5, 1.0), w)
