@@ -19,6 +19,9 @@ from a state:
 - ``command:i``: the command, rate-limited as training ramps it (a change of a whole range
   takes ``command_ramp_s``).
 
+A walk controller evolved with a capture step (``policy.json``'s ``layers.capture_step``:
+the NAO's) runs it on top of the policy, as the NAOqi runner does
+(:mod:`evomotion.sim.robots.nao.naoqi_capture_step`; its state restarts with :meth:`start`).
 Then ``target = clip(nominal + action, lower, upper)`` for the driven joints, the follower
 copies its leader, every other actuator holds ``nominal_pose_all_actuators``; the targets are
 held for ``control_steps`` physics steps. Actuators are matched by name, so the model may hold
@@ -39,6 +42,10 @@ from evomotion.errors import FileFormatError, InputError
 from evomotion.textio import read_json
 
 MAX_JSON_BYTES = 1 << 20
+#: what a capture step's record holds (:mod:`evomotion.sim.robots.nao.naoqi_capture_step`)
+CAPTURE_STEP_KEYS = frozenset({"gain", "com_height_m", "deadband_mps", "reach_x_m", "out_y_m",
+                               "in_y_m", "calibration_rate", "calibration_gate_mps",
+                               "warmup_cycles", "bins", "gait", "geometry", "ranges"})
 
 
 def _floats(info: dict, key: str, n: int, path: Path) -> np.ndarray:
@@ -61,10 +68,7 @@ class PolicyPlayer:
         info = read_json(jpath, "controller description (policy.json)", MAX_JSON_BYTES)
         if not isinstance(info, dict):
             raise FileFormatError(jpath, None, "a JSON object")
-        if info.get("layers"):
-            raise InputError(f"{jpath}: the controller acts with layers on top of its policy "
-                             f"({', '.join(map(str, info['layers']))}), which this player "
-                             "does not run; expected a plain policy")
+        self.layer_record = self._layer_record(info, jpath)
         self.policy = read_policy_npz(folder / "policy.npz")
         names = info.get("observations")
         if not isinstance(names, list) or len(names) != self.policy.spec.obs_dim:
@@ -110,6 +114,36 @@ class PolicyPlayer:
         self.readers = [self._reader(str(n), contact_sensors or {}, jpath) for n in names]
         self.command = np.zeros(self.command_span.size)
         self.t_start = 0.0
+        self.layer: Any = None
+        self._layer_args = ([str(n) for n in names], [str(j) for j in joints],
+                            [float(v) for v in self.nominal_driven], self.control_dt)
+        self._new_layer()
+
+    @staticmethod
+    def _layer_record(info: dict, path: Path) -> dict | None:
+        """``policy.json``'s ``layers``: only a capture step with its whole record."""
+        layers = info.get("layers") or {}
+        if not isinstance(layers, dict) or set(layers) - {"capture_step"}:
+            raise InputError(f"{path}: key 'layers': this player runs a capture step "
+                             f"(capture_step) only, got {layers!r:.80}")
+        record = layers.get("capture_step")
+        if record is None:
+            return None
+        if not isinstance(record, dict) or not set(record) >= CAPTURE_STEP_KEYS:
+            raise FileFormatError(path, None, "key 'layers.capture_step': an object with "
+                                  f"{', '.join(sorted(CAPTURE_STEP_KEYS))} (a run folder "
+                                  "from before 2026-12-06's 15th session lacks them)")
+        return record
+
+    def _new_layer(self) -> None:
+        if self.layer_record is None:
+            return
+        from evomotion.sim.robots.nao.naoqi_capture_step import CaptureStep
+
+        try:
+            self.layer = CaptureStep(self.layer_record, *self._layer_args)
+        except ValueError as e:  # check()'s line, or a missing observation or joint
+            raise InputError(f"policy.json: layers: {e}"[:300]) from None
 
     def _actuator(self, name: str, path: Path) -> int:
         i = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_ACTUATOR, name)
@@ -167,6 +201,7 @@ class PolicyPlayer:
         """The gait clock starts now; the command is standing."""
         self.t_start = float(data.time)
         self.command = np.zeros(self.command_span.size)
+        self._new_layer()
 
     def observe(self, data: mujoco.MjData) -> np.ndarray:
         return np.array([r(data) for r in self.readers], dtype=float)
@@ -180,7 +215,10 @@ class PolicyPlayer:
                     else np.full(self.command.size, np.inf))
             self.command = self.command + np.clip(want - self.command, -step, step)
         p = self.policy
-        action = p.spec.act_one(p.params, self.observe(data), p.obs_mean, p.obs_std)
+        obs = self.observe(data)
+        action = p.spec.act_one(p.params, obs, p.obs_mean, p.obs_std)
+        if self.layer is not None:
+            action = np.array(self.layer(obs.tolist(), action.tolist()))
         action = np.where(np.isnan(action), 0.0, action)
         out = self.nominal.copy()
         out[self.columns] = np.clip(self.nominal_driven + action, self.lower, self.upper)

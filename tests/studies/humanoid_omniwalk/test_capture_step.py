@@ -139,16 +139,20 @@ def test_the_capture_step_is_refused_off_the_nao_and_out_of_range():
         OmniWalkProblem(OmniWalkConfig(robot="op3", capture_gain=0.5, threads=1))
 
 
-def test_a_run_with_the_capture_step_says_so_and_its_players_refuse_it(tmp_path):
-    """policy.json records the layer; no naoqi/ (the runner lacks it); the policy player,
-    which would walk the policy alone, refuses the folder in one line."""
+def test_a_run_with_the_capture_step_exports_it_and_its_player_runs_it(tmp_path):
+    """policy.json records the layer; naoqi/ gets capture_step.py; the policy player (play,
+    walk-to, the live walk) runs policy + layer as the simulator does: pushed after its
+    warm-up, its targets are the numpy policy + layer's on its observations (1e-9), and they
+    differ from the policy's alone; compare runs it too and says so."""
     import json
 
     import mujoco
 
+    from evomotion.core.policies.export import read_policy_npz
     from evomotion.run.config import resolve_config
     from evomotion.run.runner import run_study
     from evomotion.sim.policy_player import PolicyPlayer
+    from evomotion.sim.state import STATE_SPEC
     from evomotion.studies import get_study
     from evomotion.studies.humanoid_omniwalk.compare import compare, compare_command
 
@@ -157,15 +161,46 @@ def test_a_run_with_the_capture_step_says_so_and_its_players_refuse_it(tmp_path)
     tiny = ("problem.duration_s=1.0", "problem.eval_episodes=1", "problem.episodes=1",
             "problem.threads=1", "algorithm.pop_size=4", "algorithm.top_directions=0",
             "run.generations=1", "run.videos=false", "problem.capture_gain=0.7")
-    run_study(s, resolve_config(s, None, list(tiny)), out, quiet=True)
+    cfg = resolve_config(s, None, list(tiny))
+    run_study(s, cfg, out, quiet=True)
     info = json.loads((out / "policy.json").read_text())
     assert info["layers"]["capture_step"]["gain"] == 0.7
-    assert not (out / "naoqi").exists()
-    assert "naoqi/ not written: the runner does not run the capture step" in \
-        (out / "log.txt").read_text()
-    model = mujoco.MjModel.from_xml_string("<mujoco/>")
-    with pytest.raises(InputError, match="layers on top of its policy \\(capture_step\\)"):
-        PolicyPlayer(out, model)
+    naoqi = json.loads((out / "naoqi" / "policy.json").read_text())
+    assert naoqi["capture_step"]["gain"] == 0.7 and (out / "naoqi" / "capture_step.py").is_file()
+    layer_file = (out / "capture_step.py").read_bytes()
+    assert layer_file == (out / "naoqi" / "capture_step.py").read_bytes()
+    assert "+ capture_step.py: walk the NAO" in (out / "log.txt").read_text()
+    problem = OmniWalkProblem(cfg.problem)
+    model = problem.robot.model
+    player = PolicyPlayer(out, model, {"left": "left_floor", "right": "right_floor"})
+    pol = read_policy_npz(out / "policy.npz")
+    ref = CaptureStep(problem.ctl, list(problem.obs_names), 1, 0.7, problem.ctl.com_height_m)
+    d = mujoco.MjData(model)
+    mujoco.mj_setState(model, d, problem.ctl.state0, STATE_SPEC)
+    mujoco.mj_forward(model, d)
+    player.start(d)
+    torso = model.body("torso").id
+    moved = 0.0
+    for c in range(125):  # 2.5 s; a push of 2.5 N s from behind at 1.6-1.7 s
+        d.xfrc_applied[torso, 0] = 25.0 if 80 <= c < 85 else 0.0
+        ctrl = player.targets(d, [0.1, 0.0, 0.0])
+        obs = player.observe(d)  # what targets() read (the command ramped first)
+        act = pol.spec.act(pol.params[None], obs[None], pol.obs_mean, pol.obs_std)
+        want = ref(np.array([0]), obs[None], act)[0]
+        np.testing.assert_allclose(ctrl[player.columns], np.clip(
+            player.nominal_driven + want, player.lower, player.upper), rtol=0, atol=1e-9)
+        moved = max(moved, float(np.abs(want - act[0]).max()))
+        d.ctrl[:] = ctrl
+        for _ in range(player.control_steps):
+            mujoco.mj_step(model, d)
+    assert moved > 0.01
+    # a run folder's record from before the layer's settings were written is refused
+    old = json.loads((out / "policy.json").read_text())
+    old["layers"]["capture_step"] = {"gain": 0.7, "com_height_m": 0.25}
+    (out / "policy.json").write_text(json.dumps(old))
+    with pytest.raises(InputError, match="key 'layers.capture_step': an object with"):
+        PolicyPlayer(out, mujoco.MjModel.from_xml_string("<mujoco/>"))
+    (out / "policy.json").write_text(json.dumps(info))
     # compare runs it (the run's gain, or --capture-gain over it) and says so
     text = compare_command(out, worlds=1, duration_s=1.0)
     assert ", capture step gain 0.7" in text and "| walk engine (the start) + capture step" in text

@@ -1,7 +1,9 @@
 """What a humanoid-walk run leaves: the best controller as ``policy.npz``, ``policy.py``,
 ``policy.onnx`` and ``policy.json`` (what a robot-side loop needs: the observation columns in
 order, the command and how it is ramped, the gait clock's period, the control period, the
-driven joints with their nominal pose and bounds, the joint that follows another)."""
+driven joints with their nominal pose and bounds, the joint that follows another); with a
+capture step (``problem.capture_gain``) also ``capture_step.py`` (the layer, standard library
+only, its settings in ``policy.json``'s ``layers``), and ``naoqi/`` carries it too."""
 
 from __future__ import annotations
 
@@ -18,11 +20,12 @@ def policy_info(problem: Any) -> dict[str, Any]:
     model = problem.robot.model
     joints = [model.joint(int(model.actuator_trnid[int(c), 0])).name for c in sim.columns]
     layers = {"capture_step": {
-        "gain": cfg.capture_gain, "com_height_m": ctl.com_height_m,
-        "note": "capture-point foot placement by leg odometry on top of the policy "
-                "(evomotion.studies.humanoid_omniwalk.capture_step); not in policy.py or "
-                "policy.onnx (they play the policy without it); no naoqi/ is written"}} \
-        if cfg.capture_gain else {}
+        **capture_step_record(ctl, cfg.capture_gain), "file": "capture_step.py",
+        "note": "capture-point foot placement by leg odometry on top of the policy: "
+                "capture_step.py (standard library; also in naoqi/) runs it, "
+                "CaptureStep(this record, observations, joints, nominal_rad, "
+                "control_period_s)(obs, policy(obs)) -> action; policy.py and policy.onnx are "
+                "the policy without it"}} if cfg.capture_gain else {}
     return {
         "robot": problem.robot.name, "policy": problem.policy.kind,
         "files": {"npz": "policy.npz", "py": "policy.py", "onnx": "policy.onnx"},
@@ -51,12 +54,43 @@ def policy_info(problem: Any) -> dict[str, Any]:
     }
 
 
+def capture_step_record(ctl: Any, gain: float) -> dict[str, Any]:
+    """The capture step's settings for the NAOqi runner's ``capture_step.py`` (and
+    ``policy.json``): its gain and constants, the walk engine's settings, the NAO's leg
+    geometry and leg joints' ranges (``ctl`` a :class:`.controller.Controller` on the NAO)."""
+    from dataclasses import asdict
+
+    from evomotion.sim.robots import nao
+    from evomotion.sim.robots.nao.joint_limits import JOINT_RANGES
+    from evomotion.studies.humanoid_omniwalk import capture_step as cs
+
+    return {"gain": float(gain), "com_height_m": ctl.com_height_m,
+            "deadband_mps": cs.DEADBAND_MPS, "reach_x_m": cs.REACH_X_M, "out_y_m": cs.OUT_Y_M,
+            "in_y_m": cs.IN_Y_M, "calibration_rate": cs.CALIBRATION_RATE,
+            "calibration_gate_mps": cs.CALIBRATION_GATE_MPS,
+            "warmup_cycles": cs.WARMUP_CYCLES,
+            "bins": max(1, int(round(ctl.gait.period_s / ctl.control_dt))),
+            "gait": {k: float(v) for k, v in asdict(ctl.gait).items()},
+            "geometry": {"hip_offset_y_m": nao.HIP_OFFSET_Y_M,
+                         "hip_offset_z_m": nao.HIP_OFFSET_Z_M, "thigh_m": nao.THIGH_M,
+                         "tibia_m": nao.TIBIA_M},
+            "ranges": {j: [float(v) for v in JOINT_RANGES[j]]
+                       for j in (*nao.LEFT_LEG, *nao.RIGHT_LEG)}}
+
+
 def write_policy(ctx: Any) -> None:
     """``policy.npz``/``.py``/``.onnx``/``.json`` of the best centre so far (every checkpoint)."""
     from evomotion.studies.policy_search import write_policy_files
 
-    if ctx.problem is not None:
-        write_policy_files(ctx, {POLICY_JSON: policy_info(ctx.problem)})
+    if ctx.problem is None:
+        return
+    write_policy_files(ctx, {POLICY_JSON: policy_info(ctx.problem)})
+    if ctx.problem.cfg.capture_gain and ctx.out_dir is not None and \
+            (ctx.out_dir / "policy.npz").is_file():
+        from evomotion.outfile import atomic_write_text
+        from evomotion.sim.robots.nao.policy_export import CAPTURE_STEP, runner_source
+
+        atomic_write_text(ctx.out_dir / CAPTURE_STEP, runner_source(CAPTURE_STEP))
 
 
 def write_naoqi(ctx: Any) -> None:
@@ -70,23 +104,21 @@ def write_naoqi(ctx: Any) -> None:
     npz = ctx.out_dir / "policy.npz" if ctx.out_dir is not None else None
     if p is None or npz is None or not npz.is_file() or not p.robot.has("naoqi_policy"):
         return
-    if p.cfg.capture_gain:
-        ctx.log("naoqi/ not written: the runner does not run the capture step "
-                "(problem.capture_gain) this controller was evolved with")
-        return
     info = policy_info(p)
+    layer = capture_step_record(p.ctl, p.cfg.capture_gain) if p.cfg.capture_gain else None
     export = p.robot.capability("naoqi_policy", "humanoid-walk's NAOqi export")
     try:
         export.write_naoqi_policy(ctx.out_dir / "naoqi", read_policy_npz(npz), p.obs_names,
                                   info["joints"], info["nominal_rad"], info["lower_rad"],
                                   info["upper_rad"], info["control_period_s"],
                                   info["phase_period_s"], info["nominal_pose_all_actuators"],
-                                  command_ramp_s=p.cfg.ramp_s)
+                                  command_ramp_s=p.cfg.ramp_s, capture_step=layer)
     except InputError as e:
         ctx.log(f"naoqi/ not written: {e}")
         return
     notes = export.approximations(p.obs_names)
-    ctx.log("naoqi/policy_runner.py + policy.json: walk the NAO (Python 2.7 or 3; --command "
+    ctx.log("naoqi/policy_runner.py + policy.json" + (" + capture_step.py" if layer else "")
+            + ": walk the NAO (Python 2.7 or 3; --command "
             "vx,vy,w or --command-key KEY)" + (f"; approximated on the robot: "
                                                f"{'; '.join(notes)}" if notes else ""))
 

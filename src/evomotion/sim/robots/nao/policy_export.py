@@ -21,7 +21,10 @@ the ``policy.json`` it reads (:data:`FORMAT`):
   measures no joint velocity; a finite difference of the positions, an approximation),
   the runner's clock (``phase``), ``--command`` (``command``);
 - the joints (DCM ``Position/Actuator`` keys), nominal pose, bounds, control period, and the
-  whole nominal pose (ALMotion names) the robot goes to before the loop.
+  whole nominal pose (ALMotion names) the robot goes to before the loop;
+- for a walk controller with a capture step, its ``capture_step`` record (gain, the walk
+  engine's settings, the NAO's leg geometry and leg ranges), and the folder gets
+  :mod:`.naoqi_capture_step` as ``capture_step.py``.
 
 A policy reading ``torso_velocity`` or ``torso_height`` (no NAO sensor measures them) is
 refused with one :class:`~evomotion.errors.InputError` line naming them, and so is an action
@@ -43,6 +46,13 @@ from evomotion.textio import decode_utf8, read_file_bytes
 
 FORMAT = "evomotion-naoqi-policy/1"
 RUNNER = "policy_runner.py"
+CAPTURE_STEP = "capture_step.py"
+_SOURCES = {RUNNER: RUNNER, CAPTURE_STEP: "naoqi_capture_step.py"}
+#: the observations the walk's capture step reads (:mod:`.naoqi_capture_step`)
+CAPTURE_STEP_READS = (*(f"joint_{k}:{s}{j}" for k in ("pos", "vel") for s in "LR"
+                        for j in ("HipRoll", "HipPitch", "KneePitch", "AnklePitch", "AnkleRoll")),
+                      "gyro:x", "gyro:y", "gyro:z", "foot_contact:left", "foot_contact:right",
+                      "phase:sin", "phase:cos", "command:0", "command:1", "command:2")
 POLICY_JSON = "policy.json"
 #: a foot touches the floor when its FSRs carry more than this (kg; an assumption: the NAO
 #: standing puts ~2.6 kg on each foot, a swing foot ~0)
@@ -187,9 +197,11 @@ def naoqi_policy_record(policy: ExportedPolicy, observation_names: Sequence[str]
                         control_period_s: float, phase_period_s: float = 0.0,
                         nominal_pose: dict[str, float] | None = None,
                         contact_threshold_kg: float = CONTACT_THRESHOLD_KG,
-                        command_ramp_s: float = 0.0) -> dict[str, Any]:
+                        command_ramp_s: float = 0.0,
+                        capture_step: dict[str, Any] | None = None) -> dict[str, Any]:
     """The runner's ``policy.json`` record (see the module doc); one InputError line for a
-    policy the NAO cannot run."""
+    policy the NAO cannot run. ``capture_step``: the walk's capture-step record (run by
+    :mod:`.naoqi_capture_step`, which reads the observations in :data:`CAPTURE_STEP_READS`)."""
     names, joints = list(observation_names), list(joints)
     if len(names) != policy.spec.obs_dim:
         raise InputError(f"NAOqi export: {len(names)} observation names for a policy of "
@@ -208,6 +220,12 @@ def naoqi_policy_record(policy: ExportedPolicy, observation_names: Sequence[str]
     if float(phase_period_s) <= 0 and any(n.startswith("phase:") for n in names):
         raise InputError(f"NAOqi export: the policy reads phase; phase_period_s must be > 0, "
                          f"got {phase_period_s}")
+    if capture_step:
+        missing = [n for n in CAPTURE_STEP_READS if n not in names]
+        if missing or "LHipYawPitch" not in joints:
+            raise InputError("NAOqi export: the capture step reads "
+                             f"{', '.join(missing) or 'LHipYawPitch among the joints'}, "
+                             "which the policy does not")
     model = policy_model(policy, names)
     pose = dict(nominal_pose) if nominal_pose else dict(zip(joints, map(float, nominal_rad)))
     pose.pop("RHipYawPitch", None)
@@ -222,12 +240,14 @@ def naoqi_policy_record(policy: ExportedPolicy, observation_names: Sequence[str]
             "control_period_s": float(control_period_s),
             "joints": joints, "nominal_rad": np.asarray(nominal_rad, float),
             "lower_rad": np.asarray(lower_rad, float), "upper_rad": np.asarray(upper_rad, float),
-            "nominal_pose": pose}
+            "nominal_pose": pose,
+            **({"capture_step": dict(capture_step)} if capture_step else {})}
 
 
-def runner_source() -> str:
-    """The text of :mod:`.policy_runner` (written out as ``policy_runner.py``)."""
-    src = Path(__file__).with_name(RUNNER)
+def runner_source(name: str = RUNNER) -> str:
+    """The text of :mod:`.policy_runner` (written out as ``policy_runner.py``), or with
+    ``name`` :data:`CAPTURE_STEP` that of :mod:`.naoqi_capture_step`."""
+    src = Path(__file__).with_name(_SOURCES[name])
     return decode_utf8(read_file_bytes(src, "NAOqi policy runner"), src)
 
 
@@ -237,18 +257,26 @@ def write_naoqi_policy(folder: str | Path, policy: ExportedPolicy,
                        upper_rad: Sequence[float], control_period_s: float,
                        phase_period_s: float = 0.0,
                        nominal_pose: dict[str, float] | None = None,
-                       command_ramp_s: float = 0.0) -> dict[str, Path]:
+                       command_ramp_s: float = 0.0,
+                       capture_step: dict[str, Any] | None = None) -> dict[str, Path]:
     """``folder/policy_runner.py`` and ``folder/policy.json`` (made with its parent's
-    permission, i.e. ``folder`` may be new); everything is checked before anything is
-    written."""
+    permission, i.e. ``folder`` may be new), with ``capture_step`` also
+    ``folder/capture_step.py``; everything is checked before anything is written."""
     record = naoqi_policy_record(policy, observation_names, joints, nominal_rad, lower_rad,
                                  upper_rad, control_period_s, phase_period_s, nominal_pose,
-                                 command_ramp_s=command_ramp_s)
+                                 command_ramp_s=command_ramp_s, capture_step=capture_step)
     folder = Path(folder)
-    return {"json": write_json(folder / POLICY_JSON, record, "NAOqi policy file", mkdir=True,
-                               indent=1),
-            "runner": atomic_write_text(folder / RUNNER, runner_source(),
-                                        "NAOqi policy runner", mkdir=True)}
+    out = {"json": write_json(folder / POLICY_JSON, record, "NAOqi policy file", mkdir=True,
+                              indent=1)}
+    if capture_step:
+        out["capture_step"] = atomic_write_text(folder / CAPTURE_STEP,
+                                                runner_source(CAPTURE_STEP),
+                                                "NAOqi capture step", mkdir=True)
+    else:
+        (folder / CAPTURE_STEP).unlink(missing_ok=True)  # an older export's
+    out["runner"] = atomic_write_text(folder / RUNNER, runner_source(), "NAOqi policy runner",
+                                      mkdir=True)
+    return out
 
 
 def approximations(observation_names: Sequence[str]) -> list[str]:
@@ -257,7 +285,7 @@ def approximations(observation_names: Sequence[str]) -> list[str]:
     return [f"{c}: {APPROXIMATED[c]}" for c in used]
 
 
-__all__ = ["APPROXIMATED", "CONTACT_THRESHOLD_KG", "FEET", "FORMAT", "UNMEASURED", "approximations",
-           "fsr_key", "joint_key", "naoqi_policy_record", "observation_sources",
-           "policy_layers", "policy_model", "runner_source", "structured_record",
-           "write_naoqi_policy"]
+__all__ = ["APPROXIMATED", "CAPTURE_STEP", "CAPTURE_STEP_READS", "CONTACT_THRESHOLD_KG", "FEET",
+           "FORMAT", "UNMEASURED", "approximations", "fsr_key", "joint_key",
+           "naoqi_policy_record", "observation_sources", "policy_layers", "policy_model",
+           "runner_source", "structured_record", "write_naoqi_policy"]

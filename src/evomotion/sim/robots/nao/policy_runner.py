@@ -7,12 +7,15 @@
                             [--period-ms 20] [--command vx,vy,w] [--command-key KEY]
                             [--dry-run]
 
-One file, the standard library only (no numpy, no evomotion): it runs under NAOqi 2.8's own
-Python 2.7 on the robot and under Python 3 with the ``naoqi`` SDK module on a PC. Every control
+One file (two with a capture step), the standard library only (no numpy, no evomotion): it
+runs under NAOqi 2.8's own Python 2.7 on the robot and under Python 3 with the ``naoqi`` SDK
+module on a PC. Every control
 period it reads the sensors with ONE ``ALMemory.getListData(keys)`` call, builds the
 observation as evomotion's simulator does (``policy.json`` lists each column's source), runs
 the policy (normalise, clip, layers with tanh or a structured policy's phase tape plus
-linear feedback, ``offset + scale * y``, clip) and sends
+linear feedback, ``offset + scale * y``, clip), with a ``capture_step`` record in
+``policy.json`` moves the swing foot by the capture point (``capture_step.py`` beside this
+file, loaded then; the same period required) and sends
 ``clip(nominal + action, lower, upper)`` to the joints through a DCM "timed commands" alias
 (``setAlias``, time ``dcm.getTime(delay_ms)``).
 
@@ -305,6 +308,11 @@ class Runner(object):
         self.dry_run, self.delay_ms = dry_run, int(delay_ms)
         self.t0 = None
         self.last_targets = None
+        self.layer = None
+        if record.get("capture_step"):
+            self.layer = _capture_step_module().CaptureStep(
+                record["capture_step"], [str(c["name"]) for c in record["observation"]],
+                self.joints, self.nominal, float(record["control_period_s"]))
 
     def start(self, pose_speed=0.1):
         """Stiffness on, the nominal pose, the DCM alias (nothing sent with ``dry_run``)."""
@@ -323,6 +331,8 @@ class Runner(object):
         values = self.memory.getListData(self.observe.keys)
         obs = self.observe(values, self.clock() - self.t0)
         action = self.policy(obs)
+        if self.layer is not None:
+            action = self.layer(obs, action)
         targets = [min(max(n + (0.0 if math.isnan(a) else a), lo), hi) for n, a, lo, hi
                    in zip(self.nominal, action, self.lower, self.upper)]
         if not self.dry_run:
@@ -355,6 +365,22 @@ class Runner(object):
         return steps, late
 
 
+def _capture_step_module():
+    """``capture_step.py`` beside this file (Python 3's importlib, Python 2.7's imp)."""
+    path = os.path.join(os.path.dirname(os.path.abspath(__file__)), "capture_step.py")
+    if not os.path.isfile(path):
+        raise IOError("policy.json has a capture step; %s is missing" % path)
+    try:
+        import importlib.util
+    except ImportError:  # Python 2.7
+        import imp
+        return imp.load_source("evomotion_capture_step", path)
+    spec = importlib.util.spec_from_file_location("evomotion_capture_step", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
 def load(path):
     with open(path) as fh:
         return json.load(fh)
@@ -380,6 +406,10 @@ def main(argv=None):
                   else float(record["control_period_s"]))
         if not 0.01 <= period <= 0.02 + 1e-9 or not args.seconds > 0:
             raise ValueError("--period-ms must be 10 to 20 and --seconds > 0")
+        if record.get("capture_step") and abs(period - float(record["control_period_s"])) \
+                > 1e-9:
+            raise ValueError("--period-ms: the capture step runs at the policy's period, "
+                             "%g ms" % (float(record["control_period_s"]) * 1000.0))
         command = [float(x) for x in args.command.split(",") if x.strip()]
         from naoqi import ALProxy
         memory = ALProxy("ALMemory", args.ip, args.port)
