@@ -109,6 +109,9 @@ def main() -> None:
         print("\nthe kick that sees the ball: | ball's offset from its place (cm) | command (deg) "
               "| offset followed | swing stretch |\n|---|---|---|---|")
         for r in rows:
+            if "ball_offset_m" not in r:  # no kick (the walk fell)
+                print("| - | - | - | - |")
+                continue
             off = 100 * np.asarray(r["ball_offset_m"])
             print(f"| ({off[0]:+.1f}, {off[1]:+.1f}) | {r['command_deg']:+.1f} | "
                   f"{r['followed_fraction']:.0%} | {r['swing_stretch']:.3f} |")

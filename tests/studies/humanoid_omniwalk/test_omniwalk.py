@@ -113,11 +113,16 @@ def test_run_writes_the_controller_and_its_description(run_dir, problem):
     assert "humanoid-walk: best centre score" in log
     assert "evomotion humanoid-walk compare RUN measures it" in log
     assert record["command_ramp_s"] == 0.5 and record["joints"] == info["joints"]
+    # the NAO's default controller has capture steps: recorded, and their file exported
+    assert info["layers"]["capture_step"]["gain"] == record["capture_step"]["gain"] == 1.0
+    assert (run_dir / "capture_step.py").is_file()
+    assert (run_dir / "naoqi" / "capture_step.py").is_file()
 
 
 def test_compare_prints_both_controllers_and_the_top_speeds(run_dir):
     text = compare_command(run_dir, worlds=2, duration_s=1.0)
-    assert "| evolved controller |" in text and "| walk engine (open loop" in text
+    # the NAO's default has capture steps on top (problem.capture_gain 1)
+    assert "| evolved controller |" in text and "| walk engine (the start) + capture step" in text
     assert "| forward [0.45, 0.0, 0.0] |" in text
     assert "| stand [0.0, 0.0, 0.0] | vx " in text and " cm/s, " in text  # the creep
     res = json.loads(compare_command(run_dir, worlds=2, duration_s=1.0, json_out=True))

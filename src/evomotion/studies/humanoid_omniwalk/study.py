@@ -49,7 +49,7 @@ def compare_cmd(run: Path = typer.Argument(..., help="a humanoid-walk run folder
 
 
 
-NAO_DEFAULTS = {"problem": {"symmetric": True}}
+NAO_DEFAULTS = {"problem": {"symmetric": True, "capture_gain": 1.0}}
 
 STUDY = Study(
     name="humanoid-walk",
@@ -78,6 +78,10 @@ STUDY = Study(
     # speed met on 3 seeds against 14 of 18, steady speed / yaw-rate errors 13 / 11-14 %
     # against 15-19 / 19-20 %, survival 62 / 60 / 66 % against 68 / 63 / 60 %
     # (docs/humanoid-walk.md); --set problem.symmetric=false for the former.
+    # Capture steps by leg odometry on top (2026-12-06, fifteenth session, once the NAOqi
+    # runner and the policy player ran them): survival 74 / 73 / 73 % against 62 / 60 / 66 %
+    # on the same seeds, held-command speed error 13.0 / 9.6 / 12.9 %; --set
+    # problem.capture_gain=0 for the former.
     # The dm humanoid (2026-12-06): with the NAO's defaults it learned to stand; from the
     # engine setting that walked furthest in the scan, on forward commands alone in the
     # nominal world, 600 generations walk 0.23-0.25 m/s at 0.3 on every seed (the same doc)
