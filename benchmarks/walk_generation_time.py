@@ -2,7 +2,9 @@
 ``problem.symmetric`` false / true, or ``problem.capture_gain`` 0 / 1), run back to back on
 this machine (the ratio is what to report; these VMs are noisy): each setting evolves
 ``--generations`` generations from the same seed, everything else the study's default, and
-the script prints wall seconds and environment steps per generation.
+the script prints wall seconds and environment steps per generation. Since 2026-12-06's
+fifteenth session the NAO's default has capture steps (gain 1), so ``--vary symmetric`` times
+both with them, unlike the ratios measured before it.
 
     python benchmarks/walk_generation_time.py --generations 40 [--seed 0] [--threads 2]
         [--vary symmetric|capture_gain]

@@ -451,10 +451,12 @@ def current_study_name(name: str, problem_keys: Any = ()) -> str:
 ADDED_KEYS: dict[str, dict[str, dict[str, Any]]] = {
     "humanoid-balance": {"problem": {"stance_width_rad": 0.0, "stance_stagger_rad": 0.0,
                                      "stance_crouch_rad": 0.0, "stance_lean_rad": 0.0}},
-    # 34: the walk's command kinds and mirror-symmetric controllers, which a robot's defaults
-    # (Study.robot_defaults) now set (a saved dm-humanoid or NAO run reruns as it ran)
+    # 34: the walk's command kinds, mirror-symmetric controllers and capture steps, which a
+    # robot's defaults (Study.robot_defaults) now set (a saved dm-humanoid or NAO run reruns
+    # as it ran)
     "humanoid-walk": {"problem": {"symmetric": False,
-                                  "command_weights": [0.3, 0.15, 0.15, 0.3, 0.1]}},
+                                  "command_weights": [0.3, 0.15, 0.15, 0.3, 0.1],
+                                  "capture_gain": 0.0}},
 }
 
 

@@ -69,6 +69,7 @@ class PolicyPlayer:
         if not isinstance(info, dict):
             raise FileFormatError(jpath, None, "a JSON object")
         self.layer_record = self._layer_record(info, jpath)
+        self._jpath = jpath
         self.policy = read_policy_npz(folder / "policy.npz")
         names = info.get("observations")
         if not isinstance(names, list) or len(names) != self.policy.spec.obs_dim:
@@ -143,7 +144,7 @@ class PolicyPlayer:
         try:
             self.layer = CaptureStep(self.layer_record, *self._layer_args)
         except ValueError as e:  # check()'s line, or a missing observation or joint
-            raise InputError(f"policy.json: layers: {e}"[:300]) from None
+            raise InputError(f"{self._jpath}: layers: {e}"[:400]) from None
 
     def _actuator(self, name: str, path: Path) -> int:
         i = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_ACTUATOR, name)

@@ -28,11 +28,14 @@ def problem():
     return OmniWalkProblem(OmniWalkConfig(duration_s=3.0, threads=1, capture_gain=1.0))
 
 
-def _reading(ctl) -> ClosedLoopSimulator:
-    """The controller's simulator with the torso's true velocity appended."""
+def _reading(ctl) -> tuple[ClosedLoopSimulator, list[str], list[int]]:
+    """The controller's simulator with the torso's true velocity appended, its observation
+    names and the true velocity's x, y columns."""
     spec = ObservationSpec((*CHANNELS, "torso_velocity"), phase_period_s=ctl.gait.period_s,
                            command_size=3)
-    return ctl.simulator(spec, 1)
+    sim = ctl.simulator(spec, 1)
+    names = list(sim.observe.names)
+    return sim, names, [names.index(f"torso_velocity:{a}") for a in "xy"]
 
 
 def test_leg_odometry_reads_the_torsos_velocity(problem):
@@ -41,11 +44,8 @@ def test_leg_odometry_reads_the_torsos_velocity(problem):
     axis correlated above 0.85 with it, control step by control step (measured 0.92-0.95;
     this engine sways 0.33 m/s sideways and its mean |error| is 2.5-6 cm/s)."""
     ctl = problem.ctl
-    sim = _reading(ctl)
-    names = list(sim.observe.names)
-    true_cols = [names.index(f"torso_velocity:{a}") for a in "xy"]
-    x = ctl.initial_params()
-    od = problem.obs_dim
+    sim, names, true_cols = _reading(ctl)
+    x, od = ctl.initial_params(), problem.obs_dim
     seen = []
     for command in ((0.3, 0.0, 0.0), (0.0, 0.15, 0.0)):
         layer = CaptureStep(ctl, names, 1, 0.0, ctl.com_height_m)
@@ -271,11 +271,8 @@ def test_leg_odometry_needs_the_hip_yaw_pitch_rate_while_turning(problem):
     forward error with the hip yaw-pitch's rate is well below that without it (3.4 against
     7.1 cm/s here; a review measured 4.4 against 8.3 on another gait)."""
     ctl = problem.ctl
-    sim = _reading(ctl)
-    names = list(sim.observe.names)
-    true_cols = [names.index(f"torso_velocity:{a}") for a in "xy"]
-    x = ctl.initial_params()
-    od = problem.obs_dim
+    sim, names, true_cols = _reading(ctl)
+    x, od = ctl.initial_params(), problem.obs_dim
     layer = CaptureStep(ctl, names, 1, 0.0, ctl.com_height_m)
     errors: list[tuple[float, float]] = []
 

@@ -48,9 +48,9 @@ def test_the_users_settings_win_over_the_robots(tmp_path):
 
 
 def test_a_saved_run_config_reruns_as_it_ran(tmp_path):
-    """A NAO or dm humanoid run saved before ``problem.symmetric`` and
-    ``problem.command_weights`` existed lacks them: ``--config`` that file runs what it ran
-    (not the robot's defaults now)."""
+    """A NAO or dm humanoid run saved before ``problem.symmetric``,
+    ``problem.command_weights`` and ``problem.capture_gain`` existed lacks them: ``--config``
+    that file runs what it ran (not the robot's defaults now)."""
     from evomotion.run.config import config_to_toml
 
     s = get_study("humanoid-walk")
@@ -62,11 +62,11 @@ def test_a_saved_run_config_reruns_as_it_ran(tmp_path):
         import tomli_w
 
         raw = tomllib.loads(config_to_toml(cfg))
-        for key in ("symmetric", "command_weights"):
+        for key in ("symmetric", "command_weights", "capture_gain"):
             del raw["problem"][key]
         f = tmp_path / f"old-{robot or 'nao'}.toml"
         f.write_text(tomli_w.dumps(raw))
         again = resolve_config(s, f)
-        assert again.problem.symmetric is False
+        assert again.problem.symmetric is False and again.problem.capture_gain == 0.0
         assert tuple(again.problem.command_weights) == (0.3, 0.15, 0.15, 0.3, 0.1)
         assert again.problem.sway_m == cfg.problem.sway_m  # the rest as saved

@@ -94,7 +94,9 @@ class LegOdometry:
         touch = obs[:, self.contact] > 0.5
         weight = np.where(touch.any(axis=1, keepdims=True), touch, stance).astype(float)
         weight /= np.maximum(weight.sum(axis=1, keepdims=True), 1.0)
-        return weight[:, :1] * est[0] + weight[:, 1:] * est[1]
+        # a foot not counted adds nothing, even a non-finite estimate (0 x NaN would be NaN)
+        return (np.where(weight[:, :1] > 0, weight[:, :1] * est[0], 0.0)
+                + np.where(weight[:, 1:] > 0, weight[:, 1:] * est[1], 0.0))
 
 
 class CaptureStep:
@@ -144,6 +146,8 @@ class CaptureStep:
         sway = self.sway[rows, b]
         v = self.velocity_of(rows, obs, phase)
         dv = v - command[:, :2] - sway  # eq. (2)
+        # a non-finite reading moves no foot and learns no sway
+        dv = np.where(np.isfinite(dv).all(axis=1, keepdims=True), dv, 0.0)
         self.steps[rows] += 1
         if not self.fixed:
             calm = np.linalg.norm(dv, axis=1) < CALIBRATION_GATE_MPS
@@ -172,6 +176,8 @@ class CaptureStep:
         moved = both[k:] - both[:k]
         out = action + moved[:, ctl.columns]
         hyp = ctl.nominal[ctl.columns[self.hyp_col]] + out[:, self.hyp_col]
-        self.hip_yaw_pitch_rate[rows] = (hyp - self.hip_yaw_pitch[rows]) / ctl.control_dt
-        self.hip_yaw_pitch[rows] = hyp
+        ok = np.isfinite(hyp)  # a NaN action: the motor holds its last target
+        self.hip_yaw_pitch_rate[rows] = np.where(
+            ok, (hyp - self.hip_yaw_pitch[rows]) / ctl.control_dt, 0.0)
+        self.hip_yaw_pitch[rows] = np.where(ok, hyp, self.hip_yaw_pitch[rows])
         return out

@@ -171,7 +171,8 @@ class CaptureStep(object):
         self.bins = int(record["bins"])
         self.omega = math.sqrt(9.81 / float(record["com_height_m"]))
         self.leg = Leg(record["geometry"])
-        ranges = dict((j, (float(lo), float(hi))) for j, (lo, hi) in record["ranges"].items())
+        ranges = dict((j, (float(record["ranges"][j][0]), float(record["ranges"][j][1])))
+                      for j in LEGS["left"] + LEGS["right"])
         self.engine = Engine(record["gait"], self.leg, ranges)
         self.w = float(record["gait"]["swing_fraction"])
         self.ahead = float(control_period_s) / float(record["gait"]["period_s"])
@@ -227,6 +228,8 @@ class CaptureStep(object):
         sway = self.sway[b]
         v = self.velocity(obs, phase)
         dv = [v[i] - command[i] - sway[i] for i in range(2)]
+        if not all(_finite(d) for d in dv):  # a NaN sensor moves no foot, learns no sway
+            dv = [0.0, 0.0]
         self.steps += 1
         if math.hypot(dv[0], dv[1]) < self.gate:
             self.sway[b] = [sway[i] + self.rate * dv[i] for i in range(2)]
@@ -253,8 +256,11 @@ class CaptureStep(object):
         out = [a + (moved[j] - plain[j] if j in moved else 0.0)
                for j, a in zip(self.joints, action)]
         hyp = self.hyp_nominal + out[self.hyp]
-        self.hip_yaw_pitch_rate = (hyp - self.hip_yaw_pitch) / self.dt
-        self.hip_yaw_pitch = hyp
+        if _finite(hyp):
+            self.hip_yaw_pitch_rate = (hyp - self.hip_yaw_pitch) / self.dt
+            self.hip_yaw_pitch = hyp
+        else:  # a NaN action: the motor holds its last target
+            self.hip_yaw_pitch_rate = 0.0
         return out
 
 
@@ -289,6 +295,10 @@ def check(record):
         if not isinstance(r, list) or len(r) != 2:
             raise ValueError("capture_step: ranges.%s: expected [low, high]" % j)
         _number("ranges.%s" % j, r[1], _number("ranges.%s" % j, r[0], -7.0, 7.0), 7.0)
+
+
+def _finite(x):
+    return not (math.isnan(x) or math.isinf(x))
 
 
 def _round_even(x):

@@ -309,7 +309,7 @@ class Runner(object):
         self.t0 = None
         self.last_targets = None
         self.layer = None
-        if record.get("capture_step"):
+        if record.get("capture_step") is not None:  # {} or 0: one ValueError line
             self.layer = _capture_step_module().CaptureStep(
                 record["capture_step"], [str(c["name"]) for c in record["observation"]],
                 self.joints, self.nominal, float(record["control_period_s"]))
@@ -406,7 +406,8 @@ def main(argv=None):
                   else float(record["control_period_s"]))
         if not 0.01 <= period <= 0.02 + 1e-9 or not args.seconds > 0:
             raise ValueError("--period-ms must be 10 to 20 and --seconds > 0")
-        if record.get("capture_step") and abs(period - float(record["control_period_s"])) \
+        if record.get("capture_step") is not None and \
+                abs(period - float(record["control_period_s"])) \
                 > 1e-9:
             raise ValueError("--period-ms: the capture step runs at the policy's period, "
                              "%g ms" % (float(record["control_period_s"]) * 1000.0))
