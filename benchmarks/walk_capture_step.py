@@ -104,9 +104,9 @@ def oracle(p, sim, n: int, gain: float, v_nominal: np.ndarray, deadband_mps: flo
     from evomotion.studies.humanoid_omniwalk.capture_step import CaptureStep
 
     names = list(sim.observe.names)
-    return CaptureStep(p.ctl, names, n, gain, p.ctl.com_height_m,
-                       velocity=[names.index(f"torso_velocity:{a}") for a in "xy"],
-                       sway=v_nominal, deadband_mps=deadband_mps)
+    velocity = [names.index(f"torso_velocity:{a}") for a in "xy"]
+    return CaptureStep(p.ctl, names, n, gain, velocity=velocity, sway=v_nominal,
+                       deadband_mps=deadband_mps)
 
 
 def measure(worlds: int, duration_s: float, pushes, periods, gain: float, seed: int):
@@ -172,7 +172,7 @@ def measure_run(run: str, worlds: int, duration_s: float, pushes, gain: float, s
                   f"+ capture step, true velocity (gain {gain:g})":
                       lambda: oracle(p, sim, worlds, gain, v_nominal, DEADBAND_MPS),
                   f"+ capture step, leg odometry (gain {gain:g})":
-                      lambda: CaptureStep(p.ctl, names, worlds, gain, p.ctl.com_height_m)}
+                      lambda: CaptureStep(p.ctl, names, worlds, gain)}
         for name, layer in layers.items():
             rows.append([world, name] + [survival(p, sim, seeds, push, commands, base, layer())
                                          for push in pushes])

@@ -42,10 +42,6 @@ from evomotion.errors import FileFormatError, InputError
 from evomotion.textio import read_json
 
 MAX_JSON_BYTES = 1 << 20
-#: what a capture step's record holds (:mod:`evomotion.sim.robots.nao.naoqi_capture_step`)
-CAPTURE_STEP_KEYS = frozenset({"gain", "com_height_m", "deadband_mps", "reach_x_m", "out_y_m",
-                               "in_y_m", "calibration_rate", "calibration_gate_mps",
-                               "warmup_cycles", "bins", "gait", "geometry", "ranges"})
 
 
 def _floats(info: dict, key: str, n: int, path: Path) -> np.ndarray:
@@ -127,12 +123,14 @@ class PolicyPlayer:
         if not isinstance(layers, dict) or set(layers) - {"capture_step"}:
             raise InputError(f"{path}: key 'layers': this player runs a capture step "
                              f"(capture_step) only, got {layers!r:.80}")
+        from evomotion.sim.robots.nao.naoqi_capture_step import KEYS
+
         record = layers.get("capture_step")
         if record is None:
             return None
-        if not isinstance(record, dict) or not set(record) >= CAPTURE_STEP_KEYS:
+        if not isinstance(record, dict) or not set(record) >= set(KEYS):
             raise FileFormatError(path, None, "key 'layers.capture_step': an object with "
-                                  f"{', '.join(sorted(CAPTURE_STEP_KEYS))} (a run folder "
+                                  f"{', '.join(sorted(KEYS))} (a run folder "
                                   "from before 2026-12-06's 15th session lacks them)")
         return record
 

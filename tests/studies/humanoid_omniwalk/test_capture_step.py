@@ -48,7 +48,7 @@ def test_leg_odometry_reads_the_torsos_velocity(problem):
     x, od = ctl.initial_params(), problem.obs_dim
     seen = []
     for command in ((0.3, 0.0, 0.0), (0.0, 0.15, 0.0)):
-        layer = CaptureStep(ctl, names, 1, 0.0, ctl.com_height_m)
+        layer = CaptureStep(ctl, names, 1, 0.0)
 
         def policy(rows, obs, layer=layer):
             act = problem.policy.act(x[None], obs[:, :od], np.zeros((1, od)), np.ones((1, od)))
@@ -74,7 +74,7 @@ def test_gain_zero_returns_the_action_unchanged(problem):
     rng = np.random.default_rng(0)
     obs = rng.normal(size=(5, len(names)))
     act = rng.normal(size=(5, ctl.columns.size))
-    layer = CaptureStep(ctl, names, 5, 0.0, ctl.com_height_m)
+    layer = CaptureStep(ctl, names, 5, 0.0)
     assert np.array_equal(layer(np.arange(5), obs, act), act)
 
 
@@ -87,8 +87,7 @@ def test_the_swing_foot_lands_at_the_clipped_capture_point(problem):
     vcols = [len(names) - 2, len(names) - 1]
     omega = math.sqrt(9.81 / ctl.com_height_m)
     dv = np.array([[0.3, 0.0], [2.0, 0.3]])  # 0.3 m/s forward; far beyond reach, to the left
-    layer = CaptureStep(ctl, names, 2, 1.0, ctl.com_height_m, velocity=vcols,
-                        sway=np.zeros((ctl.window, 2)))
+    layer = CaptureStep(ctl, names, 2, 1.0, velocity=vcols, sway=np.zeros((ctl.window, 2)))
     obs = np.zeros((2, len(names)))
     obs[:, vcols] = dv
     action = np.zeros((2, ctl.columns.size))
@@ -176,7 +175,7 @@ def test_a_run_with_the_capture_step_exports_it_and_its_player_runs_it(tmp_path)
     model = problem.robot.model
     player = PolicyPlayer(out, model, {"left": "left_floor", "right": "right_floor"})
     pol = read_policy_npz(out / "policy.npz")
-    ref = CaptureStep(problem.ctl, list(problem.obs_names), 1, 0.7, problem.ctl.com_height_m)
+    ref = CaptureStep(problem.ctl, list(problem.obs_names), 1, 0.7)
     d = mujoco.MjData(model)
     mujoco.mj_setState(model, d, problem.ctl.state0, STATE_SPEC)
     mujoco.mj_forward(model, d)
@@ -220,8 +219,7 @@ def test_the_online_layer_waits_its_warm_up_cycles(problem):
 
     ctl = problem.ctl
     names = [*ctl.sim.observe.names, "torso_velocity:x", "torso_velocity:y"]
-    layer = CaptureStep(ctl, names, 1, 1.0, ctl.com_height_m, velocity=[len(names) - 2,
-                                                                         len(names) - 1])
+    layer = CaptureStep(ctl, names, 1, 1.0, velocity=[len(names) - 2, len(names) - 1])
     obs = np.zeros((1, len(names)))
     obs[0, -2] = 1.0
     action = np.zeros((1, ctl.columns.size))
@@ -245,8 +243,7 @@ def test_the_sway_is_learnt_only_from_calm_steps(problem, speed):
     assert 0.1 < CALIBRATION_GATE_MPS < 0.5
     ctl = problem.ctl
     names = [*ctl.sim.observe.names, "torso_velocity:x", "torso_velocity:y"]
-    layer = CaptureStep(ctl, names, 1, 1.0, ctl.com_height_m, velocity=[len(names) - 2,
-                                                                         len(names) - 1],
+    layer = CaptureStep(ctl, names, 1, 1.0, velocity=[len(names) - 2, len(names) - 1],
                         deadband_mps=0.0)
     obs = np.zeros((1, len(names)))
     obs[0, -2] = speed
@@ -273,7 +270,7 @@ def test_leg_odometry_needs_the_hip_yaw_pitch_rate_while_turning(problem):
     ctl = problem.ctl
     sim, names, true_cols = _reading(ctl)
     x, od = ctl.initial_params(), problem.obs_dim
-    layer = CaptureStep(ctl, names, 1, 0.0, ctl.com_height_m)
+    layer = CaptureStep(ctl, names, 1, 0.0)
     errors: list[tuple[float, float]] = []
 
     def policy(rows, obs):

@@ -87,7 +87,7 @@ def _layers(p, record):
     info = policy_info(p)
     std = _module().CaptureStep(record, names, info["joints"], info["nominal_rad"],
                                 p.ctl.control_dt)
-    ref = CaptureStep(p.ctl, names, 1, record["gain"], p.ctl.com_height_m)
+    ref = CaptureStep(p.ctl, names, 1, record["gain"])
     return std, ref
 
 
@@ -150,7 +150,7 @@ def test_the_runner_sends_the_numpy_policy_and_layers_targets(walk, tmp_path, mo
     steps, late = runner.run(C * PERIOD_S - 1e-9, PERIOD_S)
     assert (steps, late) == (C, 0)
     sent = np.array([v for _, v in naoqi.dcm.sent])
-    ref = CaptureStep(p.ctl, list(p.obs_names), 1, 1.5, p.ctl.com_height_m)
+    ref = CaptureStep(p.ctl, list(p.obs_names), 1, 1.5)
     o = np.array(seen)
     want = []
     for k in range(C):

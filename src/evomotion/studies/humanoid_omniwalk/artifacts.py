@@ -69,7 +69,7 @@ def capture_step_record(ctl: Any, gain: float) -> dict[str, Any]:
             "in_y_m": cs.IN_Y_M, "calibration_rate": cs.CALIBRATION_RATE,
             "calibration_gate_mps": cs.CALIBRATION_GATE_MPS,
             "warmup_cycles": cs.WARMUP_CYCLES,
-            "bins": max(1, int(round(ctl.gait.period_s / ctl.control_dt))),
+            "bins": ctl.window,
             "gait": {k: float(v) for k, v in asdict(ctl.gait).items()},
             "geometry": {"hip_offset_y_m": nao.HIP_OFFSET_Y_M,
                          "hip_offset_z_m": nao.HIP_OFFSET_Z_M, "thigh_m": nao.THIGH_M,

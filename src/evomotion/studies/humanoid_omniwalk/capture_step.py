@@ -107,7 +107,7 @@ class CaptureStep:
     instead of learning it online; ``deadband_mps`` over ``DEADBAND_MPS``. Its state is per
     episode (``rows`` index it)."""
 
-    def __init__(self, ctl, names: list[str], n: int, gain: float, com_height_m: float,
+    def __init__(self, ctl, names: list[str], n: int, gain: float,
                  velocity: list[int] | None = None, sway: np.ndarray | None = None,
                  deadband_mps: float = DEADBAND_MPS) -> None:
         self.ctl, self.gain, self.velocity = ctl, float(gain), velocity
@@ -115,8 +115,8 @@ class CaptureStep:
         self.odometry = LegOdometry(names, ctl.gait.swing_fraction)
         self.iph = names.index("phase:sin"), names.index("phase:cos")
         self.ic = [names.index(f"command:{i}") for i in range(3)]
-        self.omega = math.sqrt(9.81 / com_height_m)
-        self.bins = max(1, int(round(ctl.gait.period_s / ctl.control_dt)))
+        self.omega = math.sqrt(9.81 / ctl.com_height_m)
+        self.bins = ctl.window  # control steps per gait cycle
         self.fixed = sway is not None
         self.sway = (np.broadcast_to(sway, (n, self.bins, 2)).copy() if sway is not None
                      else np.zeros((n, self.bins, 2)))

@@ -185,7 +185,7 @@ class Controller:
         step on top where ``capture_gain``)."""
         spec = self.policy
         layer = (CaptureStep(self, list(self.sim.observe.names), len(params),
-                             self.capture_gain, self.com_height_m)
+                             self.capture_gain)
                  if self.capture_gain else None)
 
         def policy(rows: np.ndarray, obs: np.ndarray) -> np.ndarray:

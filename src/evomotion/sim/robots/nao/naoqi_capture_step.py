@@ -27,6 +27,15 @@ GAIT_KEYS = {"period_s": (0.05, 10.0), "swing_fraction": (0.05, 0.95),
              "step_height_m": (-1.0, 1.0), "leg_height_m": (-1.0, 1.0), "width_m": (-1.0, 1.0),
              "sway_m": (-1.0, 1.0), "sway_phase_rad": (-10.0, 10.0), "lean_rad": (-2.0, 2.0),
              "x_offset_m": (-1.0, 1.0)}
+#: the observations the layer reads (the exporter checks a policy has them)
+READS = tuple("joint_%s:%s" % (k, j) for k in ("pos", "vel") for s in ("left", "right")
+              for j in LEGS[s][1:]) + ("gyro:x", "gyro:y", "gyro:z", "foot_contact:left",
+                                       "foot_contact:right", "phase:sin", "phase:cos",
+                                       "command:0", "command:1", "command:2")
+#: the record's keys (the policy player names them for a record that lacks some)
+KEYS = ("gain", "com_height_m", "deadband_mps", "reach_x_m", "out_y_m", "in_y_m",
+        "calibration_rate", "calibration_gate_mps", "warmup_cycles", "bins", "gait",
+        "geometry", "ranges")
 EPS = 1e-4  # the odometry's directional-derivative step (rad per rad/s)
 
 
@@ -178,17 +187,17 @@ class CaptureStep(object):
         self.ahead = float(control_period_s) / float(record["gait"]["period_s"])
         self.dt = float(control_period_s)
         col = dict((n, i) for i, n in enumerate(names))
+        missing = [n for n in READS if n not in col]
+        if missing:
+            raise ValueError("capture_step: it reads observation %r, which the policy does "
+                             "not" % (missing[0],))
         legs5 = [LEGS[s][1:] for s in ("left", "right")]
-        try:
-            self.pos = [[col["joint_pos:" + j] for j in leg] for leg in legs5]
-            self.vel = [[col["joint_vel:" + j] for j in leg] for leg in legs5]
-            self.gyro = [col["gyro:" + a] for a in "xyz"]
-            self.contact = [col["foot_contact:left"], col["foot_contact:right"]]
-            self.phase_cols = col["phase:sin"], col["phase:cos"]
-            self.command = [col["command:%d" % i] for i in range(3)]
-        except KeyError as e:
-            raise ValueError("capture_step: it reads observation %s, which the policy does "
-                             "not" % (e,))
+        self.pos = [[col["joint_pos:" + j] for j in leg] for leg in legs5]
+        self.vel = [[col["joint_vel:" + j] for j in leg] for leg in legs5]
+        self.gyro = [col["gyro:" + a] for a in "xyz"]
+        self.contact = [col["foot_contact:left"], col["foot_contact:right"]]
+        self.phase_cols = col["phase:sin"], col["phase:cos"]
+        self.command = [col["command:%d" % i] for i in range(3)]
         self.joints = list(joints)
         if "LHipYawPitch" not in self.joints or len(nominal) != len(self.joints):
             raise ValueError("capture_step: expected LHipYawPitch among the joints, with a "

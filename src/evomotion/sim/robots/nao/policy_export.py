@@ -42,17 +42,15 @@ import numpy as np
 from evomotion.core.policies.export import ExportedPolicy, policy_arrays
 from evomotion.errors import InputError
 from evomotion.outfile import atomic_write_text, write_json
+from evomotion.sim.robots.nao import naoqi_capture_step
 from evomotion.textio import decode_utf8, read_file_bytes
 
 FORMAT = "evomotion-naoqi-policy/1"
 RUNNER = "policy_runner.py"
 CAPTURE_STEP = "capture_step.py"
 _SOURCES = {RUNNER: RUNNER, CAPTURE_STEP: "naoqi_capture_step.py"}
-#: the observations the walk's capture step reads (:mod:`.naoqi_capture_step`)
-CAPTURE_STEP_READS = (*(f"joint_{k}:{s}{j}" for k in ("pos", "vel") for s in "LR"
-                        for j in ("HipRoll", "HipPitch", "KneePitch", "AnklePitch", "AnkleRoll")),
-                      "gyro:x", "gyro:y", "gyro:z", "foot_contact:left", "foot_contact:right",
-                      "phase:sin", "phase:cos", "command:0", "command:1", "command:2")
+#: the observations the walk's capture step reads (:mod:`.naoqi_capture_step`'s)
+CAPTURE_STEP_READS = naoqi_capture_step.READS
 POLICY_JSON = "policy.json"
 #: a foot touches the floor when its FSRs carry more than this (kg; an assumption: the NAO
 #: standing puts ~2.6 kg on each foot, a swing foot ~0)

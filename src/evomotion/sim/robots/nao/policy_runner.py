@@ -406,11 +406,10 @@ def main(argv=None):
                   else float(record["control_period_s"]))
         if not 0.01 <= period <= 0.02 + 1e-9 or not args.seconds > 0:
             raise ValueError("--period-ms must be 10 to 20 and --seconds > 0")
-        if record.get("capture_step") is not None and \
-                abs(period - float(record["control_period_s"])) \
-                > 1e-9:
+        own = float(record["control_period_s"])
+        if record.get("capture_step") is not None and abs(period - own) > 1e-9:
             raise ValueError("--period-ms: the capture step runs at the policy's period, "
-                             "%g ms" % (float(record["control_period_s"]) * 1000.0))
+                             "%g ms" % (own * 1000.0))
         command = [float(x) for x in args.command.split(",") if x.strip()]
         from naoqi import ALProxy
         memory = ALProxy("ALMemory", args.ip, args.port)
