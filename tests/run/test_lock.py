@@ -114,8 +114,11 @@ def test_stop_signals_the_real_run(tmp_path):
                           "--out", str(out), "--set", "run.generations=100000",
                           "--set", "run.checkpoint_every=1000"])
     try:
-        for _ in range(400):
-            if lock_owner(out) is not None and (out / "stats.csv").exists():
+        stats = out / "stats.csv"
+        for _ in range(400):  # the loop runs once a generation is in stats.csv (the file
+            # itself is made in the set-up, where SIGTERM ends the run before its log line)
+            if lock_owner(out) is not None and stats.exists() and \
+                    stats.read_text().count("\n") >= 2:
                 break
             time.sleep(0.05)
         assert owner_state(lock_owner(out), out / LOCK_NAME) == "running"
