@@ -3,13 +3,16 @@
 order, the command and how it is ramped, the gait clock's period, the control period, the
 driven joints with their nominal pose and bounds, the joint that follows another); with a
 capture step (``problem.capture_gain``) also ``capture_step.py`` (the layer, standard library
-only, its settings in ``policy.json``'s ``layers``), and ``naoqi/`` carries it too."""
+only, its settings in ``policy.json``'s ``layers``), and ``naoqi/`` carries it too, and with the
+``onnx`` extra ``controller.onnx`` (the policy and the layer in one ONNX graph, the layer's
+state an input and an output: :mod:`evomotion.sim.robots.nao.capture_step_onnx`)."""
 
 from __future__ import annotations
 
 from typing import Any
 
 POLICY_JSON = "policy.json"
+CONTROLLER_ONNX = "controller.onnx"
 
 
 def policy_info(problem: Any) -> dict[str, Any]:
@@ -25,7 +28,9 @@ def policy_info(problem: Any) -> dict[str, Any]:
                 "capture_step.py (standard library; also in naoqi/) runs it, "
                 "CaptureStep(this record, observations, joints, nominal_rad, "
                 "control_period_s)(obs, policy(obs)) -> action; policy.py and policy.onnx are "
-                "the policy without it"}} if cfg.capture_gain else {}
+                "the policy without it; controller.onnx (written with the onnx extra) is the "
+                "policy and the layer in one graph",
+        "controller_onnx": _controller_onnx_info(ctl)}} if cfg.capture_gain else {}
     return {
         "robot": problem.robot.name, "policy": problem.policy.kind,
         "files": {"npz": "policy.npz", "py": "policy.py", "onnx": "policy.onnx"},
@@ -52,6 +57,19 @@ def policy_info(problem: Any) -> dict[str, Any]:
         "foot_contact_order": list(problem.robot.feet),
         **({"layers": layers} if layers else {}),
     }
+
+
+def _controller_onnx_info(ctl: Any) -> dict[str, Any]:
+    """``controller.onnx``'s inputs, outputs and state (``policy.json``'s note on it)."""
+    from evomotion.sim.robots.nao.capture_step_onnx import state_layout
+
+    return {"file": CONTROLLER_ONNX,
+            "inputs": {"observation": "float32 [robots, observations]",
+                       "state_in": "float64 [robots, S]: the last call's state_out"},
+            "outputs": {"action": "float32 [robots, joints]: the policy's action with the "
+                                  "feet moved", "state_out": "float64 [robots, S]"},
+            "state_start": "zeros (a new walk)",
+            "state_layout": state_layout({"bins": ctl.window})}
 
 
 def capture_step_record(ctl: Any, gain: float) -> dict[str, Any]:
@@ -91,6 +109,30 @@ def write_policy(ctx: Any) -> None:
         from evomotion.sim.robots.nao.policy_export import CAPTURE_STEP, runner_source
 
         atomic_write_text(ctx.out_dir / CAPTURE_STEP, runner_source(CAPTURE_STEP))
+        write_controller_onnx(ctx)
+
+
+def write_controller_onnx(ctx: Any) -> None:
+    """``controller.onnx`` beside ``policy.npz`` (the exported policy, read back, and the
+    capture step); skipped with one note without the ``onnx`` extra."""
+    try:
+        import onnx  # noqa: F401
+    except ImportError:
+        if not ctx.cache.get("controller_onnx_note"):
+            ctx.log("note: controller.onnx not written (pip install 'evomotion[onnx]')")
+            ctx.cache["controller_onnx_note"] = True
+        return
+    from evomotion.core.policies.export import read_policy_npz
+    from evomotion.outfile import atomic_write_bytes
+    from evomotion.sim.robots.nao.capture_step_onnx import controller_model
+
+    p, pol = ctx.problem, read_policy_npz(ctx.out_dir / "policy.npz")
+    info = policy_info(p)
+    model = controller_model(pol.spec, pol.params, pol.obs_mean, pol.obs_std,
+                             capture_step_record(p.ctl, p.cfg.capture_gain), list(p.obs_names),
+                             info["joints"], info["nominal_rad"], info["control_period_s"])
+    atomic_write_bytes(ctx.out_dir / CONTROLLER_ONNX, model.SerializeToString(),
+                       "ONNX controller")
 
 
 def write_naoqi(ctx: Any) -> None:
