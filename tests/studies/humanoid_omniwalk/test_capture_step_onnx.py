@@ -163,6 +163,47 @@ def test_the_onnx_layer_agrees_on_a_fuzzed_stream(walk):
         _assert_same_state(record, ref, state)
 
 
+def test_the_warm_up_ends_at_the_same_step(walk):
+    """A gyro spike on the last call before the layer acts (its step count ``warmup · bins``)
+    moves no foot in either layer; the same spike on the next call, the first that acts, does
+    (so a layer acting one call early would differ; the spike at eight phases of the stream)."""
+    p, obs, action = walk
+    record, gyro = capture_step_record(p.ctl, 1.5), list(p.obs_names).index("gyro:y")
+    model, last = _model(p, record), WARMUP_CYCLES * p.ctl.window - 1  # 0-based call
+    late = 0.0
+    for shift in range(0, p.ctl.window, 3):
+        for at in (last, last + 1):
+            o = obs[shift:shift + at + 1].copy()
+            o[at, gyro] = 8.0
+            worst, moved, _, _ = _run(p, record, o, action[shift:shift + at + 1], model)
+            assert worst <= TOL, (shift, at, worst)
+            late = max(late, moved)  # 0 where at == last: no call after the warm-up
+    assert late > 1e-3  # a spike on the first acting call moves a foot
+
+
+def test_a_record_whose_settings_all_differ(walk, monkeypatch):
+    """The record's gate, rate, warm-up, reach and dead band each unlike the others (in the
+    default the gate and the dead band are both 0.2 m/s, so a graph reading one for the other
+    would pass): numpy's constants patched to the same values, the fuzzed velocities."""
+    from evomotion.studies.humanoid_omniwalk import capture_step as cs
+
+    for name, value in (("CALIBRATION_GATE_MPS", 0.35), ("CALIBRATION_RATE", 0.45),
+                        ("WARMUP_CYCLES", 2), ("REACH_X_M", 0.08), ("OUT_Y_M", 0.06),
+                        ("IN_Y_M", 0.02), ("DEADBAND_MPS", 0.15)):
+        monkeypatch.setattr(cs, name, value)
+    p, obs, action = walk
+    record = capture_step_record(p.ctl, 1.5)
+    assert (record["calibration_gate_mps"], record["deadband_mps"]) == (0.35, 0.15)
+    o = obs.copy()
+    vel = [i for i, n in enumerate(p.obs_names) if n.startswith("joint_vel:")]
+    o[:, vel] += np.random.default_rng(5).normal(0, 1.0, (len(o), len(vel)))
+    ref = CaptureStep(p.ctl, list(p.obs_names), 1, 1.5, deadband_mps=0.15)
+    worst, moved, ref, state = _run(p, record, o, action, ref=ref)
+    assert worst <= TOL, worst
+    assert moved > 1e-3
+    _assert_same_state(record, ref, state)
+
+
 def test_nan_readings_behave_as_in_the_numpy_layer(walk):
     """After the warm-up: a NaN gyro, a NaN joint velocity and angle, every sensor NaN, a whole
     NaN row (clock and command too) and a NaN hip yaw-pitch action, each for one step: the
@@ -215,6 +256,8 @@ def test_a_bad_record_or_policy_is_one_value_error(walk):
     with pytest.raises(ValueError, match="capture_step: gain"):
         capture_step_model({**record, "gain": -1.0}, list(p.obs_names), info["joints"],
                            info["nominal_rad"], 0.02)
+    with pytest.raises(ValueError, match="capture_step: control_period_s 0.0"):
+        capture_step_model(record, list(p.obs_names), info["joints"], info["nominal_rad"], 0.0)
     with pytest.raises(ValueError, match="LHipYawPitch"):
         capture_step_model(record, list(p.obs_names), info["joints"][1:],
                            info["nominal_rad"][1:], 0.02)

@@ -39,11 +39,11 @@ from typing import Any
 
 import numpy as np
 
+from evomotion.core.policies.onnx_graph import IR_VERSION, OPSET
 from evomotion.sim.robots.nao import onnx_kinematics as ox
 from evomotion.sim.robots.nao.naoqi_capture_step import EPS, LEGS, READS, check
 from evomotion.sim.robots.nao.onnx_kinematics import Graph, V, apply, clip, where
 
-OPSET, IR_VERSION = 17, 8  # as the policy's (evomotion.core.policies.onnx_graph)
 PREFIX = "capture_step/"
 STATE_PARTS = (("sway", None), ("steps", 1), ("offset", 4), ("lift_off", 4), ("swinging", 2),
                ("hip_yaw_pitch", 1), ("hip_yaw_pitch_rate", 1))
@@ -106,6 +106,9 @@ def _layer(g: Graph, record: dict[str, Any], names: list[str], joints: list[str]
         raise ValueError("capture_step: expected LHipYawPitch among the joints, with a "
                          "nominal angle each")
     gait, bins, dt = record["gait"], int(record["bins"]), float(control_period_s)
+    if not (math.isfinite(dt) and dt > 0):
+        raise ValueError(f"capture_step: control_period_s {control_period_s!r}: expected a "
+                         "positive number of seconds")
     w, period = float(gait["swing_fraction"]), float(gait["period_s"])
     leg = ox.Leg(record["geometry"])
     obs = apply("Unsqueeze", ox.to_double(g.tensor(obs_in)), _idx(g, 2))  # [B, O, 1]
@@ -157,7 +160,8 @@ def _layer(g: Graph, record: dict[str, Any], names: list[str], joints: list[str]
     calm = ox.lt(apply("Sqrt", dvx * dvx + dvy * dvy), float(record["calibration_gate_mps"]))
     rate = float(record["calibration_rate"])
     table = where(apply("And", onehot, calm), _cat(2, sx + rate * dvx, sy + rate * dvy), table)
-    warm = ox.gt(steps, float(record["warmup_cycles"]) * bins)
+    # whole cycles, as the NAOqi layer's int(); the record's check allows any number
+    warm = ox.gt(steps, float(int(record["warmup_cycles"]) * bins))
     dvx, dvy = where(warm, dvx, 0.0), where(warm, dvy, 0.0)
     size = apply("Sqrt", dvx * dvx + dvy * dvy)
     shrink = apply("Max", size - float(record["deadband_mps"]), 0.0)
