@@ -292,12 +292,14 @@ def write_policy_files(ctx: Any, extra: dict[str, Any] | None = None) -> None:
         atomic_write_text(Path(ctx.out_dir) / name, json.dumps(record, indent=1) + "\n")
 
 
-def log_best_centre(ctx: Any, study: str) -> None:
+def log_best_centre(ctx: Any, study: str, also: tuple[str, ...] = ()) -> None:
     """The closing log line of a robot's policy study (humanoid-balance, humanoid-walk): the
-    best centre's score and the files written."""
+    best centre's score and the files written (``also``: the study's own, where present)."""
     s = ctx.state
     if s is not None and s.best_cost < float("inf"):
         ctx.log(f"{study}: best centre score {-s.best_cost:.3f} after "
                 f"{s.train_episodes} training episodes; policy.npz, policy.py, policy.json"
                 + (", policy.onnx" if not ctx.cache.get("onnx_note") else "")
+                + "".join(f", {f}" for f in also
+                          if ctx.out_dir is not None and (ctx.out_dir / f).is_file())
                 + f"; evomotion {study} compare RUN measures it")

@@ -117,6 +117,8 @@ def test_run_writes_the_controller_and_its_description(run_dir, problem):
     assert info["layers"]["capture_step"]["gain"] == record["capture_step"]["gain"] == 1.0
     assert (run_dir / "capture_step.py").is_file()
     assert (run_dir / "naoqi" / "capture_step.py").is_file()
+    if (run_dir / "controller.onnx").is_file():  # with the onnx extra
+        assert "policy.onnx, capture_step.py, controller.onnx; evomotion" in log
 
 
 def test_compare_prints_both_controllers_and_the_top_speeds(run_dir):

@@ -170,6 +170,6 @@ def finalize(ctx: Any) -> int | None:
 
     write_policy(ctx)
     write_naoqi(ctx)
-    log_best_centre(ctx, "humanoid-walk")
+    log_best_centre(ctx, "humanoid-walk", ("capture_step.py", CONTROLLER_ONNX))
     return None
 
