@@ -31,7 +31,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
 from evomotion.studies.humanoid_omniwalk import capture_step  # noqa: E402
-from markdown_table import markdown_table  # noqa: E402
+from markdown_table import markdown_row, markdown_table  # noqa: E402
 
 ORIGINAL = capture_step.CaptureStep.__call__
 GAINS = [0.0, 0.0, 0.0]  # k_back, k_front, k_arm (rad per m/s)
@@ -97,7 +97,7 @@ def main() -> int:
             by = [up[side == s] for s in (0, 2, 1, 3)]  # 0 forward, 2 backward, 1 left, 3 right
             rows.append([v, f"{push:g}", f"{up.mean():.0%}"]
                         + [f"{b.mean():.0%} ({len(b)})" if len(b) else "-" for b in by])
-            print(markdown_table(head, rows[-1:]).splitlines()[-1], flush=True)
+            print(markdown_row(rows[-1]), flush=True)
     print(f"\n{a.run}: {n} worlds x {a.duration:g} s, one push each, random commands\n")
     print(markdown_table(head, rows))
     return 0

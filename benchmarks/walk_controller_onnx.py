@@ -24,7 +24,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
 from evomotion.studies.humanoid_omniwalk import controller as controller_module  # noqa: E402
-from markdown_table import markdown_table  # noqa: E402
+from markdown_table import markdown_row, markdown_table  # noqa: E402
+from walk_deployed_sensing import tracking_cells  # noqa: E402
 
 ORIGINAL = controller_module.Controller.run
 SESSION: list = [None]  # the onnxruntime session while the ONNX rows play
@@ -118,11 +119,8 @@ def main() -> int:
             ends.append(up)
             same = f"{np.mean(ends[0] == up):.0%}" if len(ends) == 2 else ""
             rows.append([str(run), name, f"{s['survival']:.0%}", f"{s['time_up_s']:.1f}",
-                         f"{s['relative_speed_error']:.1%} / "
-                         f"{s['steady_relative_speed_error']:.1%}",
-                         f"{s['relative_yaw_rate_error']:.1%} / "
-                         f"{s['steady_relative_yaw_rate_error']:.1%}", same])
-            print(markdown_table(head, rows[-1:]).splitlines()[-1], flush=True)
+                         *tracking_cells(s), same])
+            print(markdown_row(rows[-1]), flush=True)
         SESSION[0] = None
         obs = np.array(SEEN)
         SEEN.clear()

@@ -30,7 +30,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
 from evomotion.studies.humanoid_omniwalk import controller as controller_module  # noqa: E402
-from markdown_table import markdown_table  # noqa: E402
+from markdown_table import markdown_row, markdown_table  # noqa: E402
 
 ORIGINAL = controller_module.Controller.run
 ENCODER_RAD = 2.0 * np.pi / 4096  # one count of a 12-bit encoder
@@ -68,6 +68,12 @@ def sensed_run(self, params, mean, std, worlds, nstep, commands):
         del self.sim.run
 
 
+def tracking_cells(s: dict) -> list[str]:
+    """``compare``'s speed and yaw-rate errors of summary ``s``: "every window / steady"."""
+    return [f"{s[f'relative_{q}_error']:.1%} / {s[f'steady_relative_{q}_error']:.1%}"
+            for q in ("speed", "yaw_rate")]
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("runs", nargs="+")
@@ -93,12 +99,8 @@ def main() -> int:
         for mode in a.variants:
             MODE[0] = mode
             s = _summary(_play(problem, pol.params, pol.obs_mean, pol.obs_std, seeds))
-            rows.append([run, mode, f"{s['survival']:.0%}",
-                         f"{s['relative_speed_error']:.1%} / "
-                         f"{s['steady_relative_speed_error']:.1%}",
-                         f"{s['relative_yaw_rate_error']:.1%} / "
-                         f"{s['steady_relative_yaw_rate_error']:.1%}"])
-            print(markdown_table(head, rows[-1:]).splitlines()[-1], flush=True)
+            rows.append([run, mode, f"{s['survival']:.0%}", *tracking_cells(s)])
+            print(markdown_row(rows[-1]), flush=True)
         problem.sim.close()
     print(f"\n{a.worlds} worlds x {a.duration:g} s, the run's pushes, random commands\n")
     print(markdown_table(head, rows))

@@ -21,7 +21,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).parent))
 import walk_capture_step  # noqa: E402
 from evomotion.studies.humanoid_omniwalk import problem as problem_module  # noqa: E402
-from markdown_table import markdown_table  # noqa: E402
+from markdown_table import markdown_row, markdown_table  # noqa: E402
 
 ORIGINAL = problem_module.OmniWalkConfig.gait
 STANCE = {"x_offset_m": 0.0, "lean_rad": 0.05}
@@ -48,7 +48,7 @@ def main() -> int:
         STANCE.update(x_offset_m=x, lean_rad=lean)
         for r in walk_capture_step.measure(a.worlds, a.duration, a.pushes, [0.48], 1.0, a.seed):
             rows.append([f"{x:g}", f"{lean:g}", *r[1:]])
-            print(markdown_table(["x"] * len(rows[-1]), rows[-1:]).splitlines()[-1], flush=True)
+            print(markdown_row(rows[-1]), flush=True)
     print(f"\n{a.worlds} worlds x {a.duration:g} s, nominal world, stepping in place\n")
     print(markdown_table(["x_offset_m", "lean_rad", "who"] + [f"{p:g} N s" for p in a.pushes],
                          rows))

@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
-from markdown_table import markdown_table  # noqa: E402
+from markdown_table import markdown_row, markdown_table  # noqa: E402
 
 
 def parts(problem, pol, seeds, push_ns: float | None, batch: int = 20) -> dict[str, float]:
@@ -74,7 +74,7 @@ def main() -> int:
             rows.append([run, name] + [
                 f"{p[q + ':all']:.1%} = {p[q + ':held']:.1%} + {p[q + ':drift']:.1%} + "
                 f"{p[q + ':after a change']:.1%}" for q in "vw"])
-            print(markdown_table(head, rows[-1:]).splitlines()[-1], flush=True)
+            print(markdown_row(rows[-1]), flush=True)
         problem.sim.close()
     print(f"\n{a.worlds} worlds x {a.duration:g} s, random commands\n")
     print(markdown_table(head, rows))

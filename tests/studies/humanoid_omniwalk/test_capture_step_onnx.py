@@ -12,10 +12,14 @@ from __future__ import annotations
 import json
 import sys
 import warnings
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
+
+sys.path.insert(0, str(Path(__file__).parent))
+from pushed_walk import fuzzed, pushed_walk  # noqa: E402
 
 ort = pytest.importorskip("onnxruntime")
 onnx = pytest.importorskip("onnx")
@@ -36,43 +40,15 @@ from evomotion.studies.humanoid_omniwalk.capture_step import (  # noqa: E402
     WARMUP_CYCLES,
     CaptureStep,
 )
-from evomotion.studies.humanoid_omniwalk.problem import (  # noqa: E402
-    OmniWalkConfig,
-    OmniWalkProblem,
-)
 
 TOL = 1e-6  # rad: the float32 action out (its rounding ~1e-8 here) with a margin
 STATE_TOL = 1e-9
 ROW = np.array([0])
 
 
-def _pushed_walk():
-    """(problem, observations [C, O] the numpy layer saw, the policy's actions [C, A]) of one
-    pushed episode of the fitted controller with the capture step (gain 1.5), spied on as
-    test_naoqi_capture_step.py does."""
-    p = OmniWalkProblem(OmniWalkConfig(duration_s=4.0, threads=1, capture_gain=1.5,
-                                       push_min_ns=3.0, push_max_ns=3.0,
-                                       command_feedback=True, command_feedback_start=0.1))
-    seen: list[tuple[np.ndarray, np.ndarray]] = []
-    real = CaptureStep.__call__
-
-    def spy(self, rows, obs, action):
-        seen.append((obs[0].copy(), action[0].copy()))
-        return real(self, rows, obs, action)
-
-    CaptureStep.__call__ = spy
-    try:
-        p.play(p.ctl.initial_params()[None], np.zeros((1, p.obs_dim)),
-               np.ones((1, p.obs_dim)), np.array([3]))
-    finally:
-        CaptureStep.__call__ = real
-    p.sim.close()
-    return p, np.array([o for o, _ in seen]), np.array([a for _, a in seen])
-
-
 @pytest.fixture(scope="module")
 def walk():
-    return _pushed_walk()
+    return pushed_walk()
 
 
 def _session(model):
@@ -142,20 +118,11 @@ def test_the_onnx_layer_agrees_on_a_fuzzed_stream(walk):
     p, obs, action = walk
     names = list(p.obs_names)
     rng = np.random.default_rng(7)
-    vel = [i for i, n in enumerate(names) if n.startswith("joint_vel:")]
-    contact = [names.index("foot_contact:left"), names.index("foot_contact:right")]
-    command = [names.index(f"command:{i}") for i in range(3)]
-    ph = names.index("phase:sin"), names.index("phase:cos")
     for gain in (0.5, 3.0):
         record, ref, state, worst, moved = capture_step_record(p.ctl, gain), None, None, 0.0, 0.0
         model = _model(p, record)
         for k in range(4):
-            o = obs.copy()
-            o[:, vel] += rng.normal(0, 0.5 + k, (len(o), len(vel)))
-            o[:, contact] = rng.random((len(o), 2)) < 0.6
-            o[:, command] = rng.uniform([-0.2, -0.2, -1.2], [0.45, 0.2, 1.2], (len(o), 3))
-            angle = np.arctan2(o[:, ph[0]], o[:, ph[1]]) + rng.normal(0, 0.05, len(o))
-            o[:, ph[0]], o[:, ph[1]] = np.sin(angle), np.cos(angle)
+            o = fuzzed(names, obs, rng, k)
             w, m, ref, state = _run(p, record, o, action, model, ref, state)
             worst, moved = max(worst, w), max(moved, m)
         assert worst <= TOL, (gain, worst)

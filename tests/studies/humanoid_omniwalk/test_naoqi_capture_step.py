@@ -22,6 +22,7 @@ from hypothesis import strategies as st
 sys.path.insert(0, str(Path(__file__).parent.parent / "humanoid_balance"))
 sys.path.insert(0, str(Path(__file__).parents[2] / "sim" / "robots" / "nao"))
 import fake_naoqi  # noqa: E402
+from pushed_walk import fuzzed, pushed_walk  # noqa: E402
 from test_naoqi_policy_export import _NotPy2, _python2  # noqa: E402
 from test_naoqi_runner import PERIOD_S, _frame, _load_runner, _Offset  # noqa: E402
 
@@ -38,7 +39,6 @@ from evomotion.studies.humanoid_omniwalk.artifacts import (  # noqa: E402
 )
 from evomotion.studies.humanoid_omniwalk.capture_step import CaptureStep  # noqa: E402
 from evomotion.studies.humanoid_omniwalk.problem import (  # noqa: E402
-    OmniWalkConfig,
     OmniWalkProblem,
 )
 
@@ -54,32 +54,9 @@ def _module(folder: Path | None = None):
     return mod
 
 
-def _pushed_walk(seconds: float = 4.0):
-    """(problem, observations [C, O] the layer saw, the policy's actions [C, A]) of one pushed
-    episode of the fitted controller with the capture step (gain 1.5)."""
-    p = OmniWalkProblem(OmniWalkConfig(duration_s=seconds, threads=1, capture_gain=1.5,
-                                       push_min_ns=3.0, push_max_ns=3.0,
-                                       command_feedback=True, command_feedback_start=0.1))
-    x = p.ctl.initial_params()[None]
-    seen: list[tuple[np.ndarray, np.ndarray]] = []
-    real = CaptureStep.__call__
-
-    def spy(self, rows, obs, action):
-        seen.append((obs[0].copy(), action[0].copy()))
-        return real(self, rows, obs, action)
-
-    CaptureStep.__call__ = spy
-    try:
-        p.play(x, np.zeros((1, p.obs_dim)), np.ones((1, p.obs_dim)), np.array([3]))
-    finally:
-        CaptureStep.__call__ = real
-    p.sim.close()
-    return p, np.array([o for o, _ in seen]), np.array([a for _, a in seen])
-
-
 @pytest.fixture(scope="module")
 def walk():
-    return _pushed_walk()
+    return pushed_walk()
 
 
 def _layers(p, record):
@@ -291,19 +268,10 @@ def test_the_layers_agree_on_a_fuzzed_stream(walk):
     p, obs, action = walk
     names = list(p.obs_names)
     rng = np.random.default_rng(7)
-    vel = [i for i, n in enumerate(names) if n.startswith("joint_vel:")]
-    contact = [names.index("foot_contact:left"), names.index("foot_contact:right")]
-    command = [names.index(f"command:{i}") for i in range(3)]
-    ph = names.index("phase:sin"), names.index("phase:cos")
     for gain in (0.5, 3.0):
         std, ref = _layers(p, capture_step_record(p.ctl, gain))
         for k in range(4):  # the stream four times over: the sway table learnt, then pushed
-            o = obs.copy()
-            o[:, vel] += rng.normal(0, 0.5 + k, (len(o), len(vel)))
-            o[:, contact] = rng.random((len(o), 2)) < 0.6
-            o[:, command] = rng.uniform([-0.2, -0.2, -1.2], [0.45, 0.2, 1.2], (len(o), 3))
-            angle = np.arctan2(o[:, ph[0]], o[:, ph[1]]) + rng.normal(0, 0.05, len(o))
-            o[:, ph[0]], o[:, ph[1]] = np.sin(angle), np.cos(angle)
+            o = fuzzed(names, obs, rng, k)
             for x, a in zip(o, action, strict=True):
                 want = ref(np.array([0]), x[None], a[None])[0]
                 np.testing.assert_allclose(std(x.tolist(), a.tolist()), want, rtol=0,
