@@ -311,4 +311,6 @@ def test_a_run_folder_has_a_controller_onnx_that_loads(walk, tmp_path, monkeypat
     write_policy(ctx)
     write_policy(ctx)
     assert not (tmp_path / CONTROLLER_ONNX).exists()
+    layer = json.loads((tmp_path / "policy.json").read_text())["layers"]["capture_step"]
+    assert "controller_onnx" not in layer and layer["file"] == "capture_step.py"
     assert logs.count("note: controller.onnx not written (pip install 'evomotion[onnx]')") == 1

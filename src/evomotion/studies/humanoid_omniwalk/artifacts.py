@@ -29,8 +29,8 @@ def policy_info(problem: Any) -> dict[str, Any]:
                 "CaptureStep(this record, observations, joints, nominal_rad, "
                 "control_period_s)(obs, policy(obs)) -> action; policy.py and policy.onnx are "
                 "the policy without it; controller.onnx (written with the onnx extra) is the "
-                "policy and the layer in one graph",
-        "controller_onnx": _controller_onnx_info(ctl)}} if cfg.capture_gain else {}
+                "policy and the layer in one graph", **_controller_onnx_info(ctl)}} \
+        if cfg.capture_gain else {}
     return {
         "robot": problem.robot.name, "policy": problem.policy.kind,
         "files": {"npz": "policy.npz", "py": "policy.py", "onnx": "policy.onnx"},
@@ -60,16 +60,21 @@ def policy_info(problem: Any) -> dict[str, Any]:
 
 
 def _controller_onnx_info(ctl: Any) -> dict[str, Any]:
-    """``controller.onnx``'s inputs, outputs and state (``policy.json``'s note on it)."""
+    """``{"controller_onnx": its inputs, outputs and state}`` (``policy.json``'s note on
+    ``controller.onnx``), or nothing without the ``onnx`` extra (no file is written then)."""
     from evomotion.sim.robots.nao.capture_step_onnx import state_layout
 
-    return {"file": CONTROLLER_ONNX,
+    try:
+        import onnx  # noqa: F401
+    except ImportError:
+        return {}
+    return {"controller_onnx": {"file": CONTROLLER_ONNX,
             "inputs": {"observation": "float32 [robots, observations]",
                        "state_in": "float64 [robots, S]: the last call's state_out"},
             "outputs": {"action": "float32 [robots, joints]: the policy's action with the "
                                   "feet moved", "state_out": "float64 [robots, S]"},
             "state_start": "zeros (a new walk)",
-            "state_layout": state_layout({"bins": ctl.window})}
+            "state_layout": state_layout({"bins": ctl.window})}}
 
 
 def capture_step_record(ctl: Any, gain: float) -> dict[str, Any]:
