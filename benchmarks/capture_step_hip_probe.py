@@ -32,10 +32,10 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).parent))
 from evomotion.studies.humanoid_omniwalk import capture_step  # noqa: E402
 from markdown_table import markdown_row, markdown_table  # noqa: E402
+from walk_falls import SIDES, push_sides, side_cells  # noqa: E402
 
 ORIGINAL = capture_step.CaptureStep.__call__
 GAINS = [0.0, 0.0, 0.0]  # k_back, k_front, k_arm (rad per m/s)
-SIDES = ("forward", "backward", "left", "right")
 
 
 def patched(self, rows, obs, action):
@@ -90,13 +90,9 @@ def main() -> int:
             ws = problem.worlds(seeds, push)
             _, res, _ = problem.play(P, M, S, seeds, push)
             up = res.fall_step >= problem.nstep
-            t = np.array([w.push_time_s for w in ws])
-            rel = np.array([np.arctan2(w.push_ns[1], w.push_ns[0]) for w in ws]) - \
-                heading_at(res.torso, t, dt)
-            side = np.round(np.angle(np.exp(1j * rel)) / (np.pi / 2)).astype(int) % 4
-            by = [up[side == s] for s in (0, 2, 1, 3)]  # 0 forward, 2 backward, 1 left, 3 right
-            rows.append([v, f"{push:g}", f"{up.mean():.0%}"]
-                        + [f"{b.mean():.0%} ({len(b)})" if len(b) else "-" for b in by])
+            side = push_sides(ws, heading_at(res.torso, np.array([w.push_time_s for w in ws]),
+                                             dt))
+            rows.append([v, f"{push:g}", f"{up.mean():.0%}", *side_cells(up, side)])
             print(markdown_row(rows[-1]), flush=True)
     print(f"\n{a.run}: {n} worlds x {a.duration:g} s, one push each, random commands\n")
     print(markdown_table(head, rows))

@@ -22,6 +22,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
 from markdown_table import markdown_row, markdown_table  # noqa: E402
+from walk_falls import SIDES, push_sides, side_cells  # noqa: E402
 
 DELAY: list = [None]  # control steps after the push, or None: never
 
@@ -79,8 +80,8 @@ def main() -> int:
     P, M, S = (np.tile(v, (n, 1)) for v in (pol.params, pol.obs_mean, pol.obs_std))
     plain = {p: prob.play(P, M, S, seeds, p)[1].fell for p in a.push}
     prob.ctl.run = jumping_run(prob.ctl)  # type: ignore[method-assign]
-    head = ["jump (control steps after the push)", "push (N s)", "survival", "pushed forward",
-            "pushed backward", "pushed sideways"]
+    head = ["jump (control steps after the push)", "push (N s)", "survival"] + [
+        f"pushed {s}" for s in SIDES]
     rows = []
     for d in a.delay:
         DELAY[0] = None if d == "none" else int(d)
@@ -90,12 +91,9 @@ def main() -> int:
             if DELAY[0] is None:  # the probe's own clock, never jumping: the run as it is
                 assert int((res.fell != plain[push]).sum()) <= 2, "the clocks differ"
             up = ~res.fell
-            t = np.array([w.push_time_s for w in ws])
-            rel = np.array([np.arctan2(w.push_ns[1], w.push_ns[0]) for w in ws]) - \
-                heading_at(res.torso, t, dt)
-            side = np.round(np.angle(np.exp(1j * rel)) / (np.pi / 2)).astype(int) % 4
-            rows.append([d, f"{push:g}", f"{up.mean():.0%}"] + [
-                f"{up[m].mean():.0%} ({m.sum()})" for m in (side == 0, side == 2, side % 2 == 1)])
+            side = push_sides(ws, heading_at(res.torso, np.array([w.push_time_s for w in ws]),
+                                             dt))
+            rows.append([d, f"{push:g}", f"{up.mean():.0%}", *side_cells(up, side)])
             print(markdown_row(rows[-1]), flush=True)
     print(f"\n{a.run}: {n} worlds x {a.duration:g} s, one push each, random commands\n")
     print(markdown_table(head, rows))

@@ -44,6 +44,21 @@ def _episodes(problem, policy, seeds: np.ndarray, push_t: np.ndarray, push_ns: f
     return np.concatenate(up), np.concatenate(t_up), np.concatenate(heading)
 
 
+def push_sides(ws: list, heading: np.ndarray) -> np.ndarray:
+    """Each world's push direction against the torso's ``heading`` (rad) at the push: 0
+    forward, 1 backward (within 45°), 2 left, 3 right (:data:`SIDES`)."""
+    vec = np.array([w.push_ns[:2] for w in ws], float)
+    rel = np.angle(np.exp(1j * (np.arctan2(vec[:, 1], vec[:, 0]) - heading)))
+    return np.select([np.abs(rel) <= np.pi / 4, np.abs(rel) >= 3 * np.pi / 4, rel > 0],
+                     [0, 1, 2], 3)
+
+
+def side_cells(up: np.ndarray, side: np.ndarray) -> list[str]:
+    """Survival "NN% (worlds)" pushed forward, backward, left, right."""
+    return [f"{up[side == i].mean():.0%} ({(side == i).sum()})" if (side == i).any() else "-"
+            for i in range(len(SIDES))]
+
+
 def measure(run: str, worlds: int, duration_s: float, seed: int,
             pushes: tuple[float, float] | None = None) -> dict:
     from evomotion.studies.humanoid_omniwalk.compare import EVAL_SEED_BASE, MAX_WORLDS, load_run
@@ -61,10 +76,7 @@ def measure(run: str, worlds: int, duration_s: float, seed: int,
     up0, _, _ = _episodes(problem, policy, seeds, when, 0.0)
     problem.sim.close()
     mag = np.array([w.params["push_magnitude_ns"] for w in ws])
-    vec = np.array([w.push_ns[:2] for w in ws], float)
-    rel = np.angle(np.exp(1j * (np.arctan2(vec[:, 1], vec[:, 0]) - heading)))
-    side = np.select([np.abs(rel) <= np.pi / 4, np.abs(rel) >= 3 * np.pi / 4, rel > 0],
-                     [0, 1, 2], 3)
+    side = push_sides(ws, heading)
     fell = ~up
     out = {"run": str(folder), "worlds": worlds, "duration_s": duration_s,
            "survival": float(up.mean()), "survival_no_push": float(up0.mean()),
