@@ -58,17 +58,9 @@ def session(run: Path, problem, threads: int = 0):
         data = path.read_bytes()
     else:  # a run from before controller.onnx: the exporter's own build
         from evomotion.core.policies.export import read_policy_npz
-        from evomotion.sim.robots.nao.capture_step_onnx import controller_model
-        from evomotion.studies.humanoid_omniwalk.artifacts import (
-            capture_step_record,
-            policy_info,
-        )
+        from evomotion.studies.humanoid_omniwalk.artifacts import controller_onnx
 
-        pol, info = read_policy_npz(run / "policy.npz"), policy_info(problem)
-        data = controller_model(pol.spec, pol.params, pol.obs_mean, pol.obs_std,
-                                capture_step_record(problem.ctl, problem.cfg.capture_gain),
-                                list(problem.obs_names), info["joints"], info["nominal_rad"],
-                                info["control_period_s"]).SerializeToString()
+        data = controller_onnx(problem, read_policy_npz(run / "policy.npz")).SerializeToString()
     opts = ort.SessionOptions()
     opts.intra_op_num_threads = threads
     return ort.InferenceSession(data, opts, providers=["CPUExecutionProvider"])

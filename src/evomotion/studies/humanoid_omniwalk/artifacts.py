@@ -107,19 +107,33 @@ def write_policy(ctx: Any) -> None:
 
     if ctx.problem is None:
         return
-    write_policy_files(ctx, {POLICY_JSON: policy_info(ctx.problem)})
+    info = policy_info(ctx.problem)
+    write_policy_files(ctx, {POLICY_JSON: info})
     if ctx.problem.cfg.capture_gain and ctx.out_dir is not None and \
             (ctx.out_dir / "policy.npz").is_file():
         from evomotion.outfile import atomic_write_text
         from evomotion.sim.robots.nao.policy_export import CAPTURE_STEP, runner_source
 
         atomic_write_text(ctx.out_dir / CAPTURE_STEP, runner_source(CAPTURE_STEP))
-        write_controller_onnx(ctx)
+        write_controller_onnx(ctx, info)
 
 
-def write_controller_onnx(ctx: Any) -> None:
+def controller_onnx(problem: Any, policy: Any, info: dict[str, Any] | None = None) -> Any:
+    """The ``onnx.ModelProto`` of ``controller.onnx``: ``policy`` (a ``read_policy_npz``
+    result) and ``problem``'s capture step (``info``: its :func:`policy_info`, if at hand)."""
+    from evomotion.sim.robots.nao.capture_step_onnx import controller_model
+
+    info = info if info is not None else policy_info(problem)
+    return controller_model(policy.spec, policy.params, policy.obs_mean, policy.obs_std,
+                            capture_step_record(problem.ctl, problem.cfg.capture_gain),
+                            list(problem.obs_names), info["joints"], info["nominal_rad"],
+                            info["control_period_s"])
+
+
+def write_controller_onnx(ctx: Any, info: dict[str, Any]) -> None:
     """``controller.onnx`` beside ``policy.npz`` (the exported policy, read back, and the
-    capture step); skipped with one note without the ``onnx`` extra."""
+    capture step; ``info`` the run's :func:`policy_info`); skipped with one note without the
+    ``onnx`` extra."""
     try:
         import onnx  # noqa: F401
     except ImportError:
@@ -129,13 +143,8 @@ def write_controller_onnx(ctx: Any) -> None:
         return
     from evomotion.core.policies.export import read_policy_npz
     from evomotion.outfile import atomic_write_bytes
-    from evomotion.sim.robots.nao.capture_step_onnx import controller_model
 
-    p, pol = ctx.problem, read_policy_npz(ctx.out_dir / "policy.npz")
-    info = policy_info(p)
-    model = controller_model(pol.spec, pol.params, pol.obs_mean, pol.obs_std,
-                             capture_step_record(p.ctl, p.cfg.capture_gain), list(p.obs_names),
-                             info["joints"], info["nominal_rad"], info["control_period_s"])
+    model = controller_onnx(ctx.problem, read_policy_npz(ctx.out_dir / "policy.npz"), info)
     atomic_write_bytes(ctx.out_dir / CONTROLLER_ONNX, model.SerializeToString(),
                        "ONNX controller")
 

@@ -80,7 +80,7 @@ def _take(x: V, i: int, axis: int) -> V:
     return apply("Gather", x, _idx(x.g, i), axis=axis)
 
 
-def _sum(x: V, axis: int) -> V:
+def _reduce_sum(x: V, axis: int) -> V:
     return apply("ReduceSum", x, _idx(x.g, axis), keepdims=1)
 
 
@@ -135,7 +135,7 @@ def _layer(g: Graph, record: dict[str, Any], names: list[str], joints: list[str]
     p = ox.mod(phase + np.array([[0.0], [0.5]]), 1.0)  # [B, 2, 1]
     r = apply("Round", phase * bins)
     onehot = ox.eq(where(ox.ge(r, bins), r - bins, r), np.arange(bins, dtype=float)[:, None])
-    sway = _sum(where(onehot, table, 0.0), 1)  # [B, 1, 2]
+    sway = _reduce_sum(where(onehot, table, 0.0), 1)  # [B, 1, 2]
     sx, sy = _take(sway, 0, 2), _take(sway, 1, 2)
     # eq. (1): leg odometry at q and q + ε q̇ (the variants' axis), both feet at once
     hyp = hyp_nominal + _shape(hyp_state, 1, 1)
@@ -150,8 +150,8 @@ def _layer(g: Graph, record: dict[str, Any], names: list[str], joints: list[str]
     touch = ox.gt(cols("foot_contact:left", "foot_contact:right"), 0.5)
     anyone = apply("Or", _take(touch, 0, 1), _take(touch, 1, 1))
     weight = where(anyone, ox.to_double(touch), ox.to_double(ox.ge(p, w)))  # (no bool Where)
-    weight = weight / apply("Max", _sum(weight, 1), 1.0)
-    vx, vy = (_sum(where(ox.gt(weight, 0.0), weight * e, 0.0), 1) for e in est)
+    weight = weight / apply("Max", _reduce_sum(weight, 1), 1.0)
+    vx, vy = (_reduce_sum(where(ox.gt(weight, 0.0), weight * e, 0.0), 1) for e in est)
     # eq. (2), the sway's calibration, the warm-up and the dead band
     dvx, dvy = vx - cx - sx, vy - cy - sy
     ok = apply("And", ox.finite(dvx), ox.finite(dvy))
