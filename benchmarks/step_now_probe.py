@@ -4,10 +4,10 @@ time known: an oracle; a detector would add its own delay) the gait clock jumps 
 of the next step, so the swinging foot lands now and the other foot lifts, with the run's
 capture-step layer placing it (capture-point walk engines end the step when the capture point
 leaves the support: walking.md). The clock is otherwise integrated as the simulator's time
-(``--delay none``: never jumps, the run as it is, checked against the plain play). Survival
-over ``--duration`` s in ``--worlds`` unseen perturbed worlds (``compare``'s seeds shifted by
-``--seed``) with one push of each ``--push`` size, in all and by the push's direction in the
-robot's frame (as ``walk_falls.py``).
+(``--delay none``: the run as it is; the probe's clock never jumping is checked against
+it). Survival over ``--duration`` s in ``--worlds`` unseen perturbed worlds (``compare``'s
+seeds shifted by ``--seed``) with one push of each ``--push`` size, in all and by the push's
+direction in the robot's frame (as ``walk_falls.py``).
 
     python benchmarks/step_now_probe.py RUN [--delay none 0 2 5] [--push 3 4]
 """
@@ -24,11 +24,21 @@ sys.path.insert(0, str(Path(__file__).parent))
 from markdown_table import markdown_row, markdown_table  # noqa: E402
 from walk_falls import SIDES, push_sides, side_cells  # noqa: E402
 
-DELAY: list = [None]  # control steps after the push, or None: never
+DELAY: list = [0]  # control steps after the push
 
 
-def jumping_run(ctl):
-    """``Controller.run`` with the oracle's clock (module doc) and the run's layer on top."""
+def next_step(phase: np.ndarray) -> np.ndarray:
+    """The gait clock at the start of the next step (the left foot's swing starts at phase 0,
+    the right foot's at 1/2): the swinging foot lands now, the other lifts."""
+    f = phase % 1.0
+    return phase + np.where(f < 0.5, 0.5, 1.0) - f
+
+
+def clocked_run(ctl, trigger):
+    """``Controller.run`` whose gait clock is its own, integrated every control period and
+    moved to :func:`next_step` in the rows where ``trigger(worlds, layer)``'s function
+    ``(rows, obs, count)`` says (``obs`` with the clock before the jump, ``count`` the control
+    steps so far per episode); the run's capture-step layer on top, reading that clock."""
     from evomotion.studies.humanoid_omniwalk.capture_step import CaptureStep
 
     names = list(ctl.sim.observe.names)
@@ -38,18 +48,19 @@ def jumping_run(ctl):
     def run(params, mean, std, worlds, nstep, commands):
         n = len(worlds)
         phase, count = np.zeros(n), np.zeros(n, np.int64)
-        at = np.array([-1 if DELAY[0] is None else
-                       int(np.ceil(w.push_time_s / ctl.control_dt)) + DELAY[0] for w in worlds])
         layer = CaptureStep(ctl, names, n, ctl.capture_gain)
+        fire = trigger(worlds, layer)
+
+        def clock(o, rows):
+            o[:, sin_c], o[:, cos_c] = np.sin(2 * np.pi * phase[rows]), \
+                np.cos(2 * np.pi * phase[rows])
 
         def policy(rows, obs):
             o = obs.copy()
-            if DELAY[0] is not None:
-                hit = rows[count[rows] == at[rows]]
-                f = phase[hit] % 1.0
-                phase[hit] += np.where(f < 0.5, 0.5, 1.0) - f  # the next step starts now
-                o[:, sin_c] = np.sin(2 * np.pi * phase[rows])
-                o[:, cos_c] = np.cos(2 * np.pi * phase[rows])
+            clock(o, rows)
+            hit = rows[fire(rows, o, count)]
+            phase[hit] = next_step(phase[hit])
+            clock(o, rows)
             count[rows] += 1
             phase[rows] += step
             return layer(rows, o, ctl.policy.act(params[rows], o, mean[rows], std[rows]))
@@ -58,6 +69,13 @@ def jumping_run(ctl):
                            record_states=True, record_targets=True)
 
     return run
+
+
+def oracle(worlds, layer):
+    """Fires ``DELAY[0]`` control steps after each world's push (its time known)."""
+    dt = layer.ctl.control_dt
+    at = np.array([int(np.ceil(w.push_time_s / dt)) + DELAY[0] for w in worlds])
+    return lambda rows, obs, count: count[rows] == at[rows]
 
 
 def main() -> int:
@@ -78,18 +96,27 @@ def main() -> int:
     seeds = EVAL_SEED_BASE + a.seed * MAX_WORLDS + np.arange(a.worlds)
     n, dt = len(seeds), prob.ctl.control_dt
     P, M, S = (np.tile(v, (n, 1)) for v in (pol.params, pol.obs_mean, pol.obs_std))
+    plain_run = prob.ctl.run
     plain = {p: prob.play(P, M, S, seeds, p)[1].fell for p in a.push}
-    prob.ctl.run = jumping_run(prob.ctl)  # type: ignore[method-assign]
+    # the probe's own clock, never jumping, is the run as it is (but for the clocks'
+    # rounding, which can turn a fall in a world or two)
+    prob.ctl.run = clocked_run(prob.ctl, lambda ws, layer: lambda rows, obs, count:
+                               np.zeros(len(rows), bool))  # type: ignore[method-assign]
+    for p in a.push:
+        assert int((prob.play(P, M, S, seeds, p)[1].fell != plain[p]).sum()) <= 2, \
+            "the clocks differ"
     head = ["jump (control steps after the push)", "push (N s)", "survival"] + [
         f"pushed {s}" for s in SIDES]
     rows = []
     for d in a.delay:
-        DELAY[0] = None if d == "none" else int(d)
+        if d == "none":  # the run as it is
+            prob.ctl.run = plain_run  # type: ignore[method-assign]
+        else:
+            DELAY[0] = int(d)
+            prob.ctl.run = clocked_run(prob.ctl, oracle)  # type: ignore[method-assign]
         for push in a.push:
             ws = prob.worlds(seeds, push)
             res = prob.play(P, M, S, seeds, push)[1]
-            if DELAY[0] is None:  # the probe's own clock, never jumping: the run as it is
-                assert int((res.fell != plain[push]).sum()) <= 2, "the clocks differ"
             up = ~res.fell
             side = push_sides(ws, heading_at(res.torso, np.array([w.push_time_s for w in ws]),
                                              dt))

@@ -24,26 +24,18 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).parent))
 from evomotion.studies.humanoid_omniwalk import capture_step as cs  # noqa: E402
 from evomotion.studies.humanoid_omniwalk import controller as controller_module  # noqa: E402
+from step_now_probe import clocked_run  # noqa: E402
 from walk_falls import measure, table  # noqa: E402
 
 SETTINGS = {"tau": 0.45, "refractory_s": 0.5}
 
 
-def run(self, params, mean, std, worlds, nstep, commands):
-    """``Controller.run`` with the detector's clock (module doc)."""
-    names = list(self.sim.observe.names)
-    sin_c, cos_c = names.index("phase:sin"), names.index("phase:cos")
-    step, n = self.control_dt / self.gait.period_s, len(params)
-    phase, last, count = np.zeros(n), np.full(n, -10 ** 6), np.zeros(n, np.int64)
-    refract = int(round(SETTINGS["refractory_s"] / self.control_dt))
-    layer = cs.CaptureStep(self, names, n, self.capture_gain)
+def detector(worlds, layer):
+    """Fires where the layer's ``|Δv|`` passes ``SETTINGS["tau"]`` (module doc)."""
+    last = np.full(len(worlds), -10 ** 6)
+    refract = int(round(SETTINGS["refractory_s"] / layer.ctl.control_dt))
 
-    def clock(o, rows):
-        o[:, sin_c], o[:, cos_c] = np.sin(2 * np.pi * phase[rows]), np.cos(2 * np.pi * phase[rows])
-
-    def policy(rows, obs):
-        o = obs.copy()
-        clock(o, rows)
+    def fire(rows, o, count):
         ph = layer.phase(o)
         b = np.round(ph * layer.bins).astype(np.int64) % layer.bins
         dv = layer.velocity_of(rows, o, ph) - o[:, layer.ic[:2]] - layer.sway[rows, b]
@@ -51,17 +43,15 @@ def run(self, params, mean, std, worlds, nstep, commands):
         warm = layer.steps[rows] + 1 > cs.WARMUP_CYCLES * layer.bins
         hit = warm & (np.linalg.norm(dv, axis=1) > SETTINGS["tau"]) & \
             (count[rows] - last[rows] > refract)
-        r = rows[hit]
-        f = phase[r] % 1.0
-        phase[r] += np.where(f < 0.5, 0.5, 1.0) - f  # the next step starts now
-        last[r] = count[r]
-        clock(o, rows)
-        count[rows] += 1
-        phase[rows] += step
-        return layer(rows, o, self.policy.act(params[rows], o, mean[rows], std[rows]))
+        last[rows[hit]] = count[rows[hit]]
+        return hit
 
-    return self.sim.run(policy, worlds, nstep, commands=commands, initial_state=self.state0,
-                        record_states=True, record_targets=True)
+    return fire
+
+
+def run(self, params, mean, std, worlds, nstep, commands):
+    """``Controller.run`` with the detector's clock (module doc)."""
+    return clocked_run(self, detector)(params, mean, std, worlds, nstep, commands)
 
 
 def main() -> int:
