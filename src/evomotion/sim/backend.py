@@ -40,15 +40,20 @@ def make_simulator(model: mujoco.MjModel, cfg: Any, threads: int = 0):
 
 def physics_record(sim: Any, robot: Any = None) -> dict[str, Any]:
     """What a run folder records about its physics (``physics.json``): the backend, its
-    device and guarantee; with ``robot`` also its name and the digests of its spec and MJCF
-    (:func:`robot_identity`)."""
+    device and guarantee, the host's numpy, SIMD features and BLAS kernels
+    (:func:`~evomotion.sim.cpu_platform.cpu_platform`); with ``robot`` also its name and the
+    digests of its spec and MJCF (:func:`robot_identity`)."""
+    from evomotion.sim.cpu_platform import cpu_platform
+
     if getattr(sim, "backend", "cpu") == "warp":
         record = sim.record()
     else:
         record = {"backend": "cpu", "threads": sim.nthread, "precision": "float64",
                   "mujoco": mujoco.__version__,
                   "guarantee": "bit-identical for one seed, whatever the evaluator and thread "
-                               "count"}
+                               "count, on machines with the same numpy, numpy_simd and blas "
+                               "(sim/cpu_platform.py)"}
+    record.update(cpu_platform())
     if robot is not None:
         record.update(robot_identity(robot))
     return record

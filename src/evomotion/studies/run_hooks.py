@@ -27,9 +27,12 @@ from evomotion.run.contracts import Replay
 PHYSICS_NAME = "physics.json"
 #: what a resume compares of physics.json
 PHYSICS_KEYS = ("backend", "device", "precision", "mujoco", "mujoco_warp", "deterministic",
-                "robot", "robot_spec_sha256", "robot_mjcf_sha256")
-#: physics.json's robot keys: a run folder written before the robot was recorded lacks them
-ROBOT_KEYS = ("robot", "robot_spec_sha256", "robot_mjcf_sha256")
+                "robot", "robot_spec_sha256", "robot_mjcf_sha256", "numpy", "numpy_simd",
+                "blas")
+#: physics.json's keys added later (the robot; the host's numpy, SIMD features and BLAS
+#: kernels, sim/cpu_platform.py): a run folder written before lacks them
+LATER_KEYS = ("robot", "robot_spec_sha256", "robot_mjcf_sha256", "numpy", "numpy_simd",
+              "blas")
 MOTION_NAME = "best.motion"
 
 
@@ -80,7 +83,7 @@ class PhysicsRecord:
         folder's record lacks was not recorded then)."""
         if not isinstance(before, dict):
             return None
-        keys = tuple(k for k in PHYSICS_KEYS if k in before or k not in ROBOT_KEYS)
+        keys = tuple(k for k in PHYSICS_KEYS if k in before or k not in LATER_KEYS)
         if not any(before.get(k) != now.get(k) for k in keys):
             return None
         return (f"note: resumed on other physics than the run started on ({PHYSICS_NAME}: "

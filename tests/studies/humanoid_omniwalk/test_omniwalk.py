@@ -298,3 +298,40 @@ def test_a_forward_only_run_trains_on_forward_commands_and_names_its_slowest_tes
     speeds = top_speeds(p, p.ctl.initial_params(), np.zeros(p.obs_dim), np.ones(p.obs_dim))
     assert "forward_min" in speeds and "backward" not in speeds
     assert speeds["forward_min"]["command"] == [0.1, 0.0, 0.0]
+
+
+def test_physics_json_records_the_host_and_a_resume_on_another_is_noted(tmp_path):
+    """A seed's bits hold on hosts whose numpy, SIMD features and BLAS kernels agree
+    (sim/cpu_platform.py): the run records them; resumed where OpenBLAS chose other kernels
+    (another process told ``OPENBLAS_CORETYPE``), the log says the result is not
+    bit-identical; a folder from before the keys were recorded resumes without a note."""
+    import os
+    import platform
+    import subprocess
+    import sys
+
+    from evomotion.sim.cpu_platform import cpu_platform
+
+    here = cpu_platform()["blas"]
+    if not (sys.platform.startswith("linux") and platform.machine() == "x86_64") or \
+            here.endswith((" ?", " Nehalem")):
+        pytest.skip(f"needs an x86 OpenBLAS whose kernels can be told: {here}")
+    run = tmp_path / "r"
+    sets = [a for kv in (*TINY, "run.checkpoint_every=1") for a in ("--set", kv)]
+    subprocess.run([sys.executable, "-m", "evomotion.cli", "run", "humanoid-walk", "--out",
+                    str(run), "-q", *sets], check=True, timeout=300,
+                   env={**os.environ, "OPENBLAS_CORETYPE": "Nehalem"})
+    rec = json.loads((run / "physics.json").read_text())
+    assert rec["blas"].endswith(" Nehalem") and rec["numpy_simd"] and rec["robot"] == "nao"
+    s = get_study("humanoid-walk")
+    cfg = resolve_config(s, None, [*TINY, "run.generations=2"])
+    run_study(s, cfg, run, quiet=True, resume=True)
+    log = (run / "log.txt").read_text()
+    assert "resumed on other physics" in log and "Nehalem" in log
+    assert json.loads((run / "physics.json").read_text())["blas"] == here
+    # written before the host was recorded: no note
+    old = {k: v for k, v in rec.items() if k not in ("numpy", "numpy_simd", "blas")}
+    (run / "physics.json").write_text(json.dumps(old))
+    run_study(s, resolve_config(s, None, [*TINY, "run.generations=3"]), run, quiet=True,
+              resume=True)
+    assert (run / "log.txt").read_text().count("resumed on other physics") == 1

@@ -229,6 +229,13 @@ class OmniWalkProblem:
         g = np.asarray(genomes, dtype=np.float64)
         return g if self.mirror is None else self.mirror.basis.expand(g)
 
+    def physics_record(self) -> dict:
+        """``physics.json``: the backend, what it guarantees and the host it holds on
+        (:func:`evomotion.sim.backend.physics_record`), the robot and its digests."""
+        from evomotion.sim.backend import physics_record
+
+        return physics_record(self.sim, self.robot)
+
     def worlds(self, seeds: np.ndarray, push_ns: float | None = None) -> list:
         cache = {int(s): episode_world(self.robot.model, self.draw, int(s), push_ns)
                  for s in np.unique(seeds)}

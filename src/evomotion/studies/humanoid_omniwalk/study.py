@@ -104,7 +104,6 @@ STUDY = Study(
     best_record=lazy_hook("evomotion.studies.policy_search", "best_record"),
     replay=None,
     replay_run=lazy("evomotion.studies.humanoid_omniwalk.replay", "replay_walk_command"),
-    run_record=None,
     cli=cli,
     view=StudyView(drive=True),  # the studio drives the controller live
     smoke=("problem.duration_s=1.0", "problem.eval_episodes=1", "problem.episodes=1",
