@@ -5,10 +5,10 @@ MuJoCo's C engine gives the same bits on any x86-64 CPU it runs on, but numpy do
 promise that across CPUs: it picks SIMD loops at run time by the CPU's features (some float64
 functions differ in the last bit on AVX-512 machines), and its BLAS (OpenBLAS, built with
 ``DYNAMIC_ARCH``) picks its kernels by the CPU (``Haswell``, ``SkylakeX``, ``Zen``, ...),
-whose sums round differently (measured: a humanoid-walk run's first generation differs at
-1e-11 under ``OPENBLAS_CORETYPE=Sandybridge`` against ``Haswell``, and 300 generations later
-the controllers differ). A seed's run is bit-identical on machines whose
-:func:`cpu_platform` agrees; a resume on another is noted in the run log.
+whose sums round differently (measured, ``benchmarks/blas_kernels.py``: a humanoid-walk run's
+first generation's stats differ by up to 4e-5 under ``OPENBLAS_CORETYPE=Sandybridge`` against
+``Haswell``, its controller after two generations too). A seed's run is bit-identical on
+machines whose :func:`cpu_platform` agrees; a resume on another is noted in the run log.
 """
 
 from __future__ import annotations
