@@ -8,6 +8,9 @@ one-cycle windows while up) split by window into three parts that add up to it:
   standing): any walked velocity there is error, and nothing is added to the denominator;
 - **after a change**: the windows within ``SETTLE_S`` of a change (the response to it).
 
+A second table splits the settled (held + drift) and after-a-change parts by the kind of the
+command given at the window's end (forward/backward, sideways, turning, mixed, standing).
+
 Each part is its numerator over the same denominator (all windows' ``Σ|v_cmd|``); the yaw rate
 likewise (``|ω_cmd| ≥ 0.1`` rad/s held). Played with the run's pushes and again with every
 push 0 N s, on compare's 100 unseen perturbed worlds x 60 s of random commands.
@@ -26,18 +29,47 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).parent))
 from markdown_table import markdown_row, markdown_table  # noqa: E402
 
+#: the kinds of command (commands.py) as :func:`command_kind` names them
+KINDS = ("forward/backward", "sideways", "turning", "mixed", "standing")
 
-def parts(problem, pol, seeds, push_ns: float | None, batch: int = 20) -> dict[str, float]:
-    """The every-window relative errors' parts (module doc), speed ``v:`` and yaw rate ``w:``."""
+
+def command_kind(cmds: np.ndarray) -> np.ndarray:
+    """The kind (:data:`KINDS`) of each command ``cmds[..., 3]`` as given (unramped)."""
+    nz = np.abs(cmds) > 1e-12
+    return np.select([nz[..., 0] & ~nz[..., 1:].any(-1), nz[..., 1] & ~nz[..., ::2].any(-1),
+                      nz[..., 2] & ~nz[..., :2].any(-1), nz.all(-1)], list(KINDS[:4]), KINDS[4])
+
+
+def parts(problem, pol, seeds, push_ns: float | None, batch: int = 20,
+          preview_s: float = 0.0, tell=None) -> dict[str, float]:
+    """The every-window relative errors' parts (module doc), speed ``v:`` and yaw rate ``w:``,
+    ``v:steps`` and ``w:steps`` (every window's against the commands as given, unramped), the
+    settled and after-a-change parts by the kind of the command given at the window's end
+    (``v:settled to turning``, ...), and
+    ``survived`` (the share of episodes up at the end). With ``preview_s`` the robot is
+    told each ramp that much ahead (:func:`~evomotion.studies.humanoid_omniwalk.commands.
+    command_schedule`), and with ``tell`` it is told ``tell(commands[n, C, 3])`` of them (e.g. a
+    calibration), the errors still against the ramped commands."""
+    from dataclasses import replace
+
     from evomotion.studies.humanoid_omniwalk import compare as c
-    from evomotion.studies.humanoid_omniwalk.commands import tracking
+    from evomotion.studies.humanoid_omniwalk.commands import schedules, tracking
 
-    sums: dict[str, float] = {}
+    at_once = replace(problem.command_draw, ramp_s=1e-9)
+
+    sums: dict[str, float] = {"survived": 0.0}
+    C = -(-problem.nstep // problem.control_steps)
     for a in range(0, len(seeds), batch):
         s = seeds[a:a + batch]
         n = len(s)
-        _, res, cmds = problem.play(*(np.tile(x, (n, 1)) for x in
-                                      (pol.params, pol.obs_mean, pol.obs_std)), s, push_ns)
+        t = np.arange(C) * problem.ctl.control_dt
+        cmds = schedules(problem.command_draw, s, t)
+        told = schedules(problem.command_draw, s, t, preview_s) if preview_s else cmds
+        told = told if tell is None else tell(told)
+        _, res, _ = problem.play(*(np.tile(x, (n, 1)) for x in
+                                   (pol.params, pol.obs_mean, pol.obs_std)), s, push_ns,
+                                 commands=told)
+        sums["survived"] += float((~res.fell).sum()) / len(seeds)
         tr = tracking(res.torso, cmds, problem.ctl.window, problem.ctl.control_dt)
         ev, ew = tr.errors()
         ends = np.arange(problem.ctl.window, cmds.shape[1] + 1)
@@ -45,14 +77,24 @@ def parts(problem, pol, seeds, push_ns: float | None, batch: int = 20) -> dict[s
         settled = up & c.steady_windows(cmds, problem.ctl.window,
                                         int(round(c.SETTLE_S / problem.ctl.control_dt)))
         cv, cw = np.hypot(tr.cmd[..., 0], tr.cmd[..., 1]), np.abs(tr.cmd[..., 2])
+        given = schedules(at_once, s, t)
+        steps = tracking(res.torso, given, problem.ctl.window, problem.ctl.control_dt).errors()
+        kinds = command_kind(given[:, ends - 1])  # the command given at each window's end
         for q, e, cmd, lo in (("v", ev, cv, c.STEADY_MIN_V_MPS), ("w", ew, cw,
                                                                    c.STEADY_MIN_W_RPS)):
             held = settled & (cmd >= lo)
             for key, mask in (("held", held), ("drift", settled & ~held),
                               ("after a change", up & ~settled), ("all", up)):
                 sums[f"{q}:{key}"] = sums.get(f"{q}:{key}", 0.0) + float((e * mask).sum())
+            sums[f"{q}:steps"] = sums.get(f"{q}:steps", 0.0) + float(
+                (steps["vw".index(q)] * up).sum())
+            for kind in KINDS:
+                for key, mask in (("settled", settled), ("after a change", up & ~settled)):
+                    k = f"{q}:{key} to {kind}"
+                    sums[k] = sums.get(k, 0.0) + float((e * mask * (kinds == kind)).sum())
             sums[f"{q}:cmd"] = sums.get(f"{q}:cmd", 0.0) + float((cmd * up).sum())
-    return {k: v / sums[k[:2] + "cmd"] for k, v in sums.items() if not k.endswith("cmd")}
+    return {k: v if k == "survived" else v / sums[k[:2] + "cmd"]
+            for k, v in sums.items() if not k.endswith("cmd")}
 
 
 def main() -> int:
@@ -65,7 +107,7 @@ def main() -> int:
 
     head = ["run", "pushes", "speed: every window = held + drift + after a change",
             "yaw rate: every window = held + drift + after a change"]
-    rows = []
+    rows, by_kind = [], []
     for run in a.runs:
         problem, pol, _ = load_run(run, a.duration)
         seeds = EVAL_SEED_BASE + np.arange(a.worlds)
@@ -75,9 +117,16 @@ def main() -> int:
                 f"{p[q + ':all']:.1%} = {p[q + ':held']:.1%} + {p[q + ':drift']:.1%} + "
                 f"{p[q + ':after a change']:.1%}" for q in "vw"])
             print(markdown_row(rows[-1]), flush=True)
+            if push is None:
+                by_kind += [[run, what] + [
+                    f"{p[f'{q}:settled to {k}']:.1%} + {p[f'{q}:after a change to {k}']:.1%}"
+                    for k in KINDS] for q, what in (("v", "speed"), ("w", "yaw rate"))]
         problem.sim.close()
     print(f"\n{a.worlds} worlds x {a.duration:g} s, random commands\n")
     print(markdown_table(head, rows))
+    print("\nthe run's pushes, by the kind of command given (settled + after a change; "
+          "they add up to every window)\n")
+    print(markdown_table(["run", "error"] + list(KINDS), by_kind))
     return 0
 
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -30,6 +32,26 @@ def test_a_schedule_is_its_seeds_alone_in_range_and_ramped(seed):
     # a ramp of ramp_s: no step bigger than the full range over ramp_s / dt steps
     span = np.array([d.vx_max - d.vx_min, 2 * d.vy_max, 2 * d.yaw_rate_max])
     assert np.all(np.abs(np.diff(c, axis=0)) <= span * 0.02 / d.ramp_s + 1e-12)
+
+
+@settings(max_examples=20, deadline=None, derandomize=True, database=None)
+@given(seed=st.integers(0, 2**40), preview=st.sampled_from([0.04, 0.1, 0.3, 0.5]))
+def test_a_preview_is_the_ramp_ahead_never_the_next_command(seed, preview):
+    d = CommandDraw()
+    plain, ahead = command_schedule(d, seed, T), command_schedule(d, seed, T, preview)
+    np.testing.assert_array_equal(command_schedule(d, seed, T, 0.0), plain)
+    np.testing.assert_array_equal(schedules(d, np.array([seed]), T, preview)[0], ahead)
+    # each command at once (a microsecond on: the first is given at 0 s)
+    target = command_schedule(replace(d, ramp_s=1e-9), seed, T + 1e-6)
+    # between the ramp now and the command given now: never the next command
+    assert np.all(ahead >= np.minimum(plain, target) - 1e-12)
+    assert np.all(ahead <= np.maximum(plain, target) + 1e-12)
+    # where no new command comes within the preview, it is the ramp that much later
+    later = command_schedule(d, seed, T + preview)
+    k = int(round(preview / 0.02))
+    same = np.array([np.all(target[i:i + k + 1] == target[i]) for i in range(len(T) - k)])
+    np.testing.assert_allclose(ahead[:len(same)][same], later[:len(same)][same], atol=1e-12)
+    assert same.mean() > 0.8 and np.any(ahead != plain)
 
 
 def test_schedules_hold_commands_for_two_to_four_seconds_and_mix_kinds():

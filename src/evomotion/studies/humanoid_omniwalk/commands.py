@@ -60,9 +60,12 @@ def _one(draw: CommandDraw, rng: np.random.Generator) -> np.ndarray:
     return np.zeros(3)
 
 
-def command_schedule(draw: CommandDraw, seed: int, times_s: np.ndarray) -> np.ndarray:
+def command_schedule(draw: CommandDraw, seed: int, times_s: np.ndarray,
+                     preview_s: float = 0.0) -> np.ndarray:
     """The ramped commands ``[T, 3]`` of episode ``seed`` at ``times_s[T]`` (see the module
-    doc)."""
+    doc); with ``preview_s`` each ramp where it will be that much later (a command's ramp is
+    known once the command is given, the next command not: the ramp starts with a jump of
+    ``preview_s / ramp_s`` of the change and ends ``preview_s`` sooner)."""
     rng = np.random.default_rng([int(seed), 1])
     t = np.asarray(times_s, dtype=np.float64)
     end = float(t.max()) if t.size else 0.0
@@ -73,14 +76,16 @@ def command_schedule(draw: CommandDraw, seed: int, times_s: np.ndarray) -> np.nd
     starts_a, cmds_a = np.array(starts), np.array(cmds)
     seg = np.searchsorted(starts_a, t, side="right") - 1
     prev = np.where(seg[:, None] > 0, cmds_a[np.maximum(seg - 1, 0)], 0.0)
-    frac = np.clip((t - starts_a[seg]) / draw.ramp_s, 0.0, 1.0)[:, None]
+    frac = np.clip((t - starts_a[seg] + preview_s) / draw.ramp_s, 0.0, 1.0)[:, None]
     return prev + (cmds_a[seg] - prev) * frac
 
 
-def schedules(draw: CommandDraw, seeds: np.ndarray, times_s: np.ndarray) -> np.ndarray:
+def schedules(draw: CommandDraw, seeds: np.ndarray, times_s: np.ndarray,
+              preview_s: float = 0.0) -> np.ndarray:
     """``[n, T, 3]``: :func:`command_schedule` of each seed (one drawn per distinct seed)."""
     seeds = np.asarray(seeds)
-    cache = {int(s): command_schedule(draw, int(s), times_s) for s in np.unique(seeds)}
+    cache = {int(s): command_schedule(draw, int(s), times_s, preview_s)
+             for s in np.unique(seeds)}
     return np.stack([cache[int(s)] for s in seeds]) if seeds.size else \
         np.zeros((0, len(times_s), 3))
 
