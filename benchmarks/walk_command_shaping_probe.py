@@ -28,18 +28,12 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
 from markdown_table import markdown_row, markdown_table  # noqa: E402
-from walk_tracking_breakdown import parts  # noqa: E402
+from walk_tracking_breakdown import parts, played  # noqa: E402
 
 #: the values each command component (vx m/s, vy m/s, ω rad/s) is held at for its gain curve
 LEVELS = ((-0.2, -0.1, 0.1, 0.2, 0.3, 0.45), (-0.2, -0.1, 0.1, 0.2),
           (-1.2, -0.9, -0.6, -0.3, 0.3, 0.6, 0.9, 1.2))
 GAIN_WORLDS, GAIN_S = 6, 8.0
-
-
-def played(problem, pol, seeds, push_ns, commands):
-    n = len(seeds)
-    return problem.play(*(np.tile(x, (n, 1)) for x in (pol.params, pol.obs_mean, pol.obs_std)),
-                        seeds, push_ns, commands=commands)[1]
 
 
 def lag_errors(problem, pol, seeds, shifts: np.ndarray) -> np.ndarray:

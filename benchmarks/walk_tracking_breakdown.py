@@ -40,6 +40,14 @@ def command_kind(cmds: np.ndarray) -> np.ndarray:
                       nz[..., 2] & ~nz[..., :2].any(-1), nz.all(-1)], list(KINDS[:4]), KINDS[4])
 
 
+def played(problem, pol, seeds, push_ns: float | None, commands: np.ndarray):
+    """The closed-loop result of the exported policy ``pol`` in the worlds of ``seeds`` told
+    ``commands[n, C, 3]``."""
+    n = len(seeds)
+    return problem.play(*(np.tile(x, (n, 1)) for x in (pol.params, pol.obs_mean, pol.obs_std)),
+                        seeds, push_ns, commands=commands)[1]
+
+
 def parts(problem, pol, seeds, push_ns: float | None, batch: int = 20,
           preview_s: float = 0.0, tell=None) -> dict[str, float]:
     """The every-window relative errors' parts (module doc), speed ``v:`` and yaw rate ``w:``,
@@ -58,17 +66,12 @@ def parts(problem, pol, seeds, push_ns: float | None, batch: int = 20,
     at_once = replace(problem.command_draw, ramp_s=1e-9)
 
     sums: dict[str, float] = {"survived": 0.0}
-    C = -(-problem.nstep // problem.control_steps)
+    t = np.arange(-(-problem.nstep // problem.control_steps)) * problem.ctl.control_dt
     for a in range(0, len(seeds), batch):
         s = seeds[a:a + batch]
-        n = len(s)
-        t = np.arange(C) * problem.ctl.control_dt
         cmds = schedules(problem.command_draw, s, t)
         told = schedules(problem.command_draw, s, t, preview_s) if preview_s else cmds
-        told = told if tell is None else tell(told)
-        _, res, _ = problem.play(*(np.tile(x, (n, 1)) for x in
-                                   (pol.params, pol.obs_mean, pol.obs_std)), s, push_ns,
-                                 commands=told)
+        res = played(problem, pol, s, push_ns, told if tell is None else tell(told))
         sums["survived"] += float((~res.fell).sum()) / len(seeds)
         tr = tracking(res.torso, cmds, problem.ctl.window, problem.ctl.control_dt)
         ev, ew = tr.errors()
