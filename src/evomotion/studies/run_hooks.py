@@ -28,11 +28,12 @@ PHYSICS_NAME = "physics.json"
 #: what a resume compares of physics.json
 PHYSICS_KEYS = ("backend", "device", "precision", "mujoco", "mujoco_warp", "deterministic",
                 "robot", "robot_spec_sha256", "robot_mjcf_sha256", "numpy", "numpy_simd",
-                "blas")
+                "blas", "gymnasium", "env_backend")
 #: physics.json's keys added later (the robot; the host's numpy, SIMD features and BLAS
-#: kernels, sim/cpu_platform.py): a run folder written before lacks them
+#: kernels, sim/cpu_platform.py; gym's Gymnasium and how it is stepped): a run folder
+#: written before lacks them
 LATER_KEYS = ("robot", "robot_spec_sha256", "robot_mjcf_sha256", "numpy", "numpy_simd",
-              "blas")
+              "blas", "gymnasium", "env_backend")
 MOTION_NAME = "best.motion"
 
 

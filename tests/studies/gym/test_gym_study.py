@@ -116,3 +116,33 @@ def test_replay_plays_the_exported_policy_on_unseen_episodes(tmp_path):
     r = subprocess.run([sys.executable, "-m", "evomotion.cli", "replay", str(out), "--push",
                         "1"], capture_output=True, text=True, timeout=300)
     assert r.returncode != 0 and "Traceback" not in r.stderr and "--push" in r.stderr
+
+
+def test_physics_json_records_gymnasium_and_a_resume_on_another_is_noted(tmp_path):
+    """The run records what its bits depend on (MuJoCo, Gymnasium, how the environment is
+    stepped, the host's numpy and BLAS); resumed where the record differs, the log says the
+    result is not bit-identical; a folder written before gym recorded physics resumes
+    without a note."""
+    import json
+
+    from evomotion.run.config import resolve_config
+    from evomotion.run.runner import run_study
+    from evomotion.studies.gym.study import STUDY
+
+    sets = ["problem.max_episode_steps=20", "problem.eval_episodes=1", "algorithm.pop_size=4",
+            "run.evaluator=serial", "run.checkpoint_every=1"]
+    run = tmp_path / "r"
+    run_study(STUDY, resolve_config(STUDY, None, [*sets, "run.generations=1"]), run, quiet=True)
+    rec = json.loads((run / "physics.json").read_text())
+    assert rec["gymnasium"] == gym.__version__ and rec["env"] == "Hopper-v5"
+    assert rec["env_backend"] == "batched" and rec["backend"] == "cpu" and rec["blas"]
+    (run / "physics.json").write_text(json.dumps({**rec, "gymnasium": "0.0.1"}))
+    run_study(STUDY, resolve_config(STUDY, None, [*sets, "run.generations=2"]), run, quiet=True,
+              resume=True)
+    log = (run / "log.txt").read_text()
+    assert "resumed on other physics" in log and "0.0.1" in log
+    assert json.loads((run / "physics.json").read_text())["gymnasium"] == gym.__version__
+    (run / "physics.json").unlink()  # written before 2026-12-07
+    run_study(STUDY, resolve_config(STUDY, None, [*sets, "run.generations=3"]), run, quiet=True,
+              resume=True)
+    assert (run / "log.txt").read_text().count("resumed on other physics") == 1

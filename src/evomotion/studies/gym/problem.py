@@ -159,6 +159,24 @@ class GymProblem:
         return run_gymnasium(self._envs, policy, owner, seeds, self.max_steps, self.low,
                              self.high)
 
+    def physics_record(self) -> dict[str, Any]:
+        """``physics.json``: the environment, how it is stepped, the MuJoCo and Gymnasium
+        versions and the host facts a CPU run's bits depend on
+        (:func:`~evomotion.sim.cpu_platform.cpu_platform`); a resume where they differ is
+        noted in the log (:mod:`evomotion.studies.run_hooks`)."""
+        import gymnasium
+        import mujoco
+
+        from evomotion.sim.cpu_platform import cpu_platform
+
+        return {"backend": "cpu", "precision": "float64", "mujoco": mujoco.__version__,
+                "gymnasium": gymnasium.__version__, "env": self.cfg.env,
+                "env_backend": self.backend,
+                "guarantee": "bit-identical for one seed, whatever the evaluator, on machines "
+                             "with the same mujoco, gymnasium, numpy, numpy_simd and blas "
+                             "(sim/cpu_platform.py)",
+                **cpu_platform()}
+
     def evaluation_rows(self, genomes: np.ndarray) -> np.ndarray:
         """``genomes`` as rows with no normalisation and the episodes from seed 0."""
         return neutral_rows(genomes, self.obs_dim, self.episodes)

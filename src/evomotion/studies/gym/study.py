@@ -93,7 +93,6 @@ STUDY = Study(
     best_record=lazy_hook("evomotion.studies.gym.artifacts", "best_record"),
     replay=None,
     replay_run=lazy("evomotion.studies.gym.replay", "replay_command"),
-    run_record=None,
     smoke=("problem.env=Hopper-v5", "problem.max_episode_steps=20", "problem.eval_episodes=1",
            "algorithm.pop_size=4", "run.evaluator=serial"),
 )
