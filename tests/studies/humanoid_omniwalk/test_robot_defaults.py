@@ -33,6 +33,8 @@ def test_the_dm_humanoids_defaults_are_its_measured_command_line():
     assert nao.problem.symmetric and resolve_config(
         s, overrides=["problem.robot='nao'"]).problem.symmetric
     assert not op3.problem.symmetric and not by_default.problem.symmetric
+    # the narrower yaw-rate kernel, measured on the NAO only
+    assert nao.problem.sigma_yaw_rps == 0.15 and op3.problem.sigma_yaw_rps == 0.3
 
 
 def test_the_users_settings_win_over_the_robots(tmp_path):
