@@ -85,8 +85,8 @@ STUDY = Study(
     # A yaw-rate kernel half as wide (2026-12-07, seventeenth and eighteenth sessions): the
     # yaw-rate error over every window 21 / 18 % against 27 / 31 % (steady 8 / 9 % against
     # 15 / 18 %) on seeds 0 / 1 retrained on one host, survival 70 / 68 % against 67 / 70 %,
-    # the speed error alike (docs/humanoid-walk.md); --set problem.sigma_yaw_rps=0.3 for the
-    # former.
+    # the speed error alike; seed 2 at 0.15: 23 % (11 %), 75 % (docs/humanoid-walk.md); --set
+    # problem.sigma_yaw_rps=0.3 for the former.
     # The dm humanoid (2026-12-06): with the NAO's defaults it learned to stand; from the
     # engine setting that walked furthest in the scan, on forward commands alone in the
     # nominal world, 600 generations walk 0.23-0.25 m/s at 0.3 on every seed (the same doc)
