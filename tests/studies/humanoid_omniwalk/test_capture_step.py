@@ -120,6 +120,46 @@ def test_the_swing_foot_lands_at_the_clipped_capture_point(problem):
     assert np.abs(outs[-1]).max() > 0.05  # the legs really moved
 
 
+def test_the_layer_gives_the_engine_on_every_row_bit_for_bit(problem):
+    """The layer runs the engine only on the rows whose feet it moves (or whose phase or
+    command is not finite): its output is, bit for bit, the action plus the engine with the
+    feet moved less without on every row, the former formulation; rows that move no foot keep
+    their action exactly, and a NaN command makes the row NaN as in the ONNX layer."""
+    from evomotion.studies.humanoid_omniwalk.omni_gait import targets
+
+    ctl = problem.ctl
+    names = [*ctl.sim.observe.names, "torso_velocity:x", "torso_velocity:y"]
+    vcols = [len(names) - 2, len(names) - 1]
+    n = 5
+    layer = CaptureStep(ctl, names, n, 1.0, velocity=vcols, sway=np.zeros((ctl.window, 2)))
+    rng = np.random.default_rng(4)
+    obs = np.zeros((n, len(names)))
+    command = rng.uniform(-0.3, 0.3, (n, 3))
+    obs[:, [names.index(f"command:{i}") for i in range(3)]] = command
+    # velocity offsets from the command: none, 0.5 forward, 0.4 right, one inside the dead
+    # band (0.14 m/s), one beside a NaN turn
+    obs[:, vcols] = command[:, :2] + [[0.0, 0.0], [0.5, 0.0], [0.0, -0.4], [0.1, 0.1],
+                                      [0.6, 0.3]]
+    obs[4, names.index("command:2")] = np.nan
+    action = rng.normal(scale=0.05, size=(n, ctl.columns.size))
+    moved_rows = set()
+    for c in range(ctl.window + 3):
+        phase = c * ctl.control_dt / ctl.gait.period_s
+        obs[:, names.index("phase:sin")] = math.sin(2 * math.pi * phase)
+        obs[:, names.index("phase:cos")] = math.cos(2 * math.pi * phase)
+        out = layer(np.arange(n), obs, action)
+        off = layer.offset.copy()
+        ph, cmd = layer.phase(obs), obs[:, layer.ic]
+        want = action + (targets(ctl.gait, ph, cmd, off)
+                         - targets(ctl.gait, ph, cmd, np.zeros_like(off)))[:, ctl.columns]
+        assert np.array_equal(out[:4].view(np.uint64), want[:4].view(np.uint64))
+        assert np.isnan(out[4]).any() and np.array_equal(np.isnan(out), np.isnan(want))
+        still = ~(off[:4] != 0).any(axis=(1, 2))
+        assert np.array_equal(out[:4][still], action[:4][still])
+        moved_rows |= set(np.flatnonzero(~still).tolist())
+    assert moved_rows == {1, 2}  # the offsets beyond the dead band moved a foot, no other
+
+
 def test_a_run_with_the_capture_step_is_reproducible_and_independent_of_neighbours(problem):
     """Each row's episodes carry their own layer state: a row scores the same alone and
     beside others, twice; the layer changes the score against the same problem without it."""

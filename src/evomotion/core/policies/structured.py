@@ -44,6 +44,7 @@ direction). ``G = 0`` is the plain command-modulated tape.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import ClassVar
@@ -71,11 +72,10 @@ def phase_features(sin_phi: np.ndarray, cos_phi: np.ndarray, harmonics: int) -> 
 def _row_dot(W: np.ndarray, v: np.ndarray) -> np.ndarray:
     """``Σ_m W[..., a, m] v[..., m]`` summed in column order (not BLAS, whose order depends on
     shapes and threads): the same bits whether ``W`` is one policy's or one per row, in any
-    memory layout (``policy.py`` sums alike); a loop over columns, never over individuals."""
-    y = W[..., 0] * v[..., None, 0]
-    for m in range(1, W.shape[-1]):
-        y = y + W[..., m] * v[..., None, m]
-    return y
+    memory layout (``policy.py`` sums alike, a loop over columns). The products in one call,
+    then ``np.add.accumulate`` (a running sum, left to right by definition: the loop's
+    additions in the loop's order) in another: never a loop over individuals or columns."""
+    return np.add.accumulate(W * v[..., None, :], axis=-1)[..., -1]
 
 
 @dataclass(frozen=True, eq=False)
@@ -143,10 +143,13 @@ class StructuredSpec(PolicySpec):
         c = obs[:, list(self.command_columns)] if command is None else command
         return np.concatenate([f] + [c[:, k, None] * f for k in range(c.shape[1])], axis=-1)
 
-    @property
+    @functools.cached_property
     def feedback_columns(self) -> np.ndarray:
-        """The observation columns ``x`` is made of: all but the two phase columns, in order."""
-        return np.setdiff1d(np.arange(self.obs_dim), np.asarray(self.phase_columns))
+        """The observation columns ``x`` is made of: all but the two phase columns, in order
+        (worked out once per spec, read-only)."""
+        cols = np.setdiff1d(np.arange(self.obs_dim), np.asarray(self.phase_columns))
+        cols.setflags(write=False)
+        return cols
 
     def layer_shapes(self) -> list[tuple[int, int]]:
         """The tape ``C[a, 1 + 2H]``, the gains ``K[a, o − 2]`` and, with command feedback,

@@ -169,12 +169,19 @@ class CaptureStep:
         self.swinging[rows] = swing
         self.offset[rows], self.lift_off[rows] = off, lift_off
         # the engine with the feet moved less without, in one call on both sets of rows (row
-        # by row the same numbers as two calls; offsets of zero add nothing)
-        k = len(phase)
-        both = targets(gait, np.concatenate([phase, phase]), np.concatenate([command, command]),
-                       np.concatenate([np.zeros_like(off), off]))
-        moved = both[k:] - both[:k]
-        out = action + moved[:, ctl.columns]
+        # by row the same numbers as two calls), on the rows whose feet are moved or whose
+        # phase or command is not finite (NaN less NaN is NaN, as the ONNX layer gives): on
+        # the others offsets of zero add exactly nothing (the same targets twice)
+        moved = np.zeros_like(action)
+        m = np.flatnonzero((off != 0.0).any(axis=(1, 2)) | ~np.isfinite(phase)
+                           | ~np.isfinite(command).all(axis=1))
+        if m.size:
+            k = m.size
+            both = targets(gait, np.concatenate([phase[m], phase[m]]),
+                           np.concatenate([command[m], command[m]]),
+                           np.concatenate([np.zeros_like(off[m]), off[m]]))
+            moved[m] = (both[k:] - both[:k])[:, ctl.columns]
+        out = action + moved
         hyp = ctl.nominal[ctl.columns[self.hyp_col]] + out[:, self.hyp_col]
         ok = np.isfinite(hyp)  # a NaN action: the motor holds its last target
         self.hip_yaw_pitch_rate[rows] = np.where(
