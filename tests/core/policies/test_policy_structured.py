@@ -10,6 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from evomotion.core.policies import StructuredSpec, fit_tape, make_policy
+from evomotion.core.policies.standalone import _row_dot as policy_py_row_dot
 from evomotion.core.policies.structured import _row_dot, phase_features
 
 
@@ -51,19 +52,12 @@ def test_batched_act_is_the_formula_row_by_row(n, o, a, H, seed, clip) -> None:
                                    rtol=0, atol=1e-9)
 
 
-def _column_loop(W: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """``Σ_m W[..., m] v[..., m]`` as ``policy.py`` sums it: a loop over the columns."""
-    y = W[..., 0] * v[..., None, 0]
-    for m in range(1, W.shape[-1]):
-        y = y + W[..., m] * v[..., None, m]
-    return y
-
-
 @settings(max_examples=60, deadline=None, derandomize=True, database=None)
 @given(n=st.integers(1, 5), a=st.integers(1, 6), m=st.integers(1, 40),
        shared=st.booleans(), seed=st.integers(0, 2**31), specials=st.booleans())
 def test_row_dot_sums_in_column_order_bit_for_bit(n, a, m, shared, seed, specials) -> None:
-    """The batched sum (products, then a running sum) gives the column loop's bits: with one
+    """The batched sum (products, then a running sum) gives the bits of ``policy.py``'s column
+    loop (the exported numpy policy, :mod:`evomotion.core.policies.standalone`): with one
     matrix for every row or one per row, over magnitudes 1e-8..1e8 where the order of
     additions shows, with NaN and infinities where they fall."""
     rng = np.random.default_rng(seed)
@@ -73,7 +67,7 @@ def test_row_dot_sums_in_column_order_bit_for_bit(n, a, m, shared, seed, special
     if specials:
         W.flat[rng.integers(W.size)] = np.nan
         v.flat[rng.integers(v.size)] = rng.choice([np.inf, -np.inf])
-    got, want = _row_dot(W, v), _column_loop(W, v)
+    got, want = _row_dot(W, v), policy_py_row_dot(W, v)
     assert got.shape == want.shape == (n, a)
     assert np.array_equal(got.view(np.uint64), want.view(np.uint64))
 
