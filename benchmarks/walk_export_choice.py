@@ -22,24 +22,17 @@ from pathlib import Path
 
 import numpy as np
 
-from evomotion.studies.humanoid_omniwalk.compare import load_run
+from evomotion.studies.humanoid_omniwalk.compare import _play, load_run
 
 VALIDATION_SEED_BASE = 2**39
 
 
 def validate(folder: Path, episodes: int, duration_s: float | None) -> dict:
     problem, policy, _ = load_run(folder, duration_s)
-    seeds = VALIDATION_SEED_BASE + np.arange(episodes)
-    ret, surv = [], []
-    for a in range(0, episodes, 64):
-        s = seeds[a:a + 64]
-        n = len(s)
-        m, _, _ = problem.play(np.tile(policy.params, (n, 1)), np.tile(policy.obs_mean, (n, 1)),
-                               np.tile(policy.obs_std, (n, 1)), s)
-        ret.append(m["return"])
-        surv.append(m["survived"])
+    m = _play(problem, policy.params, policy.obs_mean, policy.obs_std,
+              VALIDATION_SEED_BASE + np.arange(episodes))  # compare's batched player
     problem.sim.close()
-    r, v = np.concatenate(ret), np.concatenate(surv)
+    r, v = m["return"], m["survived"]
     return {"return": float(r.mean()), "se": float(r.std(ddof=1) / math.sqrt(len(r))),
             "survived": float(v.mean()), "returns": r}
 
