@@ -44,6 +44,8 @@ def main() -> None:
     ap.add_argument("--duration", type=float, default=None,
                     help="episode length (s); default the run's problem.duration_s")
     a = ap.parse_args()
+    if a.episodes < 2:
+        ap.error(f"--episodes: expected at least 2 (a standard error needs two), got {a.episodes}")
     rows = []
     for f in a.folders:
         t0 = time.perf_counter()
