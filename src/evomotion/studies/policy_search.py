@@ -33,6 +33,7 @@ from evomotion.core.state import state_from_arrays, state_to_arrays
 from evomotion.run.ask_tell import make_optimizer
 from evomotion.run.contracts import OwnInitialPopulation
 from evomotion.run.driver import Driver, Evaluate, StepReport
+from evomotion.studies.policy_start import StartPoint, start_point
 
 #: episode seeds are drawn below this (exact in a float64 row)
 SEED_LIMIT = 2**31 - 1
@@ -113,15 +114,20 @@ class PolicySearchDriver(Driver):
     sense: Sense = "max"
     extra_columns = EXTRA_COLUMNS
 
-    def __init__(self, problem: PolicyProblem, optimizer: Optimizer) -> None:
-        self.problem, self.opt = problem, optimizer
+    def __init__(self, problem: PolicyProblem, optimizer: Optimizer,
+                 start: StartPoint | None = None) -> None:
+        self.problem, self.opt, self.start = problem, optimizer, start
 
     def init(self, rng: np.random.Generator) -> PolicySearchState:
         o = self.problem.obs_dim
         p = self.problem  # a problem with its own start (a fitted gait tape): as AskTellDriver
-        opt_state = (self.opt.init(rng, p.initial_population(1, rng))
-                     if isinstance(p, OwnInitialPopulation) else self.opt.init(rng))
-        return PolicySearchState(opt_state, normalizer.init(o),
+        if self.start is not None:  # an exported policy (problem.start_policy, policy_start.py)
+            opt_state, obs = self.opt.init(rng, self.start.genome[None]), self.start.obs
+        else:
+            opt_state = (self.opt.init(rng, p.initial_population(1, rng))
+                         if isinstance(p, OwnInitialPopulation) else self.opt.init(rng))
+            obs = normalizer.init(o)
+        return PolicySearchState(opt_state, obs,
                                  np.asarray(self.opt.center(opt_state), float).copy(),
                                  float("inf"), np.zeros(o), np.ones(o))
 
@@ -190,8 +196,10 @@ class PolicySearchDriver(Driver):
 
 
 def make_policy_driver(problem: PolicyProblem, config: Any) -> PolicySearchDriver:
-    """The study factory: the registered optimizer ``algorithm.name`` on the policy."""
-    return PolicySearchDriver(problem, make_optimizer(problem, config.algorithm))
+    """The study factory: the registered optimizer ``algorithm.name`` on the policy, started
+    where ``problem.start_policy`` says (:mod:`evomotion.studies.policy_start`) if it is set."""
+    start = start_point(problem, getattr(config.problem, "start_policy", ""))
+    return PolicySearchDriver(problem, make_optimizer(problem, config.algorithm), start)
 
 
 def observation_moments(count: np.ndarray, sums: np.ndarray, sumsqs: np.ndarray

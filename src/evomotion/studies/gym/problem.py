@@ -46,6 +46,9 @@ class GymConfig:
     hidden: int = 32  # MLP: units per hidden layer
     layers: int = 2  # MLP: hidden layers
     normalize: bool = True  # ARS V2 observation normalisation (false: V1)
+    #: start the search from this exported policy (a policy.npz or a run folder holding one,
+    #: of the same controller; "" the study's own start): studies/policy_start.py
+    start_policy: str = ""
     episodes: int = 1  # training episodes per individual and generation
     eval_episodes: int = 5  # episodes of the centre per generation (the reported return)
     reward_shift: float = -1.0  # per-step shift while training; < 0: ARS's for the task
@@ -57,6 +60,7 @@ class GymConfig:
     def validate(self) -> None:
         check_fields(self, "problem")
         check_text("problem.env", self.env)
+        check_text("problem.start_policy", self.start_policy)
         if self.policy == "structured":
             raise InputError("problem.policy: the structured policy needs a phase observation "
                              "(sin/cos of a gait clock), which Gymnasium tasks lack; use linear "

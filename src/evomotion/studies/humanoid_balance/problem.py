@@ -68,6 +68,9 @@ class HumanoidBalanceConfig:
     hidden: int = 32  # MLP: units per hidden layer
     layers: int = 2  # MLP: hidden layers
     normalize: bool = True  # ARS V2 observation normalisation (false: V1)
+    #: start the search from this exported policy (a policy.npz or a run folder holding one,
+    #: of the same controller; "" the study's own start): studies/policy_start.py
+    start_policy: str = ""
     action_scale: float = 0.3  # rad of joint offset per unit of policy output
     #: bound on every normalised observation (the standing robot's first statistics are
     #: tiny, so a push would otherwise drive the inputs to thousands); inf: none (ARS)
@@ -90,6 +93,7 @@ class HumanoidBalanceConfig:
     def validate(self) -> None:
         check_fields(self, "problem")
         check_text("problem.robot", self.robot)
+        check_text("problem.start_policy", self.start_policy)
         for key in ("stance_width_rad", "stance_stagger_rad", "stance_crouch_rad",
                     "stance_lean_rad"):
             check_number(f"problem.{key}", getattr(self, key), lo=-1.0, hi=1.0)

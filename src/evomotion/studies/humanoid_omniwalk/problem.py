@@ -83,6 +83,9 @@ class OmniWalkConfig:
     #: foot moved by this times the capture point's offset (capture_step.py); 0 off; the NAO
     capture_gain: float = 0.0
     normalize: bool = True  # ARS V2 observation normalisation
+    #: start the search from this exported policy (a policy.npz or a run folder holding one,
+    #: of the same controller; "" the study's own start): studies/policy_start.py
+    start_policy: str = ""
     episodes: int = 1  # training episodes per individual and generation
     eval_episodes: int = 8  # episodes of the centre per generation (the reported return)
     vx_min: float = -0.2  # command ranges (m/s, rad/s); see commands.py
@@ -120,6 +123,7 @@ class OmniWalkConfig:
     def validate(self) -> None:
         check_fields(self, "problem")
         check_text("problem.robot", self.robot)
+        check_text("problem.start_policy", self.start_policy)
         check_number("problem.duration_s", self.duration_s, lo=0.0, hi=600.0, lo_open=True)
         check_number("problem.control_period_s", self.control_period_s, lo=0.0, hi=1.0,
                      lo_open=True)
