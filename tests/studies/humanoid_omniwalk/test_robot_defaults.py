@@ -14,7 +14,7 @@ MEASURED = ["problem.sway_m=0.008", "problem.sway_phase_rad=1.57",
             "problem.step_height_m=0.005", "problem.perturb=false", "problem.push_max_ns=0",
             "problem.vx_min=0.15", "problem.vx_max=0.3", "problem.vy_max=0.05",
             "problem.yaw_rate_max=0.2", "problem.command_weights=[1, 0, 0, 0, 0]",
-            "run.generations=600"]
+            "problem.yaw_share=0", "run.generations=300"]
 
 
 def test_the_dm_humanoids_defaults_are_its_measured_command_line():
@@ -26,9 +26,9 @@ def test_the_dm_humanoids_defaults_are_its_measured_command_line():
     nao = resolve_config(s)  # the NAO and the OP3 keep the study's defaults
     op3 = resolve_config(s, overrides=["problem.robot='op3'"])
     for cfg in (nao, op3):
-        assert cfg.problem.perturb and cfg.run.generations == 300
+        assert cfg.problem.perturb and cfg.problem.yaw_share == 0.5
         assert cfg.problem.command_weights != by_default.problem.command_weights
-    assert by_default.problem.perturb is False and by_default.run.generations == 600
+    assert by_default.problem.perturb is False and by_default.problem.yaw_share == 0
     # mirror-symmetric controllers on the NAO only (its mirror capability), named or not
     assert nao.problem.symmetric and resolve_config(
         s, overrides=["problem.robot='nao'"]).problem.symmetric
