@@ -32,6 +32,8 @@ def main() -> int:
     from evomotion.studies.policy_search import normaliser
 
     try:
+        if a.out.resolve() == a.run.resolve():
+            raise InputError(f"OUT {a.out}: expected another folder than RUN's")
         name, raw = config_from_run_dir(a.run)
         study = get_study(name)
         cfg = config_from_dict(study, raw)
@@ -40,7 +42,11 @@ def main() -> int:
         if not names:
             raise InputError(f"{a.run}: no checkpoint")
         arrays, meta = read_checkpoint(a.run, names[0])
-    except InputError as e:
+        missing = {"state.opt.center", "state.obs.count"} - set(arrays)
+        if missing:
+            raise InputError(f"{a.run}: its checkpoint holds no {sorted(missing)[0]} (expected "
+                             "a policy search by an evolution strategy, not CMA-ES)")
+    except (InputError, ValueError, OSError) as e:  # CheckpointError is a ValueError
         print(f"error: {e}", file=sys.stderr)
         return 2
     centre = arrays["state.opt.center"]

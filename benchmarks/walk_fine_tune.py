@@ -24,6 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
+from evomotion.errors import InputError
+
 
 def main() -> int:
     ap = argparse.ArgumentParser()
@@ -33,10 +35,19 @@ def main() -> int:
     ap.add_argument("--worlds", type=int, default=20)
     ap.add_argument("--duration", type=float, default=60.0)
     a = ap.parse_args()
-    if a.worlds < 1 or a.duration <= 0:
-        ap.error("--worlds must be at least 1 and --duration above 0")
+    if not 1 <= a.worlds <= 10000 or not 0.5 <= a.duration <= 600:
+        ap.error("--worlds must be 1 to 10000 and --duration 0.5 to 600 s")
+    if not (0 <= a.vy <= 2 and 0 <= a.yaw <= 10):
+        ap.error("--vy must be 0 to 2 m/s and --yaw 0 to 10 rad/s")
+    try:
+        return _table(a)
+    except InputError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
 
-    from evomotion.errors import InputError
+
+def _table(a: argparse.Namespace) -> int:
+
     from evomotion.studies.humanoid_omniwalk.compare import (
         EVAL_SEED_BASE,
         _pct,
@@ -47,13 +58,12 @@ def main() -> int:
         top_speeds,
     )
     from evomotion.studies.humanoid_omniwalk.problem import OmniWalkProblem
+    from evomotion.studies.policy_start import check_same_controller
 
-    try:
-        loaded = [load_run(r) for r in a.runs]
-    except InputError as e:
-        print(f"error: {e}", file=sys.stderr)
-        return 2
+    loaded = [load_run(r) for r in a.runs]
     problem = loaded[-1][0]
+    for run, (_, policy, _) in zip(a.runs, loaded, strict=True):
+        check_same_controller(run, policy.spec, problem.policy)  # one line if not
     quiet = quiet_problem(problem)
     nominal = OmniWalkProblem(dataclasses.replace(problem.cfg, duration_s=a.duration,
                                                   perturb=False, push_min_ns=0.0,
@@ -68,9 +78,6 @@ def main() -> int:
     seeds = EVAL_SEED_BASE + np.arange(a.worlds)
     for run, (_, policy, _) in zip(a.runs, loaded, strict=True):
         x, mean, std = policy.params, policy.obs_mean, policy.obs_std
-        if x.shape != (problem.policy.n_params,):
-            print(f"error: {run}: another controller than {a.runs[-1]}'s", file=sys.stderr)
-            return 2
         top = top_speeds(quiet, x, mean, std, tests)
         cells = []
         for name, (vx, vy, w) in tests.items():

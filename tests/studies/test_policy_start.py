@@ -4,6 +4,7 @@ such a run is bit-identical, and every file that does not fit is one line."""
 
 from __future__ import annotations
 
+import shutil
 import subprocess
 import sys
 
@@ -38,10 +39,12 @@ def source(tmp_path_factory):
                    "run.generations=3"),
               out, quiet=True)
     got = read_policy_npz(out / "policy.npz")
-    if (got.obs_std == 1).all():  # the best centre was generation 0's: give it a normaliser
-        rng = np.random.default_rng(1)
-        write_policy_npz(out / "policy.npz", got.spec, got.params,
-                         rng.normal(size=got.obs_mean.size), rng.uniform(0.5, 2, got.obs_mean.size))
+    rng = np.random.default_rng(1)
+    o = got.obs_mean.size
+    # whatever generation's centre was exported: non-zero numbers and a non-trivial normaliser
+    write_policy_npz(out / "policy.npz", got.spec,
+                     got.params + rng.normal(scale=0.01, size=got.params.size),
+                     got.obs_mean + rng.normal(size=o), got.obs_std * rng.uniform(0.5, 2, o))
     return out
 
 
@@ -58,8 +61,8 @@ def test_the_first_centre_is_the_file_acting_as_exported(source, algo):
     np.testing.assert_allclose(np.asarray(centre), got.params, rtol=0, atol=1e-12)  # box units
     assert int(state.obs.count) == START_OBS_COUNT
     mean, std = normaliser(state.obs, True)
-    np.testing.assert_allclose(mean, got.obs_mean, rtol=0, atol=0)
-    np.testing.assert_allclose(std, got.obs_std, rtol=1e-12)
+    np.testing.assert_array_equal(mean, got.obs_mean)
+    np.testing.assert_array_equal(std, got.obs_std)  # exactly: START_OBS_COUNT = 2^20 + 1
     # the centre scores what the file scores with its own normaliser
     a = problem.evaluate(policy_rows(got.params[None], mean, std, 7, 1)).metrics["return"][0]
     b = problem.evaluate(policy_rows(got.params[None], got.obs_mean, got.obs_std, 7, 1)
@@ -75,6 +78,14 @@ def test_a_started_run_resumes_bit_for_bit(source, tmp_path):
     run_study(GYM, _cfg(*sets, "run.generations=1"), split, quiet=True)
     run_study(GYM, _cfg(*sets, "run.generations=3"), split, quiet=True, resume=True)
     assert (whole / "policy.npz").read_bytes() == (split / "policy.npz").read_bytes()
+    # a resume does not read the start again: its checkpoint holds everything
+    again, src = tmp_path / "again", tmp_path / "src"
+    shutil.copytree(source, src)
+    sets2 = (*sets[:3], f"problem.start_policy='{src}'")
+    run_study(GYM, _cfg(*sets2, "run.generations=1"), again, quiet=True)
+    shutil.rmtree(src)
+    run_study(GYM, _cfg(*sets2, "run.generations=3"), again, quiet=True, resume=True)
+    assert (again / "policy.npz").read_bytes() == (whole / "policy.npz").read_bytes()
     strip = [line.split(",")[:9] for line in (whole / "stats.csv").read_text().splitlines()]
     assert strip == [line.split(",")[:9] for line in (split / "stats.csv").read_text().splitlines()]
 
@@ -105,12 +116,23 @@ def test_another_action_range_is_named(source, tmp_path):
         start_point(_problem(), str(f))
 
 
+def test_without_normalisation_an_identity_file_starts_with_no_states_seen(source, tmp_path):
+    got = read_policy_npz(source / "policy.npz")
+    o = got.obs_mean.size
+    f = write_policy_npz(tmp_path / "policy.npz", got.spec, got.params, np.zeros(o), np.ones(o))
+    start = start_point(_problem(normalize=False), str(f))
+    assert int(start.obs.count) == 0
+    np.testing.assert_array_equal(start.genome, got.params)
+
+
 def test_missing_files_are_one_line(tmp_path):
     with pytest.raises(InputError, match="no such file"):
         start_point(_problem(), str(tmp_path / "nowhere"))
     with pytest.raises(InputError, match="no policy.npz in it"):
         start_point(_problem(), str(tmp_path))
     assert start_point(_problem(), "") is None
+    with pytest.raises(InputError, match="expected a readable path"):
+        start_point(_problem(), "~no-such-user-of-this-machine/policy.npz")
 
 
 def test_a_symmetric_walk_starts_from_its_free_numbers_and_refuses_an_asymmetric_one(tmp_path):
@@ -127,7 +149,9 @@ def test_a_symmetric_walk_starts_from_its_free_numbers_and_refuses_an_asymmetric
     f = write_policy_npz(tmp_path / "asym.npz", p.policy, x, mean, std)
     with pytest.raises(InputError, match="not a mirror-symmetric controller"):
         start_point(p, str(f))
-    mean_std(got.obs)  # the identity normaliser, weighted: still a valid normaliser
+    m, sd = mean_std(got.obs)  # the identity normaliser, weighted
+    np.testing.assert_array_equal(m, 0.0)
+    np.testing.assert_array_equal(sd, 1.0)
 
 
 def test_the_cli_refuses_a_bad_start_in_one_line_before_making_the_folder(tmp_path):

@@ -64,6 +64,11 @@ class Driver(ABC):
     uses_evaluator: bool = True
     snapshot_every_step: bool = True
 
+    def check_new_run(self) -> None:
+        """Checks of a new run's own inputs (a file it starts from), before its folder is
+        made: one :class:`~evomotion.errors.InputError` line if one is wrong. A resume does not
+        call it (its state is in the checkpoint). Default: none."""
+
     @abstractmethod
     def init(self, rng: np.random.Generator) -> Any:
         """A fresh state (nothing evaluated yet)."""

@@ -120,6 +120,7 @@ def run_study(study: LoopStudy, config: Config, out_dir: Path | str | None = Non
             # a config the problem refuses is refused before the folder is made or emptied
             with sigterm_as_interrupt():
                 prepared = _prepare(study, config, problem)
+                prepared[2].check_new_run()  # e.g. the policy a search starts from
                 check_loggers(config.run.loggers)  # a missing package: before emptying
         out_dir.mkdir(parents=True, exist_ok=True)
         # SIGTERM is Ctrl-C from the moment the lock names this process (a stop from the

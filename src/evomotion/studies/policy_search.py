@@ -115,14 +115,21 @@ class PolicySearchDriver(Driver):
     extra_columns = EXTRA_COLUMNS
 
     def __init__(self, problem: PolicyProblem, optimizer: Optimizer,
-                 start: StartPoint | None = None) -> None:
-        self.problem, self.opt, self.start = problem, optimizer, start
+                 start_policy: str = "") -> None:
+        self.problem, self.opt, self.start_policy = problem, optimizer, start_policy
+        self._start: StartPoint | None = None
+
+    def check_new_run(self) -> None:
+        """Read and check ``problem.start_policy`` (a resume never reads it)."""
+        self._start = start_point(self.problem, self.start_policy)
 
     def init(self, rng: np.random.Generator) -> PolicySearchState:
         o = self.problem.obs_dim
         p = self.problem  # a problem with its own start (a fitted gait tape): as AskTellDriver
-        if self.start is not None:  # an exported policy (problem.start_policy, policy_start.py)
-            opt_state, obs = self.opt.init(rng, self.start.genome[None]), self.start.obs
+        if self.start_policy and self._start is None:
+            self.check_new_run()
+        if self._start is not None:  # an exported policy (problem.start_policy, policy_start.py)
+            opt_state, obs = self.opt.init(rng, self._start.genome[None]), self._start.obs
         else:
             opt_state = (self.opt.init(rng, p.initial_population(1, rng))
                          if isinstance(p, OwnInitialPopulation) else self.opt.init(rng))
@@ -197,9 +204,10 @@ class PolicySearchDriver(Driver):
 
 def make_policy_driver(problem: PolicyProblem, config: Any) -> PolicySearchDriver:
     """The study factory: the registered optimizer ``algorithm.name`` on the policy, started
-    where ``problem.start_policy`` says (:mod:`evomotion.studies.policy_start`) if it is set."""
-    start = start_point(problem, getattr(config.problem, "start_policy", ""))
-    return PolicySearchDriver(problem, make_optimizer(problem, config.algorithm), start)
+    where ``problem.start_policy`` says (:mod:`evomotion.studies.policy_start`) if it is set:
+    read when a new run is checked (:meth:`PolicySearchDriver.check_new_run`) or started."""
+    return PolicySearchDriver(problem, make_optimizer(problem, config.algorithm),
+                              getattr(config.problem, "start_policy", ""))
 
 
 def observation_moments(count: np.ndarray, sums: np.ndarray, sumsqs: np.ndarray

@@ -9,15 +9,17 @@ run's, and the first that differs is named). The search's centre starts at the f
 parameters (a mirror-symmetric controller's free numbers, :mod:`evomotion.core.policies.mirror`,
 when the run is symmetric: the file must then be symmetric too). With ``problem.normalize``
 the observation normaliser (ARS V2's running statistics) starts at the file's mean and standard
-deviation, weighted as :data:`START_OBS_COUNT` states seen, so the file's policy acts at first
-exactly as exported and the new run's own observations take over gradually (a 32-row
-population on two 8 s episodes each sees about 26,000 states a generation, so they weigh as
-much as the file's after about 40 generations). Without normalisation the file must carry the
-identity normaliser (mean 0, std 1).
+deviation, weighted as :data:`START_OBS_COUNT` states seen (about a million), so the file's
+policy acts at first exactly as exported and the new run's own observations take over
+gradually (a 32-row population on two 8 s episodes each sees about 26,000 states a generation,
+twice that where a symmetric controller's normaliser also takes their mirror images, so they
+weigh as much as the file's after 20-40 generations). Without normalisation the file must carry
+the identity normaliser (mean 0, std 1).
 
-The file is read when the run is set up, in the process that drives the search (never by an
-evaluator's workers), and again on a resume, which needs it where it was; the state the run
-checkpoints then holds everything, so a resumed run continues bit for bit.
+The file is read when a new run is checked, before its folder is made
+(:meth:`~evomotion.run.driver.Driver.check_new_run`), in the process that drives the search
+(never by an evaluator's workers). A resume does not read it: the run's checkpoints hold
+everything, so a resumed run continues bit for bit even if the file has moved.
 """
 
 from __future__ import annotations
@@ -31,8 +33,9 @@ import numpy as np
 from evomotion.core.policies.normalizer import RunningStats
 from evomotion.errors import InputError
 
-#: the weight, in states seen, of a start policy's normaliser (see the module)
-START_OBS_COUNT = 1_000_000
+#: the weight, in states seen, of a start policy's normaliser (see the module): about a
+#: million; 2^20 + 1 so that ``std² (n − 1) / (n − 1)`` gives the file's std back exactly
+START_OBS_COUNT = 2**20 + 1
 _KEY = "problem.start_policy"
 
 
@@ -47,14 +50,17 @@ class StartPoint:
 
 def policy_file(path: str | Path) -> Path:
     """``path`` itself, or the ``policy.npz`` of the run folder ``path``; one line if none."""
-    p = Path(path).expanduser()
-    if p.is_dir():
-        p = p / "policy.npz"
-    if not p.is_file():
-        why = "no policy.npz in it" if p.parent.is_dir() and p.name == "policy.npz" and \
-            Path(path).expanduser().is_dir() else "no such file"
+    try:
+        given = Path(path).expanduser()
+        p = given / "policy.npz" if given.is_dir() else given
+        found = p.is_file()
+    except (RuntimeError, OSError, ValueError) as e:  # ~nobody, a name too long, NUL
+        raise InputError(f"{_KEY}: expected a readable path, got {str(path)[:200]!r} "
+                         f"({type(e).__name__})") from None
+    if not found:
+        why = "no policy.npz in it" if p is not given else "no such file"
         raise InputError(f"{_KEY}: expected a policy.npz or a run folder holding one, got "
-                         f"{str(path)!r} ({why})")
+                         f"{str(path)[:200]!r} ({why})")
     return p
 
 
@@ -69,7 +75,7 @@ def start_point(problem: Any, path: str) -> StartPoint | None:
         return None
     f = policy_file(path)
     got = read_policy_npz(f)  # a malformed file: one FileFormatError line
-    _check_same_controller(f, got.spec, problem.policy)
+    check_same_controller(f, got.spec, problem.policy)
     x = np.asarray(got.params, dtype=np.float64)
     mirror = getattr(problem, "mirror", None)
     genome = x if mirror is None else mirror.basis.reduce(x)
@@ -93,7 +99,7 @@ def start_point(problem: Any, path: str) -> StartPoint | None:
     return StartPoint(genome.copy(), obs, f)
 
 
-def _check_same_controller(f: Path, spec: Any, own: Any) -> None:
+def check_same_controller(f: Path, spec: Any, own: Any) -> None:
     """One line naming the first array in which the file's controller differs from the run's
     (its kind, sizes, structure, action scale, offset and range)."""
     from evomotion.core.policies.export import policy_arrays
