@@ -153,7 +153,7 @@ def test_form_fields_and_one_line_errors():
     for name in ("arm-ik", "grid-path", "quadruped-plan", "humanoid-step"):
         assert actions.form_fields(name, "paper")  # every study's schema makes a form
     shown = {f.key: f.shown for f in actions.form_fields("humanoid-walk", robot="dm-humanoid")}
-    assert shown["problem.sway_m"] == "0.008" and shown["run.generations"] == "600"
+    assert shown["problem.sway_m"] == "0.008" and shown["problem.vx_min"] == "0.15"
     assert shown["problem.robot"] == "dm-humanoid" and shown["problem.symmetric"] == "false"
     nao = {f.key: f.shown for f in actions.form_fields("humanoid-walk")}
     op3 = {f.key: f.shown for f in actions.form_fields("humanoid-walk", robot="op3")}

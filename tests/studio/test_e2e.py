@@ -266,19 +266,19 @@ def test_a_robot_with_defaults_of_its_own_shows_them_in_the_form(page, studio, t
     base, _ = studio
     page.goto(f"{base}/new?study=humanoid-walk")
     page.wait_for_selector(".new-command")
-    assert _field(page, "run.generations").input_value() == "300"
+    assert _field(page, "problem.vx_min").input_value() == "-0.2"
     choose = _chooser(page, "problem.robot")
     choose("dm-humanoid")
-    _wait(lambda: _field(page, "run.generations").input_value() == "600", 20,
+    _wait(lambda: _field(page, "problem.vx_min").input_value() == "0.15", 20,
           "the dm humanoid's defaults")
     assert _field(page, "problem.sway_m").input_value() == "0.008"
     _wait(lambda: "dm-humanoid" in page.locator(".new-command").inner_text(), 10, "command")
     command = page.locator(".new-command").inner_text()
-    assert "sway_m" not in command and "generations" not in command
+    assert "sway_m" not in command and "vx_min" not in command
     assert page.locator(".start-button").is_enabled()
     page.screenshot(path=str(tmp_path / "robot-defaults.png"), full_page=True)
     choose("op3")
-    _wait(lambda: _field(page, "run.generations").input_value() == "300", 20,
+    _wait(lambda: _field(page, "problem.vx_min").input_value() == "-0.2", 20,
           "the study's defaults")
     assert _field(page, "problem.sway_m").input_value() == "0.025"
     _wait(lambda: "op3" in page.locator(".new-command").inner_text(), 10, "command")

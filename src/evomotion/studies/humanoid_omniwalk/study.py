@@ -96,11 +96,10 @@ STUDY = Study(
     # 0.2, fell at 0.3); with yaw_share 0 the centre kept improving, 300 generations
     robot_defaults={"": NAO_DEFAULTS, "nao": NAO_DEFAULTS, "dm-humanoid": {
         "run": {"generations": 300},
-        "problem": {"yaw_share": 0.0, "sway_m": 0.008, "sway_phase_rad": 1.57,
-                    "step_height_m": 0.005,
+        "problem": {"sway_m": 0.008, "sway_phase_rad": 1.57, "step_height_m": 0.005,
                     "perturb": False, "push_max_ns": 0.0, "vx_min": 0.15, "vx_max": 0.3,
                     "vy_max": 0.05, "yaw_rate_max": 0.2,
-                    "command_weights": [1.0, 0.0, 0.0, 0.0, 0.0]}}},
+                    "command_weights": [1.0, 0.0, 0.0, 0.0, 0.0], "yaw_share": 0.0}}},
     # the open-loop walk (a tape of 14 gait parameters, forward only, CMA-ES) is a problem of
     # another kind, so its preset is its own study
     preset_studies={"open-loop": "humanoid-walk-open-loop"},
