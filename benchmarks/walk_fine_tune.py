@@ -47,7 +47,6 @@ def main() -> int:
 
 
 def _table(a: argparse.Namespace) -> int:
-
     from evomotion.studies.humanoid_omniwalk.compare import (
         EVAL_SEED_BASE,
         _pct,
@@ -63,7 +62,7 @@ def _table(a: argparse.Namespace) -> int:
     loaded = [load_run(r) for r in a.runs]
     problem = loaded[-1][0]
     for run, (_, policy, _) in zip(a.runs, loaded, strict=True):
-        check_same_controller(run, policy.spec, problem.policy)  # one line if not
+        check_same_controller(run, policy.spec, problem.policy, "RUN")  # one line if not
     quiet = quiet_problem(problem)
     nominal = OmniWalkProblem(dataclasses.replace(problem.cfg, duration_s=a.duration,
                                                   perturb=False, push_min_ns=0.0,

@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from evomotion.core.policies import normalizer
 from evomotion.core.policies.normalizer import RunningStats
 from evomotion.errors import InputError
 
@@ -45,7 +46,6 @@ class StartPoint:
 
     genome: np.ndarray
     obs: RunningStats
-    path: Path
 
 
 def policy_file(path: str | Path) -> Path:
@@ -92,33 +92,33 @@ def start_point(problem: Any, path: str) -> StartPoint | None:
         if (mean != 0).any() or (std != 1).any():
             raise InputError(f"{_KEY}: {f} was evaluated with an observation normaliser; "
                              "expected problem.normalize=true to start from it")
-        obs = RunningStats(np.array(0, dtype=np.int64), np.zeros(mean.size), np.zeros(mean.size))
+        obs = normalizer.init(mean.size)
     else:
         n = START_OBS_COUNT
         obs = RunningStats(np.array(n, dtype=np.int64), mean.copy(), std ** 2 * (n - 1))
-    return StartPoint(genome.copy(), obs, f)
+    return StartPoint(genome.copy(), obs)
 
 
-def check_same_controller(f: Path, spec: Any, own: Any) -> None:
-    """One line naming the first array in which the file's controller differs from the run's
-    (its kind, sizes, structure, action scale, offset and range)."""
+def check_same_controller(f: Path, spec: Any, own: Any, key: str = _KEY) -> None:
+    """One line, headed ``key``, naming the first array in which the file's controller
+    differs from the run's (its kind, sizes, structure, action scale, offset and range)."""
     from evomotion.core.policies.export import policy_arrays
 
     if type(spec) is not type(own):
-        raise InputError(f"{_KEY}: {f} is a {spec.kind} policy, this run's is {own.kind}")
+        raise InputError(f"{key}: {f} is a {spec.kind} policy, this run's is {own.kind}")
     if (spec.obs_dim, spec.act_dim, spec.n_params) != (own.obs_dim, own.act_dim, own.n_params):
-        raise InputError(f"{_KEY}: {f} maps {spec.obs_dim} observations to {spec.act_dim} "
+        raise InputError(f"{key}: {f} maps {spec.obs_dim} observations to {spec.act_dim} "
                          f"actions with {spec.n_params} parameters; this run's controller "
                          f"{own.obs_dim} to {own.act_dim} with {own.n_params} (expected the "
                          "same robot, joints and policy settings)")
     ident = (np.zeros(own.obs_dim), np.ones(own.obs_dim))
     theirs = policy_arrays(spec, np.zeros(spec.n_params), *ident)
     ours = policy_arrays(own, np.zeros(own.n_params), *ident)
-    for key in sorted(set(theirs) | set(ours)):
-        a, b = theirs.get(key), ours.get(key)
+    for name in sorted(set(theirs) | set(ours)):
+        a, b = theirs.get(name), ours.get(name)
         same = a is not None and b is not None and a.shape == b.shape and (
             np.array_equal(a, b) if a.dtype.kind in "USbiu" else
             np.allclose(a, b, rtol=0.0, atol=1e-9, equal_nan=True))
         if not same:
-            raise InputError(f"{_KEY}: {f}'s {key!r} differs from this run's controller "
+            raise InputError(f"{key}: {f}'s {name!r} differs from this run's controller "
                              "(expected the same robot, joints and policy settings)")
