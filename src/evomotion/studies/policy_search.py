@@ -34,6 +34,13 @@ from evomotion.run.ask_tell import make_optimizer
 from evomotion.run.contracts import OwnInitialPopulation
 from evomotion.run.driver import Driver, Evaluate, StepReport
 from evomotion.studies.policy_start import StartPoint, start_point
+from evomotion.studies.policy_validation import (
+    Validated,
+    due,
+    no_validated,
+    validation_cost,
+    validation_seeds,
+)
 
 #: episode seeds are drawn below this (exact in a float64 row)
 SEED_LIMIT = 2**31 - 1
@@ -52,12 +59,15 @@ class PolicyProblem(Protocol):
     def evaluate(self, rows: np.ndarray) -> Any: ...
 
 
-def policy_rows(params: np.ndarray, mean: np.ndarray, std: np.ndarray, seed: int,
-                episodes: int) -> np.ndarray:
-    """The evaluation rows of ``params[n, P]``: each with the normaliser and its episodes."""
+def policy_rows(params: np.ndarray, mean: np.ndarray, std: np.ndarray,
+                seed: int | np.ndarray, episodes: int) -> np.ndarray:
+    """The evaluation rows of ``params[n, P]``: each with the normaliser and its episodes
+    (from ``seed``, one for every row or ``seed[n]``)."""
     n = params.shape[0]
-    tail = np.concatenate([mean, std, [float(seed), float(episodes)]])
-    return np.concatenate([params, np.broadcast_to(tail, (n, tail.size))], axis=1)
+    tail = np.concatenate([mean, std, [0.0, float(episodes)]])
+    rows = np.concatenate([params, np.broadcast_to(tail, (n, tail.size))], axis=1)
+    rows[:, -2] = np.asarray(seed, dtype=np.int64).astype(float)
+    return rows
 
 
 def neutral_rows(genomes: np.ndarray, obs_dim: int, episodes: int) -> np.ndarray:
@@ -106,17 +116,33 @@ class PolicySearchState:
     best_obs_std: np.ndarray
     train_episodes: int = 0
     env_steps: int = 0
+    generation: int = 0  # generations stepped (the validation schedule counts them)
+    #: the best centre on the validation episodes (policy_validation.py; unused when off)
+    valid: Validated | None = None
+
+
+def exported(state: PolicySearchState) -> tuple[np.ndarray, float, np.ndarray, np.ndarray]:
+    """``(x, cost, obs mean, obs std)`` of the centre a run exports and reports as its best:
+    the best validated one where validation has chosen one, else the best evaluated."""
+    v = state.valid
+    if v is not None and v.cost < float("inf"):
+        return v.x, v.cost, v.obs_mean, v.obs_std
+    return state.best_x, state.best_cost, state.best_obs_mean, state.best_obs_std
 
 
 class PolicySearchDriver(Driver):
     """An ES optimizer over ``problem``'s policy parameters (sense: maximise the return)."""
 
     sense: Sense = "max"
-    extra_columns = EXTRA_COLUMNS
+    extra_columns: tuple[str, ...] = EXTRA_COLUMNS
 
     def __init__(self, problem: PolicyProblem, optimizer: Optimizer,
-                 start_policy: str = "") -> None:
+                 start_policy: str = "", validate_every: int = 0,
+                 validate_episodes: int = 32) -> None:
         self.problem, self.opt, self.start_policy = problem, optimizer, start_policy
+        self.validate_every, self.validate_episodes = validate_every, validate_episodes
+        if validate_every > 0:  # the validated centre's mean return, NaN between validations
+            self.extra_columns = EXTRA_COLUMNS + ("valid_return",)
         self._start: StartPoint | None = None
 
     def check_new_run(self) -> None:
@@ -134,9 +160,9 @@ class PolicySearchDriver(Driver):
             opt_state = (self.opt.init(rng, p.initial_population(1, rng))
                          if isinstance(p, OwnInitialPopulation) else self.opt.init(rng))
             obs = normalizer.init(o)
-        return PolicySearchState(opt_state, obs,
-                                 np.asarray(self.opt.center(opt_state), float).copy(),
-                                 float("inf"), np.zeros(o), np.ones(o))
+        x0 = np.asarray(self.opt.center(opt_state), float).copy()
+        return PolicySearchState(opt_state, obs, x0, float("inf"), np.zeros(o), np.ones(o),
+                                 valid=no_validated(x0, o) if self.validate_every else None)
 
     def step(self, state: PolicySearchState, rng: np.random.Generator,
              evaluate: Evaluate) -> tuple[PolicySearchState, StepReport]:
@@ -145,8 +171,12 @@ class PolicySearchDriver(Driver):
         centre = np.asarray(self.opt.center(opt_state), float)[None]
         mean, std = normaliser(state.obs, p.normalize)
         train_seed, eval_seed = (int(s) for s in rng.integers(0, SEED_LIMIT, size=2))
+        validate = due(state.generation, self.validate_every)
+        v = self.validate_episodes if validate else 0
         rows = np.concatenate([policy_rows(genomes, mean, std, train_seed, p.episodes),
-                               policy_rows(centre, mean, std, eval_seed, p.eval_episodes)])
+                               policy_rows(centre, mean, std, eval_seed, p.eval_episodes),
+                               policy_rows(np.repeat(centre, v, axis=0), mean, std,
+                                           validation_seeds(v), 1)])
         ev = evaluate(rows)
         n = len(genomes)
         cost = -np.asarray(ev.fitness[:n], float)
@@ -154,25 +184,48 @@ class PolicySearchDriver(Driver):
         batch = valid_moments(ev.metrics, n)
         obs = state.obs if batch is None else normalizer.merge(state.obs, batch)
         ret = float(ev.metrics["return"][n]) if "return" in ev.metrics else float("nan")
-        steps = ev.metrics.get("steps", np.zeros(n + 1))
+        steps = ev.metrics.get("steps", np.zeros(len(rows)))
         new = dataclasses.replace(
-            state, opt=opt_state, obs=obs,
+            state, opt=opt_state, obs=obs, generation=state.generation + 1,
             train_episodes=state.train_episodes + n * p.episodes,
             env_steps=state.env_steps + int(np.nansum(steps[:n]) * p.episodes
-                                            + steps[n] * p.eval_episodes))
+                                            + steps[n] * p.eval_episodes
+                                            + np.nansum(steps[n + 1:])))
         best_metrics = None
         if np.isfinite(ret) and -ret < state.best_cost:
             new = dataclasses.replace(new, best_x=centre[0].copy(), best_cost=-ret,
                                       best_obs_mean=mean, best_obs_std=std)
             best_metrics = {"return": ret, "steps": float(steps[n])}
-        failed = ev.failed_mask()
         extras = {"centre_return": ret, "centre_steps": float(steps[n]),
                   "train_episodes": new.train_episodes, "env_steps": new.env_steps}
+        if self.validate_every:
+            new, best_metrics, extras = self._validated(new, state, ev, n, centre[0], mean,
+                                                        std, extras)
+        failed = ev.failed_mask()
         return new, StepReport(len(rows), cost, genomes, int(failed.sum()), list(ev.errors),
                                best_metrics, extras)
 
+    def _validated(self, new: PolicySearchState, state: PolicySearchState, ev: Any, n: int,
+                   centre: np.ndarray, mean: np.ndarray, std: np.ndarray,
+                   extras: dict[str, Any]) -> tuple:
+        """With validation on: the state, best metrics and extras after this generation's
+        validation rows (rows ``n + 1 ...``; none between validations)."""
+        valid = state.valid or no_validated(state.best_x, len(mean))
+        best_metrics, extras = None, {**extras, "valid_return": float("nan")}
+        if due(state.generation, self.validate_every):
+            returns = np.asarray(ev.metrics["return"][n + 1:], float) \
+                if "return" in ev.metrics else np.full(1, np.nan)
+            cost = validation_cost(returns)
+            extras["valid_return"] = -cost if cost < float("inf") else float("nan")
+            if cost < valid.cost:
+                valid = Validated(centre.copy(), cost, mean, std, state.generation)
+                best_metrics = {"return": -cost, "episodes": float(len(returns)),
+                                "generation": float(state.generation)}
+        return dataclasses.replace(new, valid=valid), best_metrics, extras
+
     def best(self, state: PolicySearchState) -> tuple[np.ndarray, float]:
-        return state.best_x, float(state.best_cost)
+        x, cost, _, _ = exported(state)
+        return x, float(cost)
 
     def stop(self, state: PolicySearchState) -> str | None:
         return self.opt.stop(state.opt)
@@ -189,10 +242,15 @@ class PolicySearchDriver(Driver):
         opt_type = type(self.opt.init(np.random.default_rng(0)))
         opt_state = state_from_arrays(opt_type, arrays, meta, "opt.")
         obs = state_from_arrays(RunningStats, arrays, meta, "obs.")
+        later = ("generation", "valid")  # absent from checkpoints of before validation
         fields: dict[str, Any] = {
             f.name: (np.array(arrays[f.name]) if f.name in arrays else meta[f.name])
-            for f in dataclasses.fields(PolicySearchState) if f.name not in ("opt", "obs")}
-        return PolicySearchState(opt=opt_state, obs=obs, **fields)
+            for f in dataclasses.fields(PolicySearchState)
+            if f.name not in ("opt", "obs", "valid")
+            and (f.name not in later or f.name in arrays or f.name in meta)}
+        valid = state_from_arrays(Validated, arrays, meta, "valid.") \
+            if "valid.x" in arrays else None
+        return PolicySearchState(opt=opt_state, obs=obs, valid=valid, **fields)
 
     def check_state(self, state: PolicySearchState) -> None:
         o, d = self.problem.obs_dim, self.problem.genome.dim
@@ -200,6 +258,11 @@ class PolicySearchDriver(Driver):
             raise ValueError(f"normaliser of {np.shape(state.obs.mean)}, expected ({o},)")
         if np.shape(state.best_x) != (d,):
             raise ValueError(f"best policy of {np.shape(state.best_x)}, expected ({d},)")
+        v = state.valid
+        if v is not None and (np.shape(v.x) != (d,) or np.shape(v.obs_mean) != (o,)
+                              or np.shape(v.obs_std) != (o,)):
+            raise ValueError(f"validated policy of {np.shape(v.x)} with a normaliser of "
+                             f"{np.shape(v.obs_mean)}, expected ({d},) and ({o},)")
 
 
 def make_policy_driver(problem: PolicyProblem, config: Any) -> PolicySearchDriver:
@@ -207,7 +270,9 @@ def make_policy_driver(problem: PolicyProblem, config: Any) -> PolicySearchDrive
     where ``problem.start_policy`` says (:mod:`evomotion.studies.policy_start`) if it is set:
     read when a new run is checked (:meth:`PolicySearchDriver.check_new_run`) or started."""
     return PolicySearchDriver(problem, make_optimizer(problem, config.algorithm),
-                              getattr(config.problem, "start_policy", ""))
+                              getattr(config.problem, "start_policy", ""),
+                              getattr(config.problem, "validate_every", 0),
+                              getattr(config.problem, "validate_episodes", 32))
 
 
 def observation_moments(count: np.ndarray, sums: np.ndarray, sumsqs: np.ndarray
@@ -228,15 +293,6 @@ def policy_algorithms() -> dict:
     from evomotion.core.algorithms import ALGORITHMS
 
     return {name: (ALGORITHMS[name][0], make_policy_driver) for name in POLICY_OPTIMIZERS}
-
-
-def best_record(ctx: Any) -> dict[str, Any]:
-    """A policy study's ``best.json`` extras: the best centre's return, episodes, steps."""
-    s = ctx.state
-    if s is None:
-        return {}
-    return {"centre_return": -float(s.best_cost) if s.best_cost < float("inf") else None,
-            "train_episodes": int(s.train_episodes), "env_steps": int(s.env_steps)}
 
 
 @dataclass(frozen=True)
@@ -273,49 +329,3 @@ class EpisodeRows:
             c, m, s = combine(np.asarray(counts[sel]).astype(np.int64), means[sel], m2s[sel])
             out_c[r], out_m[r], out_s[r] = float(c), m, s
         return {"obs_count": out_c, "obs_mean": out_m, "obs_m2": out_s}
-
-
-def write_policy_files(ctx: Any, extra: dict[str, Any] | None = None) -> None:
-    """``policy.npz``/``.py``/``.onnx`` of the run's best centre so far (the problem's
-    ``policy`` spec, the normaliser it was evaluated with), and ``extra``'s JSON files
-    (``{name: record}``); ``policy.onnx`` is skipped with one note without the ``onnx``
-    extra. A study's checkpoint hook."""
-    import json
-    from pathlib import Path
-
-    from evomotion.core.policies.export import export_policy
-    from evomotion.outfile import atomic_write_text
-
-    state, problem = ctx.state, ctx.problem
-    if state is None or problem is None or ctx.out_dir is None or \
-            not state.best_cost < float("inf"):
-        return
-    formats: tuple[str, ...] = ("npz", "py", "onnx")
-    try:
-        import onnx  # noqa: F401
-    except ImportError:
-        formats = ("npz", "py")
-        if not ctx.cache.get("onnx_note"):
-            ctx.log("note: policy.onnx not written (pip install 'evomotion[onnx]')")
-            ctx.cache["onnx_note"] = True
-    # a problem that searches other numbers than the policy's (a symmetric controller's)
-    # maps them: ``policy_params(genomes)``
-    params = problem.policy_params(state.best_x) if hasattr(problem, "policy_params") \
-        else state.best_x
-    export_policy(ctx.out_dir, problem.policy, params, state.best_obs_mean,
-                  state.best_obs_std, formats)
-    for name, record in (extra or {}).items():
-        atomic_write_text(Path(ctx.out_dir) / name, json.dumps(record, indent=1) + "\n")
-
-
-def log_best_centre(ctx: Any, study: str, also: tuple[str, ...] = ()) -> None:
-    """The closing log line of a robot's policy study (humanoid-balance, humanoid-walk): the
-    best centre's score and the files written (``also``: the study's own, where present)."""
-    s = ctx.state
-    if s is not None and s.best_cost < float("inf"):
-        ctx.log(f"{study}: best centre score {-s.best_cost:.3f} after "
-                f"{s.train_episodes} training episodes; policy.npz, policy.py, policy.json"
-                + (", policy.onnx" if not ctx.cache.get("onnx_note") else "")
-                + "".join(f", {f}" for f in also
-                          if ctx.out_dir is not None and (ctx.out_dir / f).is_file())
-                + f"; evomotion {study} compare RUN measures it")

@@ -1,7 +1,8 @@
 """What a gym run leaves: the best centre as ``policy.npz``, ``policy.py`` and ``policy.onnx``.
 
 The best centre is the distribution mean whose evaluation on ``problem.eval_episodes`` unseen
-episodes scored the highest mean return, with the normaliser it was evaluated with (ARS V2's
+episodes scored the highest mean return (with ``problem.validate_every``: the best on the fixed
+validation episodes, studies/policy_validation.py), with the normaliser it was evaluated with (ARS V2's
 mean and std frozen into the file). ``policy.onnx`` needs the ``onnx`` extra; without it the
 run logs one line and keeps the other two.
 """
@@ -13,16 +14,19 @@ from typing import Any
 
 def write_policy(ctx: Any) -> None:
     """``policy.npz``/``.py``/``.onnx`` of the best centre so far (every checkpoint)."""
-    from evomotion.studies.policy_search import write_policy_files
+    from evomotion.studies.policy_files import write_policy_files
 
     write_policy_files(ctx)
 
 
 def finalize(ctx: Any) -> int | None:
     write_policy(ctx)
+    from evomotion.studies.policy_search import exported
+
     s = ctx.state
     if s is not None and s.best_cost < float("inf"):
-        ctx.log(f"gym {ctx.config.problem.env}: best centre return {-s.best_cost:.1f} "
+        what = "validated centre" if exported(s)[0] is not s.best_x else "centre"
+        ctx.log(f"gym {ctx.config.problem.env}: best {what} return {-exported(s)[1]:.1f} "
                 f"after {s.train_episodes} training episodes, {s.env_steps} environment steps; "
                 "policy.npz, policy.py" + (", policy.onnx" if not ctx.cache.get("onnx_note")
                                           else ""))
@@ -30,7 +34,7 @@ def finalize(ctx: Any) -> int | None:
 
 
 def best_record(ctx: Any) -> dict[str, Any]:
-    from evomotion.studies.policy_search import best_record as policy_best
+    from evomotion.studies.policy_files import best_record as policy_best
 
     out = policy_best(ctx)
     if out:

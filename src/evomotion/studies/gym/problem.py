@@ -30,6 +30,7 @@ from evomotion.errors import InputError
 from evomotion.studies.gym.envs import BatchedTask, task_of
 from evomotion.studies.gym.episodes import Episodes, run_batched, run_gymnasium
 from evomotion.studies.policy_search import EpisodeRows, neutral_rows, split_rows
+from evomotion.studies.policy_validation import check_validation
 
 BACKENDS = ("auto", "batched", "gymnasium")
 #: ARS's survival shift per task (their public code), subtracted per step while training
@@ -49,6 +50,11 @@ class GymConfig:
     #: start the search from this exported policy (a policy.npz or a run folder holding one,
     #: of the same controller; "" the study's own start): studies/policy_start.py
     start_policy: str = ""
+    #: validate the centre of every this many generations on validate_episodes fixed episodes
+    #: and export the best validated one (0: export the best single evaluation; the
+    #: winner's curse): studies/policy_validation.py
+    validate_every: int = 0
+    validate_episodes: int = 32
     episodes: int = 1  # training episodes per individual and generation
     eval_episodes: int = 5  # episodes of the centre per generation (the reported return)
     reward_shift: float = -1.0  # per-step shift while training; < 0: ARS's for the task
@@ -61,6 +67,7 @@ class GymConfig:
         check_fields(self, "problem")
         check_text("problem.env", self.env)
         check_text("problem.start_policy", self.start_policy)
+        check_validation(self.validate_every, self.validate_episodes)
         if self.policy == "structured":
             raise InputError("problem.policy: the structured policy needs a phase observation "
                              "(sin/cos of a gait clock), which Gymnasium tasks lack; use linear "

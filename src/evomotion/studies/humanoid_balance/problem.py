@@ -35,6 +35,7 @@ from evomotion.studies.humanoid_balance.episodes import (
     run_episodes,
 )
 from evomotion.studies.policy_search import EpisodeRows, neutral_rows, split_rows
+from evomotion.studies.policy_validation import check_validation
 
 if TYPE_CHECKING:
     from evomotion.sim.warp_closed_loop import WarpClosedLoopSimulator
@@ -71,6 +72,11 @@ class HumanoidBalanceConfig:
     #: start the search from this exported policy (a policy.npz or a run folder holding one,
     #: of the same controller; "" the study's own start): studies/policy_start.py
     start_policy: str = ""
+    #: validate the centre of every this many generations on validate_episodes fixed episodes
+    #: and export the best validated one (0: export the best single evaluation; the
+    #: winner's curse): studies/policy_validation.py
+    validate_every: int = 0
+    validate_episodes: int = 32
     action_scale: float = 0.3  # rad of joint offset per unit of policy output
     #: bound on every normalised observation (the standing robot's first statistics are
     #: tiny, so a push would otherwise drive the inputs to thousands); inf: none (ARS)
@@ -94,6 +100,7 @@ class HumanoidBalanceConfig:
         check_fields(self, "problem")
         check_text("problem.robot", self.robot)
         check_text("problem.start_policy", self.start_policy)
+        check_validation(self.validate_every, self.validate_episodes)
         for key in ("stance_width_rad", "stance_stagger_rad", "stance_crouch_rad",
                     "stance_lean_rad"):
             check_number(f"problem.{key}", getattr(self, key), lo=-1.0, hi=1.0)

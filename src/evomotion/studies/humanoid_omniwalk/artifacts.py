@@ -103,7 +103,7 @@ def capture_step_record(ctl: Any, gain: float) -> dict[str, Any]:
 
 def write_policy(ctx: Any) -> None:
     """``policy.npz``/``.py``/``.onnx``/``.json`` of the best centre so far (every checkpoint)."""
-    from evomotion.studies.policy_search import write_policy_files
+    from evomotion.studies.policy_files import write_policy_files
 
     if ctx.problem is None:
         return
@@ -180,7 +180,7 @@ def write_naoqi(ctx: Any) -> None:
 
 
 def finalize(ctx: Any) -> int | None:
-    from evomotion.studies.policy_search import log_best_centre
+    from evomotion.studies.policy_files import log_best_centre
 
     write_policy(ctx)
     write_naoqi(ctx)

@@ -52,6 +52,7 @@ from evomotion.studies.policy_search import (
     observation_moments,
     split_rows,
 )
+from evomotion.studies.policy_validation import check_validation
 
 MAX_EPISODES = 1000
 METRICS = ("return", "steps", "survived", "time_up_s", "speed_error_mps",
@@ -86,6 +87,11 @@ class OmniWalkConfig:
     #: start the search from this exported policy (a policy.npz or a run folder holding one,
     #: of the same controller; "" the study's own start): studies/policy_start.py
     start_policy: str = ""
+    #: validate the centre of every this many generations on validate_episodes fixed episodes
+    #: and export the best validated one (0: export the best single evaluation; the
+    #: winner's curse): studies/policy_validation.py
+    validate_every: int = 0
+    validate_episodes: int = 32
     episodes: int = 1  # training episodes per individual and generation
     eval_episodes: int = 8  # episodes of the centre per generation (the reported return)
     vx_min: float = -0.2  # command ranges (m/s, rad/s); see commands.py
@@ -124,6 +130,7 @@ class OmniWalkConfig:
         check_fields(self, "problem")
         check_text("problem.robot", self.robot)
         check_text("problem.start_policy", self.start_policy)
+        check_validation(self.validate_every, self.validate_episodes)
         check_number("problem.duration_s", self.duration_s, lo=0.0, hi=600.0, lo_open=True)
         check_number("problem.control_period_s", self.control_period_s, lo=0.0, hi=1.0,
                      lo_open=True)
