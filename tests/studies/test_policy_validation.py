@@ -134,3 +134,13 @@ def test_seeds_and_costs():
 def test_bad_values_are_one_line_naming_the_key(key, value):
     with pytest.raises(InputError, match=f"problem.{key}: expected"):
         GymConfig(**{key: value}).validate()
+
+
+def test_the_validated_export_does_not_depend_on_the_centre_episodes(runs, tmp_path):
+    """The centre's own episodes draw their seeds whatever their number and train nothing, so
+    with validation a run may score the centre on fewer of them and export the same file."""
+    _, on = runs
+    out = tmp_path / "fewer"
+    run_study(GYM, _cfg("run.generations=8", *VALIDATE, "problem.eval_episodes=1"), out,
+              quiet=True)
+    assert (on / "policy.npz").read_bytes() == (out / "policy.npz").read_bytes()

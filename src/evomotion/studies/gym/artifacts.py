@@ -1,10 +1,10 @@
 """What a gym run leaves: the best centre as ``policy.npz``, ``policy.py`` and ``policy.onnx``.
 
 The best centre is the distribution mean whose evaluation on ``problem.eval_episodes`` unseen
-episodes scored the highest mean return (with ``problem.validate_every``: the best on the fixed
-validation episodes, studies/policy_validation.py), with the normaliser it was evaluated with (ARS V2's
-mean and std frozen into the file). ``policy.onnx`` needs the ``onnx`` extra; without it the
-run logs one line and keeps the other two.
+episodes scored the highest mean return (with ``problem.validate_every``: the best on the
+fixed validation episodes, studies/policy_validation.py), with the normaliser it was evaluated
+with (ARS V2's mean and std frozen into the file). ``policy.onnx`` needs the ``onnx`` extra;
+without it the run logs one line and keeps the other two.
 """
 
 from __future__ import annotations
