@@ -277,7 +277,7 @@ def _ctx(p, out_dir, logs):
     rng = np.random.default_rng(3)
     best = SimpleNamespace(best_cost=-1.0, best_x=p.ctl.initial_params(),
                            best_obs_mean=rng.normal(0, 0.05, p.obs_dim),
-                           best_obs_std=rng.uniform(0.8, 1.2, p.obs_dim))
+                           best_obs_std=rng.uniform(0.8, 1.2, p.obs_dim), valid=None)
     return SimpleNamespace(problem=p, state=best, out_dir=out_dir, cache={}, log=logs.append)
 
 
