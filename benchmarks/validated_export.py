@@ -32,8 +32,9 @@ import numpy as np
 FRESH_SEED_BASE = 2**39
 
 
-def centres(run: Path) -> tuple[str, object, dict]:
-    """``(study name, problem, {which: (x, mean, std, generation, chosen by)})``."""
+def centres(run: Path) -> tuple[str, object, int, dict]:
+    """``(study name, problem, validation episodes, {which: (x, mean, std, generation,
+    chosen by)})``."""
     from evomotion.run.checkpoint import candidates, read_checkpoint
     from evomotion.run.config import config_from_dict, config_from_run_dir
     from evomotion.studies import get_study
@@ -46,7 +47,7 @@ def centres(run: Path) -> tuple[str, object, dict]:
     if "state.valid.x" not in a:
         raise SystemExit(f"error: {run}: no validated centre (run with problem.validate_every)")
     best_gen = _best_generation(run)
-    return name, problem, {
+    return name, problem, int(cfg.problem.validate_episodes), {
         "best": (a["state.best_x"], a["state.best_obs_mean"], a["state.best_obs_std"],
                  best_gen, -float(meta["state.best_cost"])),
         "validated": (a["state.valid.x"], a["state.valid.obs_mean"], a["state.valid.obs_std"],
@@ -116,8 +117,7 @@ def main() -> int:
     results = []
     for run in a.runs:
         t0 = time.perf_counter()
-        name, problem, found = centres(run)
-        k = problem_cfg_episodes(run)
+        name, problem, k, found = centres(run)
         res: dict = {"run": str(run), "study": name, "validate_episodes": k}
         for which, (x, mean, std, gen, score) in found.items():
             val = returns(problem, x, mean, std, validation_seeds(k))
@@ -145,13 +145,6 @@ def main() -> int:
     if a.json:
         print(json.dumps(results, indent=1))
     return 0
-
-
-def problem_cfg_episodes(run: Path) -> int:
-    from evomotion.run.config import config_from_run_dir
-
-    _, raw = config_from_run_dir(run)
-    return int(raw.get("problem", {}).get("validate_episodes", 32))
 
 
 def print_run(res: dict) -> None:

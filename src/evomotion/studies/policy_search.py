@@ -171,8 +171,7 @@ class PolicySearchDriver(Driver):
         centre = np.asarray(self.opt.center(opt_state), float)[None]
         mean, std = normaliser(state.obs, p.normalize)
         train_seed, eval_seed = (int(s) for s in rng.integers(0, SEED_LIMIT, size=2))
-        validate = due(state.generation, self.validate_every)
-        v = self.validate_episodes if validate else 0
+        v = self.validate_episodes if due(state.generation, self.validate_every) else 0
         rows = np.concatenate([policy_rows(genomes, mean, std, train_seed, p.episodes),
                                policy_rows(centre, mean, std, eval_seed, p.eval_episodes),
                                policy_rows(np.repeat(centre, v, axis=0), mean, std,
@@ -199,20 +198,20 @@ class PolicySearchDriver(Driver):
         extras = {"centre_return": ret, "centre_steps": float(steps[n]),
                   "train_episodes": new.train_episodes, "env_steps": new.env_steps}
         if self.validate_every:
-            new, best_metrics, extras = self._validated(new, state, ev, n, centre[0], mean,
-                                                        std, extras)
+            new, best_metrics, extras = self._validated(new, state, ev, n, v > 0, centre[0],
+                                                        mean, std, extras)
         failed = ev.failed_mask()
         return new, StepReport(len(rows), cost, genomes, int(failed.sum()), list(ev.errors),
                                best_metrics, extras)
 
     def _validated(self, new: PolicySearchState, state: PolicySearchState, ev: Any, n: int,
-                   centre: np.ndarray, mean: np.ndarray, std: np.ndarray,
+                   validated: bool, centre: np.ndarray, mean: np.ndarray, std: np.ndarray,
                    extras: dict[str, Any]) -> tuple:
         """With validation on: the state, best metrics and extras after this generation's
-        validation rows (rows ``n + 1 ...``; none between validations)."""
+        validation rows (rows ``n + 1 ...``, where ``validated``; none between validations)."""
         valid = state.valid or no_validated(state.best_x, len(mean))
         best_metrics, extras = None, {**extras, "valid_return": float("nan")}
-        if due(state.generation, self.validate_every):
+        if validated:
             returns = np.asarray(ev.metrics["return"][n + 1:], float) \
                 if "return" in ev.metrics else np.full(1, np.nan)
             cost = validation_cost(returns)

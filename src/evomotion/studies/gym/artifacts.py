@@ -25,8 +25,10 @@ def finalize(ctx: Any) -> int | None:
 
     s = ctx.state
     if s is not None and s.best_cost < float("inf"):
-        what = "validated centre" if exported(s)[0] is not s.best_x else "centre"
-        ctx.log(f"gym {ctx.config.problem.env}: best {what} return {-exported(s)[1]:.1f} "
+        _, cost, _, _ = exported(s)
+        what = "validated centre" if s.valid is not None and s.valid.cost < float("inf") \
+            else "centre"
+        ctx.log(f"gym {ctx.config.problem.env}: best {what} return {-cost:.1f} "
                 f"after {s.train_episodes} training episodes, {s.env_steps} environment steps; "
                 "policy.npz, policy.py" + (", policy.onnx" if not ctx.cache.get("onnx_note")
                                           else ""))
