@@ -447,10 +447,12 @@ def current_study_name(name: str, problem_keys: Any = ()) -> str:
 #: keys a study gained after run folders were written whose default changes (or may change)
 #: what such a run does: absent from a saved config, they read as these values (what those
 #: runs did). 33: humanoid-balance's stance (sim/stance.py; those runs stood in the spec pose;
-#: runs before its lean stood upright, which the lean's default 0 also gives).
+#: runs before its lean stood upright, which the lean's default 0 also gives; runs before
+#: problem.validate_every exported the best single centre score, which 0 gives).
 ADDED_KEYS: dict[str, dict[str, dict[str, Any]]] = {
     "humanoid-balance": {"problem": {"stance_width_rad": 0.0, "stance_stagger_rad": 0.0,
-                                     "stance_crouch_rad": 0.0, "stance_lean_rad": 0.0}},
+                                     "stance_crouch_rad": 0.0, "stance_lean_rad": 0.0,
+                                     "validate_every": 0, "validate_episodes": 32}},
     # 34: the walk's command kinds, mirror-symmetric controllers and capture steps, which a
     # robot's defaults (Study.robot_defaults) now set (a saved dm-humanoid or NAO run reruns
     # as it ran)

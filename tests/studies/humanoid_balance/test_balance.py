@@ -23,8 +23,8 @@ from evomotion.studies.humanoid_balance.problem import (
 from evomotion.studies.policy_search import policy_rows
 
 TINY = ("problem.duration_s=0.4", "problem.eval_episodes=1", "problem.episodes=1",
-        "problem.threads=1", "algorithm.pop_size=4", "algorithm.top_directions=0",
-        "run.generations=1", "run.videos=false", "run.seed=5")
+        "problem.validate_episodes=2", "problem.threads=1", "algorithm.pop_size=4",
+        "algorithm.top_directions=0", "run.generations=1", "run.videos=false", "run.seed=5")
 
 
 @pytest.fixture(scope="module")
@@ -105,7 +105,7 @@ def test_run_writes_the_policy_and_its_description(run_dir):
     assert len(info["joints"]) == len(info["nominal_rad"]) == p.act_dim
     assert info["control_period_s"] == 0.02 and info["control_steps"] == 5
     log = (run_dir / "log.txt").read_text()
-    assert "humanoid-balance: best centre score" in log
+    assert "humanoid-balance: best validated centre score" in log  # the default validates
     assert "evomotion humanoid-balance compare RUN measures it" in log
 
 
@@ -179,6 +179,45 @@ def test_bad_config_is_one_line():
         HumanoidBalanceConfig(stance_width_rad=2.0).validate()
     with pytest.raises(InputError, match="problem.stance_width_rad.*AnkleRoll at"):
         HumanoidBalanceProblem(HumanoidBalanceConfig(stance_width_rad=0.6, threads=1))
+
+
+def test_the_default_validates_and_a_folder_from_before_it_resumes_as_it_ran(tmp_path):
+    """The default exports the best centre on fixed validation episodes; a run folder written
+    before ``problem.validate_every`` existed (it exported the best single centre score) is
+    read with validation off and resumed bit for bit as the run it was."""
+    import re
+
+    from evomotion.run.config import config_from_run_dir
+    from evomotion.run.stats import read_stats
+
+    study = get_study("humanoid-balance")
+    default = resolve_config(study, None, []).problem
+    assert (default.validate_every, default.validate_episodes, default.eval_episodes) == (
+        10, 128, 8)
+    tiny = [t for t in TINY if not t.startswith("run.generations")]
+    old = [*tiny, "problem.validate_every=0", "problem.validate_episodes=32",
+           "run.checkpoint_every=1"]
+    full, part = tmp_path / "full", tmp_path / "part"
+    for out, gens in ((full, 3), (part, 2)):
+        run_study(study, resolve_config(study, None, [*old, f"run.generations={gens}"]), out,
+                  quiet=True)
+    cfg = part / "config.toml"  # as written before the keys existed
+    cfg.write_text(re.sub(r"^validate_\w+ = .*\n", "", cfg.read_text(), flags=re.M))
+    for ck in (part / "checkpoints").glob("gen-*.json"):
+        meta = json.loads(ck.read_text())
+        meta["config"] = {k: v for k, v in meta["config"].items() if "validate_" not in k}
+        ck.write_text(json.dumps(meta))
+    assert "validate_" not in cfg.read_text()
+    assert config_from_run_dir(part)[1]["problem"]["validate_every"] == 0
+    proc = subprocess.run([sys.executable, "-m", "evomotion.cli", "resume", str(part), "--set",
+                           "run.generations=3", "--quiet"], capture_output=True, text=True,
+                          timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    a, b = read_stats(full / "stats.csv"), read_stats(part / "stats.csv")
+    assert "valid_return" not in b and len(b["generation"]) == 4
+    for col in set(a) - {"wall_s", "evals_per_s"}:
+        np.testing.assert_array_equal(a[col], b[col], err_msg=col)
+    assert (full / "policy.npz").read_bytes() == (part / "policy.npz").read_bytes()
 
 
 SPEC_POSE = ("problem.stance_width_rad=0", "problem.stance_stagger_rad=0",
@@ -269,4 +308,5 @@ def test_a_folder_from_before_the_lean_reads_as_standing_upright_in_its_own_stan
         "stance_width_rad": 0.3, "stance_stagger_rad": 0.2, "stance_crouch_rad": 0.15}}
     problem = as_now(raw)["problem"]
     assert problem == {"stance_width_rad": 0.3, "stance_stagger_rad": 0.2,
-                       "stance_crouch_rad": 0.15, "stance_lean_rad": 0.0}
+                       "stance_crouch_rad": 0.15, "stance_lean_rad": 0.0,
+                       "validate_every": 0, "validate_episodes": 32}

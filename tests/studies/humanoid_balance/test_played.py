@@ -19,6 +19,7 @@ def balance_run(tmp_path_factory):
     run("humanoid-balance", {"run": {"generations": 2},
                              "algorithm": {"pop_size": 4, "top_directions": 0},
                              "problem": {"duration_s": 1.5, "eval_episodes": 1, "episodes": 1,
+                                         "validate_episodes": 2,
                                          "threads": 1, "push_window_start": 0.1,
                                          "push_window_end": 0.2}}, out)
     return out
