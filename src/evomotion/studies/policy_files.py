@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from evomotion.studies.policy_search import exported
+from evomotion.studies.policy_search import chosen_validated, exported
 
 
 def best_record(ctx: Any) -> dict[str, Any]:
@@ -19,8 +19,8 @@ def best_record(ctx: Any) -> dict[str, Any]:
     best = -float(s.best_cost) if s.best_cost < float("inf") else None
     out: dict[str, Any] = {"centre_return": best, "train_episodes": int(s.train_episodes),
                            "env_steps": int(s.env_steps)}
-    v = s.valid
-    if v is not None and v.cost < float("inf"):  # the exported centre (policy_validation.py)
+    v = chosen_validated(s)
+    if v is not None:  # the exported centre (policy_validation.py)
         out["validated"] = {"return": -float(v.cost), "generation": int(v.generation),
                             "episodes": int(getattr(ctx.config.problem, "validate_episodes",
                                                     0))}
@@ -64,10 +64,9 @@ def log_best_centre(ctx: Any, study: str, also: tuple[str, ...] = ()) -> None:
     best centre's score and the files written (``also``: the study's own, where present)."""
     s = ctx.state
     if s is not None and s.best_cost < float("inf"):
-        v = s.valid
+        v = chosen_validated(s)
         what = (f"best validated centre score {-v.cost:.3f} (generation {v.generation})"
-                if v is not None and v.cost < float("inf")
-                else f"best centre score {-s.best_cost:.3f}")
+                if v is not None else f"best centre score {-s.best_cost:.3f}")
         ctx.log(f"{study}: {what} after "
                 f"{s.train_episodes} training episodes; policy.npz, policy.py, policy.json"
                 + (", policy.onnx" if not ctx.cache.get("onnx_note") else "")

@@ -121,11 +121,18 @@ class PolicySearchState:
     valid: Validated | None = None
 
 
+def chosen_validated(state: PolicySearchState) -> Validated | None:
+    """The best validated centre where validation has chosen one (a finite validation
+    cost), else None."""
+    v = state.valid
+    return v if v is not None and v.cost < float("inf") else None
+
+
 def exported(state: PolicySearchState) -> tuple[np.ndarray, float, np.ndarray, np.ndarray]:
     """``(x, cost, obs mean, obs std)`` of the centre a run exports and reports as its best:
     the best validated one where validation has chosen one, else the best evaluated."""
-    v = state.valid
-    if v is not None and v.cost < float("inf"):
+    v = chosen_validated(state)
+    if v is not None:
         return v.x, v.cost, v.obs_mean, v.obs_std
     return state.best_x, state.best_cost, state.best_obs_mean, state.best_obs_std
 

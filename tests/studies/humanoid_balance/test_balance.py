@@ -185,8 +185,6 @@ def test_the_default_validates_and_a_folder_from_before_it_resumes_as_it_ran(tmp
     """The default exports the best centre on fixed validation episodes; a run folder written
     before ``problem.validate_every`` existed (it exported the best single centre score) is
     read with validation off and resumed bit for bit as the run it was."""
-    import re
-
     from evomotion.run.config import config_from_run_dir
     from evomotion.run.stats import read_stats
 
@@ -201,13 +199,8 @@ def test_the_default_validates_and_a_folder_from_before_it_resumes_as_it_ran(tmp
     for out, gens in ((full, 3), (part, 2)):
         run_study(study, resolve_config(study, None, [*old, f"run.generations={gens}"]), out,
                   quiet=True)
-    cfg = part / "config.toml"  # as written before the keys existed
-    cfg.write_text(re.sub(r"^validate_\w+ = .*\n", "", cfg.read_text(), flags=re.M))
-    for ck in (part / "checkpoints").glob("gen-*.json"):
-        meta = json.loads(ck.read_text())
-        meta["config"] = {k: v for k, v in meta["config"].items() if "validate_" not in k}
-        ck.write_text(json.dumps(meta))
-    assert "validate_" not in cfg.read_text()
+    _without_keys(part, "validate_")  # as written before the keys existed
+    assert "validate_" not in (part / "config.toml").read_text()
     assert config_from_run_dir(part)[1]["problem"]["validate_every"] == 0
     proc = subprocess.run([sys.executable, "-m", "evomotion.cli", "resume", str(part), "--set",
                            "run.generations=3", "--quiet"], capture_output=True, text=True,
@@ -224,19 +217,24 @@ SPEC_POSE = ("problem.stance_width_rad=0", "problem.stance_stagger_rad=0",
              "problem.stance_crouch_rad=0")
 
 
+def _without_keys(run, prefix: str) -> None:
+    """Make ``run`` look written before the problem keys ``prefix*`` existed: none in its
+    ``config.toml`` nor in its checkpoints' config records."""
+    import re
+
+    cfg = run / "config.toml"
+    cfg.write_text(re.sub(rf"^{prefix}\w+ = .*\n", "", cfg.read_text(), flags=re.M))
+    for ck in (run / "checkpoints").glob("gen-*.json"):
+        meta = json.loads(ck.read_text())
+        meta["config"] = {k: v for k, v in meta["config"].items() if prefix not in k}
+        ck.write_text(json.dumps(meta))
+
+
 def _before_the_stance(run) -> None:
     """Make ``run`` look written before problem.stance_* existed: no such keys anywhere, and no
     ``physics.json`` (recorded since 2026-12-05)."""
-    import re
-
     (run / "physics.json").unlink()
-
-    cfg = run / "config.toml"
-    cfg.write_text(re.sub(r"^stance_\w+ = .*\n", "", cfg.read_text(), flags=re.M))
-    for ck in (run / "checkpoints").glob("gen-*.json"):
-        meta = json.loads(ck.read_text())
-        meta["config"] = {k: v for k, v in meta["config"].items() if "stance_" not in k}
-        ck.write_text(json.dumps(meta))
+    _without_keys(run, "stance_")
 
 
 def test_the_default_stance_is_wider_and_a_folder_from_before_it_resumes_in_the_spec_pose(

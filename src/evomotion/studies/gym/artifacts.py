@@ -21,13 +21,12 @@ def write_policy(ctx: Any) -> None:
 
 def finalize(ctx: Any) -> int | None:
     write_policy(ctx)
-    from evomotion.studies.policy_search import exported
+    from evomotion.studies.policy_search import chosen_validated, exported
 
     s = ctx.state
     if s is not None and s.best_cost < float("inf"):
         _, cost, _, _ = exported(s)
-        what = "validated centre" if s.valid is not None and s.valid.cost < float("inf") \
-            else "centre"
+        what = "validated centre" if chosen_validated(s) is not None else "centre"
         ctx.log(f"gym {ctx.config.problem.env}: best {what} return {-cost:.1f} "
                 f"after {s.train_episodes} training episodes, {s.env_steps} environment steps; "
                 "policy.npz, policy.py" + (", policy.onnx" if not ctx.cache.get("onnx_note")
