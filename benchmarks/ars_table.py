@@ -38,6 +38,10 @@ TASKS = {
     "Humanoid": (6000, 142600),
 }
 
+#: task -> parameters of its linear policy (v5 observation x action sizes)
+PARAMS = {"Swimmer": 8 * 2, "Hopper": 11 * 3, "HalfCheetah": 17 * 6, "Walker2d": 17 * 6,
+          "Ant": 105 * 8, "Humanoid": 348 * 17}
+
 
 def settings(task: str, method: str) -> list[str]:
     """The ``evomotion run gym`` arguments of ``method`` on ``task``."""
@@ -54,7 +58,14 @@ def settings(task: str, method: str) -> list[str]:
     if method == "cmaes":  # the study's default: CMA-ES from 0, sigma 0.1 (of the +-100 box)
         return [*env, "--set", "algorithm.name=cmaes", "--set", "algorithm.sigma0=0.0005",
                 "--set", "algorithm.x0=center", *norm]
-    raise SystemExit(f"unknown method {method!r}; available: default, ars, openai_es, cmaes")
+    if method == "pgpe":  # PGPE with ClipUp, Toklu et al. 2020's linear-policy setting:
+        # v_max 0.015, step 0.5 v_max, stdev learning rate 0.1, initial radius 0.27 (|sigma|)
+        n = PARAMS[task]
+        return [*env, "--set", "algorithm.name=pgpe", "--set", "algorithm.pop_size=100",
+                "--set", "algorithm.max_speed=0.015",
+                "--set", "algorithm.center_learning_rate=0.0075",
+                "--set", f"algorithm.stdev_init={0.27 / n ** 0.5:.6g}", *norm]
+    raise SystemExit(f"unknown method {method!r}; available: default, ars, openai_es, cmaes, pgpe")
 
 
 def one_run(task: str, method: str, seed: int, budget_s: float, workers: int,

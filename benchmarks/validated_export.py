@@ -112,12 +112,16 @@ def main() -> int:
     ap.add_argument("--fresh", type=int, default=200)
     ap.add_argument("--json", action="store_true")
     a = ap.parse_args()
+    from evomotion.errors import InputError
     from evomotion.studies.policy_validation import validation_seeds
 
     results = []
     for run in a.runs:
         t0 = time.perf_counter()
-        name, problem, k, found = centres(run)
+        try:
+            name, problem, k, found = centres(run)
+        except InputError as e:  # not a run folder, a damaged config or checkpoint: one line
+            raise SystemExit(f"error: {e}") from None
         res: dict = {"run": str(run), "study": name, "validate_episodes": k}
         for which, (x, mean, std, gen, score) in found.items():
             val = returns(problem, x, mean, std, validation_seeds(k))

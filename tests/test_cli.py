@@ -38,6 +38,27 @@ def test_bad_input_is_one_line_error(tmp_path, args, msg):
     assert not (tmp_path / "runs").exists()  # nothing created for a rejected command
 
 
+@pytest.mark.parametrize("args, msg", [
+    (["replay", "--nope", "x.motion"], "error: No such option: --nope (see 'evomotion replay "
+                                       "--help')"),
+    (["replay"], "error: Missing argument 'motion'."),
+    (["nosuch"], "error: No such command 'nosuch'."),
+    (["plot", "r", "--out"], "error: Option '--out' requires an argument."),
+])
+def test_a_bad_option_or_argument_is_one_line(tmp_path, args, msg):
+    """What the command-line parser itself refuses (an unknown option, a missing argument, a
+    value of the wrong type) is one line too, not a usage block and a box."""
+    r = cli(*args, cwd=tmp_path)
+    assert r.returncode == 2 and "Traceback" not in r.stderr
+    lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1 and lines[0].startswith(msg), r.stderr
+
+
+def test_no_command_prints_the_help(tmp_path):
+    r = cli(cwd=tmp_path)
+    assert r.returncode == 2 and "Usage: evomotion" in r.stdout and "studies" in r.stdout
+
+
 def test_malformed_toml(tmp_path):
     bad = tmp_path / "bad.toml"
     bad.write_text("[run]\nseed = \n")

@@ -5,7 +5,7 @@ from __future__ import annotations
 import dataclasses
 import sys
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
@@ -243,7 +243,8 @@ def replay_cmd(
              "policy.npz")],
     json_out: Annotated[bool, typer.Option("--json", help="Only JSON on stdout")] = False,
     video: Annotated[Path | None, typer.Option(help="Write an MP4 of the replay")] = None,
-    hold: Annotated[float, typer.Option(help="Seconds held in the last pose")] = 1.0,
+    hold: Annotated[float | None, typer.Option(
+        help="A .motion: seconds held in the last pose (default 1)")] = None,
     friction: Annotated[float | None, typer.Option(
         help="Scale of every friction coefficient (floor and soles; > 0)")] = None,
     mass_scale: Annotated[float | None, typer.Option(
@@ -273,9 +274,10 @@ def replay_cmd(
     if not motion.exists():
         raise InputError(f"{motion}: no such motion file")
     if motion.is_dir() or motion.suffix == ".npz":  # a run folder: its study replays it
-        if friction is not None or mass_scale is not None or start is not None:
-            raise InputError("replay of a policy: --friction, --mass-scale and --from apply to "
-                             "a .motion; use --stress N (--push P sets the push, N s)")
+        if friction is not None or mass_scale is not None or start is not None \
+                or hold is not None:
+            raise InputError("replay of a policy: --friction, --mass-scale, --from and --hold "
+                             "apply to a .motion; use --stress N (--push P sets the push, N s)")
         from evomotion.run.config import config_from_run_dir
         from evomotion.studies import get_study
 
@@ -300,7 +302,8 @@ def replay_cmd(
         raise InputError("--stress is for a policy run folder; a .motion takes --trials N")
     options = StressOptions(friction=friction, mass_scale=mass_scale, push_ns=push,
                             trials=trials, seed=seed, start=start)
-    replay_command(motion, json_out=json_out, video=video, hold_s=hold, stress=options)
+    replay_command(motion, json_out=json_out, video=video,
+                   hold_s=1.0 if hold is None else hold, stress=options)
 
 
 @app.command("export")
@@ -368,11 +371,34 @@ def _mount_study_app(argv: list[str]) -> None:
             app.add_typer(s.cli, name=name, help=s.description)
 
 
+def _click_exceptions() -> Any:
+    """The exceptions module of the click that typer runs on (typer >= 0.2x ships its own
+    copy as ``typer._click``; earlier versions use click itself)."""
+    import importlib
+
+    try:
+        return importlib.import_module("typer._click.exceptions")
+    except ImportError:
+        return importlib.import_module("click.exceptions")
+
+
 def main(argv: list[str] | None = None) -> None:
+    cx = _click_exceptions()
     argv = list(sys.argv if argv is None else argv)
     try:
         _mount_study_app(argv)
-        app(args=argv[1:], prog_name="evomotion")
+        # not standalone: click's own errors come back here, to be said in one line
+        code = app(args=argv[1:], prog_name="evomotion", standalone_mode=False)
+    except cx.UsageError as e:  # a bad option or argument: one line, as every bad input
+        if type(e).__name__ == "NoArgsIsHelpError":  # a bare group: its help, as before
+            typer.echo(e.ctx.get_help() if e.ctx is not None else str(e))
+            sys.exit(2)
+        where = e.ctx.command_path if e.ctx is not None else "evomotion"
+        typer.echo(f"error: {e.format_message()} (see '{where} --help')", err=True)
+        sys.exit(2)
+    except typer.Abort:
+        typer.echo("error: interrupted", err=True)
+        sys.exit(130)
     except InputError as e:
         typer.echo(f"error: {e}", err=True)
         sys.exit(2)
@@ -393,6 +419,8 @@ def main(argv: list[str] | None = None) -> None:
         typer.echo("error: out of memory (an input asked for more than this machine has)",
                    err=True)
         sys.exit(2)
+    if isinstance(code, int) and code:  # typer.Exit(n) returns n when not standalone
+        sys.exit(code)
 
 
 if __name__ == "__main__":

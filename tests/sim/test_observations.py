@@ -43,7 +43,8 @@ def test_layout_matches_the_spec(robot):
     assert observation_size(every, robot) == robot.model.nu == 22
 
 
-@pytest.mark.parametrize("spec", [ObservationSpec(("nose",)),
+@pytest.mark.parametrize("spec", [ObservationSpec(()),
+                                  ObservationSpec(("nose",)),
                                   ObservationSpec(("gyro", "gyro")),
                                   ObservationSpec(("phase",)),
                                   ObservationSpec(("command",)),

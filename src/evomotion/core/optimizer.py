@@ -48,6 +48,23 @@ def check_rates(cfg: Any, *keys: str) -> None:
             raise ValueError(f"algorithm.{key} must be in [0, 1], got {v}")
 
 
+#: the largest state :meth:`Optimizer.check_next_step` copies and tries (bytes of arrays)
+MAX_CHECKED_BYTES = 64 * 2**20
+
+
+def _nbytes(state: Any) -> int:
+    """The bytes of the numpy arrays of a state dataclass, nested ones included."""
+    import dataclasses
+
+    if not dataclasses.is_dataclass(state):
+        return 0
+    total = 0
+    for f in dataclasses.fields(state):
+        v = getattr(state, f.name)
+        total += v.nbytes if isinstance(v, np.ndarray) else _nbytes(v)
+    return total
+
+
 class Optimizer(ABC):
     """Base class of ask/tell optimizers over a real-valued genome."""
 
@@ -102,6 +119,27 @@ class Optimizer(ABC):
         if self.generation_done(new):
             changes["generation"] = new.generation + 1
         return replace(new, **changes) if changes else new
+
+    def check_next_step(self, state: Any) -> None:
+        """Raise ``ValueError`` or ``TypeError`` unless a restored ``state`` can take one more
+        generation: one ``ask`` and one ``tell`` (every cost 0, no measures) on a copy, with a
+        generator of its own, must run and ask finite genomes. A damaged checkpoint whose
+        shapes or values break only inside the next generation is refused on resume instead.
+        States over :data:`MAX_CHECKED_BYTES` (a full covariance of thousands of genes) are
+        not tried."""
+        import copy
+        import warnings
+
+        if _nbytes(state) > MAX_CHECKED_BYTES:
+            return
+        trial = copy.deepcopy(state)
+        rng = np.random.default_rng(0)
+        with warnings.catch_warnings(), np.errstate(all="ignore"):
+            warnings.simplefilter("ignore")
+            genomes, trial = self.ask(trial, rng)
+            if not np.isfinite(genomes).all():
+                raise ValueError(f"{self.name}: the state asks for non-finite genomes")
+            self.tell(trial, genomes, np.zeros(len(genomes)), rng, None)
 
     def qd_stats(self, state: Any) -> dict[str, float]:
         """Values of :attr:`extra_columns` for ``stats.csv`` (none for plain optimizers)."""

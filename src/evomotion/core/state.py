@@ -39,13 +39,14 @@ def state_from_arrays(cls: type, arrays: dict[str, np.ndarray], meta: dict[str, 
     """Inverse of :func:`state_to_arrays` for the dataclass type ``cls``."""
     kwargs = {}
     hints = {f.name: f for f in dataclasses.fields(cls)}
+    declared = _declared_types(cls)
     for name, f in hints.items():
         key = prefix + name
         ftype = f.type if isinstance(f.type, type) else None
         if key in arrays:
-            kwargs[name] = np.array(arrays[key])
+            kwargs[name] = _checked(key, np.array(arrays[key]), declared.get(name))
         elif key in meta:
-            kwargs[name] = meta[key]
+            kwargs[name] = _checked(key, meta[key], declared.get(name))
         elif ftype is not None and dataclasses.is_dataclass(ftype):
             kwargs[name] = state_from_arrays(ftype, arrays, meta, key + ".")
         else:
@@ -54,6 +55,61 @@ def state_from_arrays(cls: type, arrays: dict[str, np.ndarray], meta: dict[str, 
                 raise KeyError(f"checkpoint lacks state field {key!r}")
             kwargs[name] = state_from_arrays(sub, arrays, meta, key + ".")
     return cls(**kwargs)
+
+
+#: what a checkpoint's value of a field declared as this type may be (JSON numbers: a float
+#: field may hold an int, an int field a whole float written by an older version)
+_ACCEPTS: dict[type, tuple[type, ...]] = {int: (int, float), float: (int, float),
+                                         bool: (bool,), str: (str,)}
+_NAMES = {int: "a number", float: "a number", bool: "true or false", str: "a string",
+          np.ndarray: "a numeric array"}
+
+
+def _declared_types(cls: type) -> dict[str, tuple[type, ...]]:
+    """``{field: the types its value may have}`` for the fields declared as ``int``,
+    ``float``, ``bool``, ``str`` or ``np.ndarray``, alone or ``| None``; other annotations
+    (``Any``, containers, nested states) are not checked."""
+    import types
+    import typing
+
+    try:
+        hints = typing.get_type_hints(cls)
+    except Exception:  # an annotation this module cannot resolve: nothing checked
+        return {}
+    out = {}
+    for name, t in hints.items():
+        parts = typing.get_args(t) if isinstance(t, types.UnionType) or \
+            typing.get_origin(t) is typing.Union else (t,)
+        known = tuple(p for p in parts if p in _NAMES or p is type(None))
+        if known and len(known) == len(parts):
+            out[name] = known
+    return out
+
+
+def checked_fields(cls: type, values: dict[str, Any], prefix: str = "") -> dict[str, Any]:
+    """``values`` (field name -> value read from a checkpoint) checked against the fields'
+    declared types as :func:`state_from_arrays` checks them, for a driver that builds its
+    state's top level itself."""
+    declared = _declared_types(cls)
+    return {k: _checked(prefix + k, v, declared.get(k)) for k, v in values.items()}
+
+
+def _checked(key: str, value: Any, allowed: tuple[type, ...] | None) -> Any:
+    """``value`` if it may be the checkpointed value of a field declared ``allowed``, else a
+    ``TypeError`` naming the field (resume then refuses the checkpoint in one line)."""
+    if allowed is None:
+        return value
+    for t in allowed:
+        if t is type(None) and value is None:
+            return value
+        if t is np.ndarray and isinstance(value, np.ndarray) and value.dtype.kind in "biuf":
+            return value
+        if t in _ACCEPTS and isinstance(value, _ACCEPTS[t]) and \
+                (t is bool or not isinstance(value, bool)):
+            return value
+    expected = " or ".join("null" if t is type(None) else _NAMES[t] for t in allowed)
+    shown = f"an array of {value.dtype}" if isinstance(value, np.ndarray) else repr(value)[:40]
+    raise TypeError(f"state field {key!r}: expected {expected}, got {shown}")
 
 
 def _nested_type(cls: type, name: str) -> type | None:

@@ -111,6 +111,7 @@ class AskTellDriver(Driver):
         bx, _ = self.opt.best(state)
         if np.shape(bx) != (d,):
             raise ValueError(f"best genome of shape {np.shape(bx)}, expected ({d},)")
+        self.opt.check_next_step(state)
 
     def best(self, state: Any) -> tuple[np.ndarray, float]:
         return self.opt.best(state)

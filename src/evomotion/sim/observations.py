@@ -64,7 +64,11 @@ class ObservationSpec:
     command_size: int = 0  # values per individual, >= 1 with "command"
 
     def validate(self) -> None:
-        """One-line :class:`InputError` for an unknown or repeated channel or a bad option."""
+        """One-line :class:`InputError` for no channel, an unknown or repeated one or a bad
+        option."""
+        if not self.channels:
+            raise InputError(f"observation channels: expected at least one of "
+                             f"{', '.join(CHANNELS)}, got none")
         for c in self.channels:
             if c not in CHANNELS:
                 raise InputError(f"observation channel {c!r} unknown; known: "

@@ -42,6 +42,7 @@ from evomotion.errors import FileFormatError, InputError
 from evomotion.textio import read_json
 
 MAX_JSON_BYTES = 1 << 20
+MAX_CONTROL_STEPS = 1000  # physics steps per control period (seconds at the NAO's 4 ms)
 
 
 def _floats(info: dict, key: str, n: int, path: Path) -> np.ndarray:
@@ -88,11 +89,21 @@ class PolicyPlayer:
             if isinstance(v, int | float) and not isinstance(v, bool):
                 self.nominal[self._actuator(str(name), jpath)] = float(v)
         self.nominal[self.columns] = self.nominal_driven
-        self.followers = [(self._actuator(str(f), jpath), self._actuator(str(lead), jpath))
-                          for f, lead in dict(info.get("followers") or {}).items()]
+        followers = info.get("followers") or {}
+        if not isinstance(followers, dict) or not all(isinstance(v, str) for v in
+                                                      followers.values()):
+            raise FileFormatError(jpath, None, "key 'followers': an object of actuator names "
+                                               "(follower: the actuator it copies)")
+        self.followers = [(self._actuator(str(f), jpath), self._actuator(lead, jpath))
+                          for f, lead in followers.items()]
         self.period_s = self._number(info, "phase_period_s", jpath)
         self.control_dt = self._number(info, "control_period_s", jpath)
-        self.control_steps = max(1, round(self.control_dt / model.opt.timestep))
+        steps = self.control_dt / model.opt.timestep
+        if not (1 <= round(steps) <= MAX_CONTROL_STEPS and abs(steps - round(steps)) < 1e-6):
+            raise FileFormatError(jpath, None, f"key 'control_period_s': a whole number (1 to "
+                                  f"{MAX_CONTROL_STEPS}) of the model's {model.opt.timestep} s "
+                                  f"physics steps, got {self.control_dt!r}")
+        self.control_steps = round(steps)
         ranges = info.get("command_ranges") or {}
         ok = isinstance(ranges, dict) and all(
             isinstance(v, list) and len(v) == 2 and all(

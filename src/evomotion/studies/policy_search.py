@@ -29,7 +29,7 @@ from evomotion.core.optimizer import Optimizer
 from evomotion.core.policies import normalizer
 from evomotion.core.policies.normalizer import Moments, RunningStats, combine, mean_std
 from evomotion.core.problem import GenomeSpec, Sense
-from evomotion.core.state import state_from_arrays, state_to_arrays
+from evomotion.core.state import checked_fields, state_from_arrays, state_to_arrays
 from evomotion.run.ask_tell import make_optimizer
 from evomotion.run.contracts import OwnInitialPopulation
 from evomotion.run.driver import Driver, Evaluate, StepReport
@@ -256,19 +256,31 @@ class PolicySearchDriver(Driver):
             and (f.name not in later or f.name in arrays or f.name in meta)}
         valid = state_from_arrays(Validated, arrays, meta, "valid.") \
             if "valid.x" in arrays else None
-        return PolicySearchState(opt=opt_state, obs=obs, valid=valid, **fields)
+        return PolicySearchState(opt=opt_state, obs=obs, valid=valid,
+                                 **checked_fields(PolicySearchState, fields))
 
     def check_state(self, state: PolicySearchState) -> None:
         o, d = self.problem.obs_dim, self.problem.genome.dim
         if np.shape(state.obs.mean) != (o,) or np.shape(state.obs.m2) != (o,):
-            raise ValueError(f"normaliser of {np.shape(state.obs.mean)}, expected ({o},)")
-        if np.shape(state.best_x) != (d,):
-            raise ValueError(f"best policy of {np.shape(state.best_x)}, expected ({d},)")
+            raise ValueError(f"normaliser mean of {np.shape(state.obs.mean)} and M2 of "
+                             f"{np.shape(state.obs.m2)}, expected ({o},)")
+        if np.shape(state.best_x) != (d,) or np.shape(state.best_obs_mean) != (o,) \
+                or np.shape(state.best_obs_std) != (o,):
+            raise ValueError(f"best policy of {np.shape(state.best_x)} with a normaliser of "
+                             f"{np.shape(state.best_obs_mean)}, expected ({d},) and ({o},)")
         v = state.valid
         if v is not None and (np.shape(v.x) != (d,) or np.shape(v.obs_mean) != (o,)
                               or np.shape(v.obs_std) != (o,)):
             raise ValueError(f"validated policy of {np.shape(v.x)} with a normaliser of "
                              f"{np.shape(v.obs_mean)}, expected ({d},) and ({o},)")
+        finite = [state.obs.mean, state.obs.m2, state.best_x, state.best_obs_mean,
+                  state.best_obs_std]
+        if v is not None:
+            finite += [v.x, v.obs_mean, v.obs_std]
+        if not all(np.isfinite(a).all() for a in finite) or np.any(state.obs.m2 < 0) \
+                or np.any(np.asarray(state.obs.count) < 0):
+            raise ValueError("a policy or normaliser with non-finite or negative moments")
+        self.opt.check_next_step(state.opt)
 
 
 def make_policy_driver(problem: PolicyProblem, config: Any) -> PolicySearchDriver:

@@ -4,6 +4,7 @@ their neighbours, the run's files, compare, one-line errors."""
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -256,6 +257,31 @@ def test_the_policy_player_sends_the_training_loops_targets(run_dir, problem, tm
             mujoco.mj_step(model, d)
     assert np.abs(np.array(sent) - res.targets[0]).max() < 1e-6
     assert np.array_equal(player.columns, sim.columns)
+
+
+@pytest.mark.parametrize("key, value, message", [
+    ("followers", "abc", "key 'followers': an object of actuator names"),
+    ("followers", 5, "key 'followers': an object of actuator names"),
+    ("followers", {"RHipYawPitch": 3}, "key 'followers': an object of actuator names"),
+    ("control_period_s", 1e300, "key 'control_period_s': a whole number (1 to 1000)"),
+    ("control_period_s", 1e-300, "key 'control_period_s': a whole number (1 to 1000)"),
+    ("control_period_s", 0.021, "key 'control_period_s': a whole number (1 to 1000)"),
+])
+def test_the_policy_player_refuses_a_bad_policy_json(run_dir, problem, tmp_path, key, value,
+                                                      message):
+    """A hand-edited policy.json the player cannot follow is one line naming the key, not a
+    traceback (followers that are no object) or a hang (a control period of 1e300 s)."""
+    import shutil
+
+    from evomotion.sim.policy_player import PolicyPlayer
+
+    shutil.copy(run_dir / "policy.npz", tmp_path / "policy.npz")
+    info = json.loads((run_dir / "policy.json").read_text())
+    info[key] = value
+    (tmp_path / "policy.json").write_text(json.dumps(info))
+    with pytest.raises(InputError, match=re.escape(message)):
+        PolicyPlayer(tmp_path, problem.robot.model, {"left": "left_floor",
+                                                     "right": "right_floor"})
 
 
 def test_command_feedback_starts_where_it_is_set():

@@ -118,7 +118,7 @@ def replay_command(path: Path, json_out: bool = False, video: Path | None = None
     """CLI body of ``evomotion replay RUN`` for a gym run."""
     if push_ns is not None:
         raise InputError("--push: a gym environment has no pushes; --stress N plays N episodes")
-    summary, skipped = replay_run(path, stress or 1, seed, video)
+    summary, skipped = replay_run(path, 1 if stress is None else stress, seed, video)
     done, video = report_replay(summary, skipped, video, json_out)
     if done:
         return
