@@ -419,8 +419,9 @@ def main(argv: list[str] | None = None) -> None:
         typer.echo("error: out of memory (an input asked for more than this machine has)",
                    err=True)
         sys.exit(2)
-    if isinstance(code, int) and code:  # typer.Exit(n) returns n when not standalone
-        sys.exit(code)
+    # as click's standalone mode did: always exit, with typer.Exit(n)'s n (returned when not
+    # standalone) or 0
+    sys.exit(code if isinstance(code, int) else 0)
 
 
 if __name__ == "__main__":

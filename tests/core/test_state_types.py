@@ -70,6 +70,17 @@ def test_an_array_of_text_is_refused():
         state_from_arrays(State, arrays, meta)
 
 
+def test_numpy_scalars_and_zero_d_arrays_read_back_as_they_were_written():
+    """An array field holding a numpy scalar (``0-d + 0-d`` is one) goes to the JSON as a
+    number, a number field holding a 0-d array to the npz: both resume as before."""
+    s = State(np.int64(3), np.array(0.5), np.array(True), "a", np.float64(2.0),
+              Inner(1.0, np.ones(2)))
+    arrays, meta = state_to_arrays(s)
+    assert meta["x"] == 2.0 and arrays["sigma"].shape == ()
+    back = state_from_arrays(State, arrays, meta)
+    assert back.x == 2.0 and back.sigma == 0.5 and back.flag
+
+
 def test_checked_fields_checks_a_top_level_built_by_hand():
     assert checked_fields(State, {"generation": 2, "anything": object})["generation"] == 2
     with pytest.raises(TypeError, match="'generation'"):

@@ -174,9 +174,11 @@ def test_face_down_start_rests_on_the_floor_and_hand_wave_stays_down(base, handw
 
 
 @pytest.mark.parametrize("opts,msg", [
-    (StressOptions(friction=-1.0), "--friction: expected > 0"),
-    (StressOptions(mass_scale=0.0), "--mass-scale: expected > 0"),
+    (StressOptions(friction=-1.0), "--friction: expected a value in (0.0, 100.0]"),
+    (StressOptions(mass_scale=0.0), "--mass-scale: expected a value in (0.0, 100.0]"),
+    (StressOptions(mass_scale=1e300), "--mass-scale: expected a value in (0.0, 100.0]"),
     (StressOptions(push_ns=float("nan")), "--push: expected a finite number"),
+    (StressOptions(push_ns=51.0), "--push: expected a value in [-50.0, 50.0]"),
     (StressOptions(trials=0), "--trials: expected a value in [1, 1000]"),
     (StressOptions(trials=2, seed=-3), "--seed: expected >= 0"),
     (StressOptions(start="sideways"), "--from: expected one of standing"),

@@ -57,10 +57,8 @@ def state_from_arrays(cls: type, arrays: dict[str, np.ndarray], meta: dict[str, 
     return cls(**kwargs)
 
 
-#: what a checkpoint's value of a field declared as this type may be (JSON numbers: a float
-#: field may hold an int, an int field a whole float written by an older version)
-_ACCEPTS: dict[type, tuple[type, ...]] = {int: (int, float), float: (int, float),
-                                         bool: (bool,), str: (str,)}
+#: the declared types checked, and what the error calls them (a JSON number may stand for
+#: an int or a float field: a float field may hold an int, an int one a whole float)
 _NAMES = {int: "a number", float: "a number", bool: "true or false", str: "a string",
           np.ndarray: "a numeric array"}
 
@@ -99,13 +97,20 @@ def _checked(key: str, value: Any, allowed: tuple[type, ...] | None) -> Any:
     ``TypeError`` naming the field (resume then refuses the checkpoint in one line)."""
     if allowed is None:
         return value
+    numeric = isinstance(value, np.ndarray) and value.dtype.kind in "biuf"
+    number = isinstance(value, int | float) and not isinstance(value, bool)
     for t in allowed:
         if t is type(None) and value is None:
             return value
-        if t is np.ndarray and isinstance(value, np.ndarray) and value.dtype.kind in "biuf":
+        # an array field that held a numpy scalar was written as a JSON number, a number
+        # field that held a 0-d array as an array: both are read back as they were written
+        if t is np.ndarray and (numeric or number):
             return value
-        if t in _ACCEPTS and isinstance(value, _ACCEPTS[t]) and \
-                (t is bool or not isinstance(value, bool)):
+        if t in (int, float) and (number or numeric and value.ndim == 0):
+            return value
+        if t is bool and (isinstance(value, bool) or numeric and value.ndim == 0):
+            return value
+        if t is str and isinstance(value, str):
             return value
     expected = " or ".join("null" if t is type(None) else _NAMES[t] for t in allowed)
     shown = f"an array of {value.dtype}" if isinstance(value, np.ndarray) else repr(value)[:40]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import matplotlib
@@ -48,8 +49,12 @@ def plot_runs(stats_csvs: list[Path], out_stem: Path, column: str = "best_so_far
     grid = np.unique(np.concatenate([r["evaluations"] for r in runs]))
     ys = np.array([step_values(grid, r["evaluations"], r[column]) for r in runs])
     fig, ax = plt.subplots(figsize=(6.4, 4.0))
-    med = np.nanmedian(ys, axis=0)
-    q1, q3 = np.nanpercentile(ys, 25, axis=0), np.nanpercentile(ys, 75, axis=0)
+    with warnings.catch_warnings(), np.errstate(invalid="ignore"):
+        # a run not started yet at an evaluation count is NaN there, one without a finite
+        # fitness inf (inf - inf inside the percentile): a gap in the band, no warning
+        warnings.simplefilter("ignore", RuntimeWarning)
+        med = np.nanmedian(ys, axis=0)
+        q1, q3 = np.nanpercentile(ys, 25, axis=0), np.nanpercentile(ys, 75, axis=0)
     ax.plot(grid, med, color="tab:blue", label=f"median of {len(runs)} runs")
     ax.fill_between(grid, q1, q3, color="tab:blue", alpha=0.25, label="interquartile range")
     ax.set_xlabel("evaluations")

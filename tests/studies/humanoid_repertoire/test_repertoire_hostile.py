@@ -37,7 +37,9 @@ def _archive(path: Path, cells: dict[int, tuple[float, float, float]],
     idx = np.array(sorted(cells), dtype=np.int64)
     meas = np.array([cells[c] for c in idx], dtype=float).reshape(-1, 3)
     genes = np.repeat(step.DEFAULT[None], len(idx), axis=0)
-    genes[:, 0] = meas[:, 0]  # each cell its own step (a different motion file)
+    # each cell its own step (a different motion file), inside the genome's bounds as the
+    # search keeps it (a measured dx of 0.5 m is an elite that left the box)
+    genes[:, 0] = np.clip(meas[:, 0], step.LOWER[0], step.UPPER[0])
     centres = np.zeros((n, 3))
     np.savez(path, kind=np.array("grid"), bins=bins.astype(np.int64), cells=np.array(n),
              lower=MEASURES.lower, upper=MEASURES.upper,
@@ -138,6 +140,37 @@ def test_a_hostile_archive_is_one_line(run):
         z.writestr("cell.npy", header.getvalue())
     (run / "archive.npz").write_bytes(buf.getvalue())
     one_error(*cli("export", run), "archive.npz")
+
+
+def _edit_archive(run: Path, edit) -> None:
+    with np.load(run / "archive.npz") as z:
+        a = {k: z[k] for k in z.files}
+    edit(a)
+    np.savez(run / "archive.npz", **a)
+
+
+def test_archived_genes_of_another_count_or_outside_the_bounds_are_one_line(run):
+    """An archive edited by hand: elites with 7 genes (a traceback before) or a gene of 1e300
+    (exported before, with a numpy overflow warning) are refused naming the file."""
+    _edit_archive(run, lambda a: a.update(solution=a["solution"][:, :7]))
+    one_error(*cli("export", run), "'solution' holds 7 genes per cell, expected 8")
+
+    def huge(a):
+        a["solution"][0, 0] = 1e300
+    _edit_archive(run, lambda a: a.update(solution=np.repeat(step.DEFAULT[None], 3, axis=0)))
+    _edit_archive(run, huge)
+    one_error(*cli("export", run), "cell 10's genes lie outside the genome's bounds")
+
+
+@pytest.mark.parametrize("damage", ["missing", "garbage"])
+def test_pick_refuses_a_step_whose_motion_is_missing_or_no_motion(run, damage):
+    """``pick`` names a .motion that walk-to could play: one that is gone or is no motion is
+    refused in one line (it was reported as the answer before)."""
+    index = json.loads((run / "repertoire" / "index.json").read_text())
+    for e in index["entries"]:
+        f = run / "repertoire" / e["file"]
+        f.unlink() if damage == "missing" else f.write_bytes(os.urandom(2000))
+    one_error(*cli("pick", run, "--dx", "0.05"), "cell-")
 
 
 # -- 2. writes: checked before the work, never through a link out of the run -------------

@@ -76,6 +76,9 @@ def write_repertoire(out_dir: Path, hold_s: float, problem: Any = None) -> list[
     box = MEASURES if robot is None else problem.measure_spec
     motion_of = step_motion if robot is None else problem.motion
     a = load_archive(out_dir / "archive.npz")
+    lower, upper = (step.LOWER, step.UPPER) if robot is None else \
+        (problem.genome.lower, problem.genome.upper)
+    check_solutions(out_dir / "archive.npz", a.solution, a.cell, lower, upper)
     folder = repertoire_folder(out_dir)
     inside = np.all((a.measures >= box.lower) & (a.measures <= box.upper), axis=1)
     up = a.objective > FALLEN_OBJECTIVE + 1.0
@@ -105,6 +108,25 @@ def write_repertoire(out_dir: Path, hold_s: float, problem: Any = None) -> list[
         "repertoire index")
     remove_stale_cells(folder, {e["file"] for e in entries})
     return entries
+
+
+def check_solutions(path: Path, solution: np.ndarray, cell: np.ndarray, lower: np.ndarray,
+                    upper: np.ndarray) -> None:
+    """One-line :class:`InputError` unless every archived elite has the genome's number of
+    genes, each inside its bounds (the search clips every genome into them; a tolerance of
+    1e-9 of the range for rounding): an archive edited by hand exports nothing absurd."""
+    from evomotion.errors import InputError
+
+    lower, upper = np.asarray(lower, float), np.asarray(upper, float)
+    if solution.ndim != 2 or solution.shape[1] != lower.size:
+        raise InputError(f"{path}: 'solution' holds {solution.shape[-1]} genes per cell, "
+                         f"expected {lower.size} (this run's genome)")
+    tol = 1e-9 * (upper - lower)
+    out = ~np.all((solution >= lower - tol) & (solution <= upper + tol), axis=1)
+    if out.any():
+        k = int(np.flatnonzero(out)[0])
+        raise InputError(f"{path}: cell {int(cell[k])}'s genes lie outside the genome's "
+                         f"bounds (an archive this run did not write)")
 
 
 _CELL_FILE = re.compile(r"^cell-[0-9]+\.motion$")

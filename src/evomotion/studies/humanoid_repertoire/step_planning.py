@@ -61,6 +61,8 @@ def pick(run: Path, dx: float, dy: float, dtheta_deg: float) -> dict:
     d = np.linalg.norm((m - [dx, dy, dtheta_deg]) / scale, axis=1)
     i = int(np.argmin(d))
     e = entries[i]
+    problem = None if stepper_of(index) == "closed_form" else _robot_problem(folder)
+    read_cell(folder, e, None if problem is None else problem.robot.joints)  # it is a motion
     return {"file": str((folder / Path(e["file"]).name).resolve()), "cell": e["cell"],
             "measured": e["measured"], "objective": e["objective"],
             "requested": {"dx_m": dx, "dy_m": dy, "dtheta_deg": dtheta_deg},

@@ -192,6 +192,9 @@ def missions_cmd(
     if json_out is not None:
         check_target(json_out, "figures file")
     names = [w.strip() for w in worlds.split(",") if w.strip()]
+    if not names:
+        raise InputError(f"--worlds: expected one or more comma-separated worlds, got "
+                         f"{worlds!r}")
     for name in names:
         load_world(name)
     if not rule_sets or any(r not in "AB" for r in rule_sets):

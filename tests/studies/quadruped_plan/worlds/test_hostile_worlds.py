@@ -176,6 +176,16 @@ def test_the_cli_refuses_a_goal_inside_an_obstacle_in_one_line(tmp_path):
     assert time.perf_counter() - t0 < 30
 
 
+@pytest.mark.parametrize("worlds", ["", ",,"])
+def test_missions_without_a_world_is_one_line(tmp_path, worlds):
+    r = subprocess.run([sys.executable, "-m", "evomotion.cli", "quadruped-plan", "missions",
+                        "--seeds", "1", "--worlds", worlds], capture_output=True, text=True,
+                       timeout=120, cwd=tmp_path)
+    assert r.returncode == 2 and r.stdout == "", r.stdout
+    assert r.stderr.strip() == f"error: --worlds: expected one or more comma-separated " \
+                               f"worlds, got {worlds!r}"
+
+
 NUMBER = st.one_of(st.floats(allow_nan=True, allow_infinity=True, width=64),
                    st.integers(-10**6, 10**6), st.sampled_from([1e300, -1e300, 1e4, 1e-300]),
                    st.floats(-30, 30))

@@ -43,6 +43,8 @@ from evomotion.sim.worlds import Perturbation, draw_worlds, make_world, simulate
 STARTS = ("standing", "face-down", "face-up")
 MAX_TRIALS = 1000
 MAX_HOLD_S = 60.0
+MAX_SCALE = 100.0  # --friction, --mass-scale: at most this factor
+MAX_PUSH_NS = 50.0  # |--push| (N s; 9.4 m/s on the 5.3 kg NAO, still a stable simulation)
 _CHUNK_BYTES = 256 * 2**20  # states kept at once by a stress test
 
 
@@ -93,11 +95,11 @@ class StressOptions:
     def validate(self) -> None:
         """One-line :class:`~evomotion.errors.InputError` for a bad value."""
         if self.friction is not None:
-            check_number("--friction", self.friction, lo=0.0, lo_open=True)
+            check_number("--friction", self.friction, lo=0.0, lo_open=True, hi=MAX_SCALE)
         if self.mass_scale is not None:
-            check_number("--mass-scale", self.mass_scale, lo=0.0, lo_open=True)
+            check_number("--mass-scale", self.mass_scale, lo=0.0, lo_open=True, hi=MAX_SCALE)
         if self.push_ns is not None:
-            check_number("--push", self.push_ns)
+            check_number("--push", self.push_ns, lo=-MAX_PUSH_NS, hi=MAX_PUSH_NS)
         if self.trials is not None:
             check_number("--trials", self.trials, lo=1, hi=MAX_TRIALS, integer=True)
         check_number("--seed", self.seed, lo=0, integer=True)
