@@ -86,16 +86,17 @@ def read_archive(path: Path | str) -> ArchiveFile:
               and (kind == "cvt" or math.prod(int(b) for b in data["bins"]) == cells))
         ok = ok and all(np.issubdtype(data[k].dtype, np.integer) for k in ("cell", "bins"))
         cell = data["cell"].astype(np.int64) if ok else np.zeros(0, np.int64)
-        ok = ok and bool(np.all((cell >= 0) & (cell < cells)))
+        ok = ok and bool(np.all((cell >= 0) & (cell < cells))) and \
+            np.unique(cell).size == cell.size
         ok = ok and all(bool(np.isfinite(data[k].astype(float)).all()) for k in (
             "lower", "upper", "centre", "objective", "measures", "all_centres", "solution"))
         ok = ok and bool(np.all(lower < upper))
     except (ValueError, TypeError, OverflowError):
         ok = False
     if not ok:
-        raise InputError(f"{path}: inconsistent archive arrays (expected n filled cells with "
-                         "matching centre, solution, objective and measures rows of finite "
-                         "numbers, and lower < upper)")
+        raise InputError(f"{path}: inconsistent archive arrays (expected n distinct filled "
+                         "cells with matching centre, solution, objective and measures rows "
+                         "of finite numbers, and lower < upper)")
     return ArchiveFile(kind, data["bins"].astype(np.int64), cells, lower, upper,
                        tuple(str(s) for s in data["measure_names"]), cell,
                        data["centre"].astype(float), data["solution"].astype(float),

@@ -162,6 +162,12 @@ def test_archived_genes_of_another_count_or_outside_the_bounds_are_one_line(run)
     one_error(*cli("export", run), "cell 10's genes lie outside the genome's bounds")
 
 
+def test_an_archive_that_fills_a_cell_twice_is_one_line(run):
+    _edit_archive(run, lambda a: a.update(cell=np.array([10, 10, 30])))
+    one_error(*cli("export", run), "archive.npz: inconsistent archive arrays (expected n "
+                                   "distinct filled cells")
+
+
 @pytest.mark.parametrize("damage", ["missing", "garbage"])
 def test_pick_refuses_a_step_whose_motion_is_missing_or_no_motion(run, damage):
     """``pick`` names a .motion that walk-to could play: one that is gone or is no motion is

@@ -162,8 +162,12 @@ def study_cmd(
         help="Duplicate grid for the body angle in the A* rows [rad]")] = ANGLE_GRID,
 ) -> None:
     """Print the paper's 12-configuration table next to the paper's figures."""
-    if astar_pos_grid <= 0 or astar_angle_grid <= 0:
-        raise InputError("--astar-pos-grid and --astar-angle-grid: expected > 0")
+    from evomotion.core.checks import check_number
+
+    check_number("--astar-pos-grid", astar_pos_grid, lo=0.0, lo_open=True)
+    check_number("--astar-angle-grid", astar_angle_grid, lo=0.0, lo_open=True)
+    check_number("--astar-seconds", astar_seconds, lo=0.0, lo_open=True, hi=3600.0)
+    check_number("--max-expansions", max_expansions, lo=1, hi=10**9, integer=True)
     rows = paper_table(search=SearchConfig(max_expansions=max_expansions), astar_rows=astar,
                        astar_seconds=astar_seconds, astar_grid=(astar_pos_grid, astar_angle_grid))
     typer.echo(format_table(rows))

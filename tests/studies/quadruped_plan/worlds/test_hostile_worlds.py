@@ -186,6 +186,20 @@ def test_missions_without_a_world_is_one_line(tmp_path, worlds):
                                f"worlds, got {worlds!r}"
 
 
+@pytest.mark.parametrize("option, value, message", [
+    ("--astar-seconds", "0", "--astar-seconds: expected a value in (0.0, 3600.0]"),
+    ("--astar-seconds", "inf", "--astar-seconds: expected a finite number"),
+    ("--max-expansions", "0", "--max-expansions: expected a value in [1, 1000000000]"),
+    ("--astar-pos-grid", "nan", "--astar-pos-grid: expected a finite number"),
+])
+def test_study_budgets_out_of_range_are_one_line(tmp_path, option, value, message):
+    r = subprocess.run([sys.executable, "-m", "evomotion.cli", "quadruped-plan", "study",
+                        option, value], capture_output=True, text=True, timeout=120,
+                       cwd=tmp_path)
+    assert r.returncode == 2 and r.stdout == "", r.stdout
+    assert r.stderr.strip().startswith(f"error: {message}"), r.stderr
+
+
 NUMBER = st.one_of(st.floats(allow_nan=True, allow_infinity=True, width=64),
                    st.integers(-10**6, 10**6), st.sampled_from([1e300, -1e300, 1e4, 1e-300]),
                    st.floats(-30, 30))
