@@ -35,6 +35,7 @@ import numpy as np
 
 from evomotion.core.problem import GenomeSpec
 from evomotion.core.state import replaced as replace
+from evomotion.core.state import state_to_arrays
 
 #: ``mutate(x[n, d], rng, rate) -> x'``: a problem-supplied mutation replacing the registry one
 MutateFn = Callable[[np.ndarray, np.random.Generator, float], np.ndarray]
@@ -50,19 +51,6 @@ def check_rates(cfg: Any, *keys: str) -> None:
 
 #: the largest state :meth:`Optimizer.check_next_step` copies and tries (bytes of arrays)
 MAX_CHECKED_BYTES = 64 * 2**20
-
-
-def _nbytes(state: Any) -> int:
-    """The bytes of the numpy arrays of a state dataclass, nested ones included."""
-    import dataclasses
-
-    if not dataclasses.is_dataclass(state):
-        return 0
-    total = 0
-    for f in dataclasses.fields(state):
-        v = getattr(state, f.name)
-        total += v.nbytes if isinstance(v, np.ndarray) else _nbytes(v)
-    return total
 
 
 class Optimizer(ABC):
@@ -130,8 +118,8 @@ class Optimizer(ABC):
         import copy
         import warnings
 
-        if _nbytes(state) > MAX_CHECKED_BYTES:
-            return
+        if sum(a.nbytes for a in state_to_arrays(state)[0].values()) > MAX_CHECKED_BYTES:
+            return  # the arrays a checkpoint holds, nested states' too
         trial = copy.deepcopy(state)
         rng = np.random.default_rng(0)
         with warnings.catch_warnings(), np.errstate(all="ignore"):

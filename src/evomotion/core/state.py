@@ -9,6 +9,7 @@ state dict.
 from __future__ import annotations
 
 import dataclasses
+import functools
 from typing import Any
 
 import numpy as np
@@ -71,7 +72,7 @@ def _declared_types(cls: type) -> dict[str, tuple[type, ...]]:
     import typing
 
     try:
-        hints = typing.get_type_hints(cls)
+        hints = _type_hints(cls)
     except Exception:  # an annotation this module cannot resolve: nothing checked
         return {}
     out = {}
@@ -118,11 +119,16 @@ def _checked(key: str, value: Any, allowed: tuple[type, ...] | None) -> Any:
 
 
 def _nested_type(cls: type, name: str) -> type | None:
+    t = _type_hints(cls).get(name)
+    return t if isinstance(t, type) and dataclasses.is_dataclass(t) else None
+
+
+@functools.cache
+def _type_hints(cls: type) -> dict[str, Any]:
+    """``typing.get_type_hints(cls)``, resolved once per state class."""
     import typing
 
-    hints = typing.get_type_hints(cls)
-    t = hints.get(name)
-    return t if isinstance(t, type) and dataclasses.is_dataclass(t) else None
+    return typing.get_type_hints(cls)
 
 
 def rng_state(rng: np.random.Generator) -> dict[str, Any]:

@@ -39,6 +39,7 @@ import numpy as np
 
 from evomotion.core.policies.export import read_policy_npz
 from evomotion.errors import FileFormatError, InputError
+from evomotion.sim.control_period import whole_steps
 from evomotion.textio import read_json
 
 MAX_JSON_BYTES = 1 << 20
@@ -98,12 +99,12 @@ class PolicyPlayer:
                           for f, lead in followers.items()]
         self.period_s = self._number(info, "phase_period_s", jpath)
         self.control_dt = self._number(info, "control_period_s", jpath)
-        steps = self.control_dt / model.opt.timestep
-        if not (1 <= round(steps) <= MAX_CONTROL_STEPS and abs(steps - round(steps)) < 1e-6):
+        steps = whole_steps(self.control_dt, model.opt.timestep, MAX_CONTROL_STEPS)
+        if steps is None:
             raise FileFormatError(jpath, None, f"key 'control_period_s': a whole number (1 to "
                                   f"{MAX_CONTROL_STEPS}) of the model's {model.opt.timestep} s "
                                   f"physics steps, got {self.control_dt!r}")
-        self.control_steps = round(steps)
+        self.control_steps = steps
         ranges = info.get("command_ranges") or {}
         ok = isinstance(ranges, dict) and all(
             isinstance(v, list) and len(v) == 2 and all(

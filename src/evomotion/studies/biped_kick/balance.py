@@ -21,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from evomotion.errors import InputError
+from evomotion.sim.control_period import whole_steps
 from evomotion.sim.state import state_qvel
 
 #: the kick scene's free joint (the torso) and the support ankles' actuators per side
@@ -33,11 +34,11 @@ def control_steps(model, period_s: float) -> int:
     """Physics steps per control period; one line unless ``period_s`` is a whole number of
     the scene's steps."""
     dt = float(model.opt.timestep)
-    k = period_s / dt
-    if abs(k - round(k)) > 1e-6 or round(k) < 1:
+    k = whole_steps(period_s, dt)
+    if k is None:
         raise InputError(f"problem.control_period_s: {period_s} s is not a whole number of "
                          f"the kick scene's {dt} s physics steps")
-    return int(round(k))
+    return k
 
 
 class BalanceFeedback:

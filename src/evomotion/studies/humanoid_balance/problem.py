@@ -27,6 +27,7 @@ import numpy as np
 from evomotion.core.checks import check_choice, check_fields, check_number, check_text, inf_ok
 from evomotion.core.problem import Evaluation, GenomeSpec, Sense
 from evomotion.errors import InputError
+from evomotion.sim.control_period import whole_steps
 from evomotion.studies.humanoid_balance.episodes import (
     Episodes,
     WorldDraw,
@@ -174,11 +175,11 @@ class HumanoidBalanceProblem:
                                      "stance_stagger_rad, stance_crouch_rad, stance_lean_rad",
                                      lean_rad=cfg.stance_lean_rad)
         self.dt = float(r.model.opt.timestep)
-        k = cfg.control_period_s / self.dt
-        if abs(k - round(k)) > 1e-6 or round(k) < 1:
+        k = whole_steps(cfg.control_period_s, self.dt)
+        if k is None:
             raise InputError(f"problem.control_period_s: {cfg.control_period_s} s is not a whole "
                              f"number of {r.name}'s {self.dt} s physics steps")
-        self.control_steps = int(round(k))
+        self.control_steps = k
         self.nstep = int(math.ceil(cfg.duration_s / self.dt))
         self.obs_spec = ObservationSpec(cfg.channels(), phase_period_s=cfg.phase_period_s)
         threads = cfg.threads or max(1, min(os.cpu_count() or 1, 8))

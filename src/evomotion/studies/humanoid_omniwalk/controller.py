@@ -35,6 +35,7 @@ from evomotion.core.policies.mirror import (
     structured_mirror,
 )
 from evomotion.sim.closed_loop import ClosedLoopResult, ClosedLoopSimulator
+from evomotion.sim.control_period import whole_steps
 from evomotion.sim.observations import ObservationSpec, observation_mirror
 from evomotion.sim.robots import load_robot, nao
 from evomotion.sim.robots.nao.joint_limits import SPEED_LIMITS
@@ -73,11 +74,11 @@ class Controller:
         self.feedback_start = float(feedback_start)
         self.robot = r = load_robot(robot or "nao")
         self.dt = float(r.model.opt.timestep)
-        k = control_period_s / self.dt
-        if abs(k - round(k)) > 1e-6 or round(k) < 1:
+        k = whole_steps(control_period_s, self.dt)
+        if k is None:
             raise InputError(f"problem.control_period_s: {control_period_s} s is not a whole "
                              f"number of {r.name}'s {self.dt} s physics steps")
-        self.control_dt = round(k) * self.dt
+        self.control_dt = k * self.dt
         #: the NAO (its closed-form leg IK: the bundled spec's capability; a copy of nao.toml
         #: elsewhere has none and is walked as any biped): the closed-form engine, the
         #: shoulders, one hip yaw-pitch motor
@@ -101,7 +102,7 @@ class Controller:
         self.nominal = self.engine(phases, np.zeros((48, 3))).mean(axis=0)
         self.obs_spec = ObservationSpec(CHANNELS, phase_period_s=self.gait.period_s,
                                         command_size=3)
-        self.steps_per_control = int(round(k))
+        self.steps_per_control = k
         self.sim = self.simulator(self.obs_spec, threads)
         names = list(self.sim.observe.names)
         self.policy = StructuredSpec(

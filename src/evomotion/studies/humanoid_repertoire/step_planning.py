@@ -61,8 +61,7 @@ def pick(run: Path, dx: float, dy: float, dtheta_deg: float) -> dict:
     d = np.linalg.norm((m - [dx, dy, dtheta_deg]) / scale, axis=1)
     i = int(np.argmin(d))
     e = entries[i]
-    problem = None if stepper_of(index) == "closed_form" else _robot_problem(folder)
-    read_cell(folder, e, None if problem is None else problem.robot.joints)  # it is a motion
+    read_cell(folder, e, _cell_joints(_robot_problem(folder, index)))  # it is a motion
     return {"file": str((folder / Path(e["file"]).name).resolve()), "cell": e["cell"],
             "measured": e["measured"], "objective": e["objective"],
             "requested": {"dx_m": dx, "dy_m": dy, "dtheta_deg": dtheta_deg},
@@ -193,8 +192,8 @@ def walk_to(run: Path, x: float, y: float, theta_deg: float, video: Path | None 
     if not idx:
         raise InputError("walk-to: the target is the start pose (nothing to do) or no "
                          "step of the repertoire gets closer to it")
-    problem = None if stepper_of(index) == "closed_form" else _robot_problem(folder)
-    joints = None if problem is None else problem.robot.joints
+    problem = _robot_problem(folder, index)
+    joints = _cell_joints(problem)
     motion = chain(with_pauses([read_cell(folder, entries[i], joints) for i in idx], settle_s))
     atomic_write_text(out, format_motion(motion), "chained motion (--out)")
     if problem is None:
@@ -215,16 +214,24 @@ def walk_to(run: Path, x: float, y: float, theta_deg: float, video: Path | None 
             "video": str(video) if video is not None and skipped is None else None}
 
 
-def _robot_problem(folder: Path):
-    """The problem of the run whose repertoire is ``folder`` (its run folder holds it)."""
+def _robot_problem(folder: Path, index: dict):
+    """The problem of the run whose repertoire is ``folder`` (its run folder holds it); None
+    for the NAO's closed-form steps (``index``'s stepper), which need none."""
     from evomotion.studies.humanoid_repertoire.artifacts import run_problem
 
+    if stepper_of(index) == "closed_form":
+        return None
     run = folder.parent
     problem = run_problem(run)
     if problem is None:
         raise InputError(f"{run}: the repertoire is another robot's than the NAO, but the "
                          "run's config.toml has no problem.robot")
     return problem
+
+
+def _cell_joints(problem) -> tuple[str, ...] | None:
+    """The channels of the repertoire's .motion files: the robot's, None for the NAO's."""
+    return None if problem is None else problem.robot.joints
 
 
 def _play_on_robot(robot, motion, video: Path | None, hold_s: float
